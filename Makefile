@@ -1,0 +1,39 @@
+# Thin wrapper over CMake presets. The README's two commands are `make demo`
+# and `make test`; `make bench` measures speed and search quality.
+JOBS ?= $(shell nproc)
+WERROR ?= $(if $(FLUTTERSCAN_WERROR),$(FLUTTERSCAN_WERROR),OFF)
+
+.PHONY: all deps build test demo bench asan arm-common format clean
+
+all: build
+
+deps:
+	@tools/install-deps
+
+build: deps
+	cmake --preset host-release -DFLUTTERSCAN_WERROR=$(WERROR) >/dev/null
+	cmake --build --preset host-release -j $(JOBS)
+
+arm-common: deps
+	cmake --preset arm-common -DFLUTTERSCAN_WERROR=$(WERROR) >/dev/null
+	cmake --build --preset arm-common -j $(JOBS)
+
+test: build arm-common
+	ctest --preset host-release -j $(JOBS)
+
+demo: build
+	tools/demo
+
+bench: build
+	tools/bench
+
+asan: deps
+	cmake --preset host-asan -DFLUTTERSCAN_WERROR=$(WERROR) >/dev/null
+	cmake --build --preset host-asan -j $(JOBS)
+	ctest --preset host-asan -j $(JOBS)
+
+format:
+	git ls-files '*.cpp' '*.hpp' | xargs clang-format -i
+
+clean:
+	rm -rf build build-debug build-asan build-arm-common
