@@ -238,6 +238,15 @@ double merit_objective(Merit merit, double value) {
   }
 }
 
+double merit_from_objective(Merit merit, double objective) {
+  switch (merit) {
+    case Merit::kSingle: return std::pow(10.0, objective / 20.0);
+    case Merit::kJoint: return std::pow(10.0, objective / 10.0);
+    case Merit::kMse: return std::pow(10.0, -objective / 10.0);
+    default: return objective;
+  }
+}
+
 double joint_information(const LedCode& code, const LightModel& light, double f) {
   std::array<int, kMaxLeds> on_slots{};
   std::array<std::complex<double>, kMaxLeds> h{};

@@ -100,6 +100,8 @@ class JointWeights {
 /// objective searches maximise: seed merits as they are, 20 log10(single),
 /// 10 log10(joint), -10 log10(mse).
 double merit_objective(Merit merit, double value);
+/// \brief The inverse of merit_objective.
+double merit_from_objective(Merit merit, double objective);
 
 /// \brief A merit's full value: on its grid, refined where the grid is dense.
 /// Fails with the reason where the merit does not apply to the code.

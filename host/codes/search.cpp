@@ -48,6 +48,9 @@ std::string search_options_problem(SearchAlgorithm algorithm, const SearchOption
     const auto& g = options.genetic;
     if (g.population < 2 || g.elites < 0 || g.elites >= g.population)
       return "the genetic population must exceed its elites";
+    if (options.evaluations > 0 && options.evaluations < g.population)
+      return "--evaluations must cover at least one generation (" +
+             std::to_string(g.population) + " evaluations)";
     if (g.crossover < 0 || g.crossover > 1 || g.mutation < 0 || g.mutation > 1)
       return "crossover and mutation rates must lie in 0..1";
   }

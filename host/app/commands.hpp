@@ -1,0 +1,15 @@
+#pragma once
+// Every subcommand registers itself on the CLI11 tree; each lives in its own file.
+
+#include <CLI/CLI.hpp>
+
+namespace flutterscan::app {
+
+/// \brief `flutterscan codes ...`: the code toolkit (codes.cpp).
+void add_codes_command(CLI::App& app);
+void add_codes_score(CLI::App& codes);
+void add_codes_search(CLI::App& codes);
+void add_codes_plot(CLI::App& codes);
+void add_codes_list(CLI::App& codes);
+
+}  // namespace flutterscan::app

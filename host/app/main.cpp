@@ -1,0 +1,37 @@
+// flutterscan: the command-line tool. Exit 0 on success, 1 when the work
+// failed, 2 on bad usage or bad input, with the reason on stderr.
+
+#include <CLI/CLI.hpp>
+
+#include <iostream>
+
+#include "app/cli_errors.hpp"
+#include "app/commands.hpp"
+
+int main(int argc, char** argv) {
+  using namespace flutterscan::app;
+  CLI::App app{"flutterscan: light-efficient flutter-shutter motion deblurring for conveyor belts"};
+  app.name("flutterscan");
+  app.set_version_flag("--version", FLUTTERSCAN_VERSION);
+  app.require_subcommand(1);
+  add_codes_command(app);
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::CallForHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForAllHelp& e) {
+    return app.exit(e);
+  } catch (const CLI::CallForVersion& e) {
+    return app.exit(e);
+  } catch (const CLI::ParseError& e) {
+    std::cerr << "flutterscan: " << e.what() << "\n(run with --help for usage)\n";
+    return 2;
+  } catch (const UsageError& e) {
+    std::cerr << "flutterscan: " << e.what() << "\n";
+    return 2;
+  } catch (const RuntimeFailure& e) {
+    std::cerr << "flutterscan: " << e.what() << "\n";
+    return 1;
+  }
+  return 0;
+}
