@@ -1,8 +1,10 @@
 // `flutterscan codes score CODE... [--merit M] [--json]`
 
+#include <algorithm>
 #include <iostream>
 #include <memory>
 
+#include "app/cli_errors.hpp"
 #include "app/code_arguments.hpp"
 #include "app/commands.hpp"
 #include "codes/code_report.hpp"
@@ -23,8 +25,17 @@ void run(const ScoreOptions& options) {
   const auto merits = parse_merits(options.merits);
   const auto settings = merit_settings(options.merit_flags);
   std::vector<LedCode> codes;  // parse every argument before printing anything
-  for (const auto& argument : options.codes)
+  const bool asks_joint = std::any_of(merits.begin(), merits.end(), [](codes::Merit m) {
+    return m == codes::Merit::kJoint || m == codes::Merit::kMse;
+  });
+  for (const auto& argument : options.codes) {
     codes.push_back(parse_code_argument(argument, options.leds, options.one_of_n));
+    const auto& crosstalk = settings.light.crosstalk;
+    if (asks_joint && crosstalk && crosstalk->leds != codes.back().leds())
+      throw UsageError("--crosstalk has " + std::to_string(crosstalk->leds) +
+                       " columns (LEDs) but code '" + argument + "' has " +
+                       std::to_string(codes.back().leds()) + " LEDs");
+  }
   for (std::size_t i = 0; i < codes.size(); ++i) {
     const auto report = codes::make_code_report(codes[i], merits, settings);
     if (options.json)

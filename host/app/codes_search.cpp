@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <cstdio>
 #include <iostream>
 #include <memory>
@@ -45,7 +46,16 @@ void show_progress(const codes::SearchProgress& progress, codes::Merit merit) {
   std::fflush(stderr);
 }
 
+void check_budget(const SearchFlags& flags) {
+  if (flags.seconds != 0 && !(std::isfinite(flags.seconds) && flags.seconds > 0))
+    throw UsageError("--seconds must be a finite number of seconds > 0, not " +
+                     std::to_string(flags.seconds));
+  if (flags.evaluations < 0)
+    throw UsageError("--evaluations must be > 0, not " + std::to_string(flags.evaluations));
+}
+
 void run(const SearchFlags& flags) {
+  check_budget(flags);
   codes::SearchOptions options;
   const auto merits = parse_merits({flags.merit});
   if (merits.size() != 1) throw UsageError("--merit takes one merit for a search");
@@ -117,12 +127,10 @@ void add_codes_search(CLI::App& codes) {
                       "anneal (incremental annealing) or genetic (the seed's GA, fixed)")
       ->check(CLI::IsMember({"anneal", "genetic"}))
       ->capture_default_str();
-  auto* seconds = command->add_option("--seconds", flags->seconds, "time budget, seconds")
-                      ->check(CLI::PositiveNumber);
+  auto* seconds = command->add_option("--seconds", flags->seconds, "time budget, seconds");
   auto* evaluations =
       command->add_option("--evaluations", flags->evaluations,
-                          "evaluation budget: with --seed the result is the same every run")
-          ->check(CLI::PositiveNumber);
+                          "evaluation budget: with --seed the result is the same every run");
   seconds->excludes(evaluations);
   command->add_option("--seed", flags->seed, "random seed")->capture_default_str();
   command->add_option("--threads", flags->threads, "threads (annealing chains)")

@@ -24,7 +24,13 @@ int main(int argc, char** argv) {
   } catch (const CLI::CallForVersion& e) {
     return app.exit(e);
   } catch (const CLI::ParseError& e) {
-    std::cerr << "flutterscan: " << e.what() << "\n(run with --help for usage)\n";
+    // CLI11 reports a missing subcommand before an unknown one: name the word it did not know.
+    const auto rest = app.remaining(true);
+    if (!rest.empty() && dynamic_cast<const CLI::RequiredError*>(&e) != nullptr)
+      std::cerr << "flutterscan: unknown command '" << rest.front() << "'";
+    else
+      std::cerr << "flutterscan: " << e.what();
+    std::cerr << "\n(run with --help for usage)\n";
     return 2;
   } catch (const UsageError& e) {
     std::cerr << "flutterscan: " << e.what() << "\n";

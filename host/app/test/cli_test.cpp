@@ -1,0 +1,504 @@
+// End-to-end tests of the real `flutterscan` binary: each test runs it as a
+// child process (fork + execv, argv passed directly, no shell) with stdout and
+// stderr captured to files in a per-test temporary directory, then checks the
+// exit code (0 success, 1 runtime failure, 2 bad usage or input), the output
+// and the files written.
+
+#include <fcntl.h>
+#include <gtest/gtest.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cerrno>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <nlohmann/json.hpp>
+#include <ostream>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+using nlohmann::json;
+
+// ---------------------------------------------------------------------------
+// Running the binary
+
+/// \brief What one run of the binary gave back.
+struct RunResult {
+  int exit_code = -1;  ///< the exit status; 128 + N when killed by signal N
+  std::string out;     ///< everything written to stdout
+  std::string err;     ///< everything written to stderr
+};
+
+std::ostream& operator<<(std::ostream& stream, const RunResult& result) {
+  return stream << "exit code " << result.exit_code << "\n--- stdout ---\n"
+                << result.out.substr(0, 2000) << "\n--- stderr ---\n"
+                << result.err.substr(0, 2000) << "\n";
+}
+
+std::string read_file(const fs::path& path) {
+  std::ifstream stream(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(stream), std::istreambuf_iterator<char>()};
+}
+
+/// \brief Runs FLUTTERSCAN_BINARY with `args` (argv[1...]), capturing stdout and
+/// stderr into files under `scratch`. The child gets an alarm so that a hung
+/// binary fails the test instead of the whole suite.
+RunResult run_binary(const std::vector<std::string>& args, const fs::path& scratch) {
+  static int serial = 0;
+  ++serial;
+  const fs::path out_path = scratch / ("stdout-" + std::to_string(serial));
+  const fs::path err_path = scratch / ("stderr-" + std::to_string(serial));
+
+  std::vector<std::string> storage;
+  storage.reserve(args.size() + 1);
+  storage.emplace_back(FLUTTERSCAN_BINARY);
+  storage.insert(storage.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& arg : storage) argv.push_back(arg.data());
+  argv.push_back(nullptr);
+
+  RunResult result;
+  const int out_fd = ::open(out_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  const int err_fd = ::open(err_path.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+  if (out_fd < 0 || err_fd < 0) {
+    ADD_FAILURE() << "cannot create capture files in " << scratch << ": " << std::strerror(errno);
+    if (out_fd >= 0) ::close(out_fd);
+    if (err_fd >= 0) ::close(err_fd);
+    return result;
+  }
+  const int null_fd = ::open("/dev/null", O_RDONLY | O_CLOEXEC);
+
+  const pid_t pid = ::fork();
+  if (pid == 0) {
+    // Child: only async-signal-safe calls until execv.
+    if (null_fd >= 0) ::dup2(null_fd, STDIN_FILENO);
+    ::dup2(out_fd, STDOUT_FILENO);
+    ::dup2(err_fd, STDERR_FILENO);
+    ::alarm(120);  // survives execv: SIGALRM ends a hung child
+    ::execv(argv[0], argv.data());
+    ::_exit(127);
+  }
+  ::close(out_fd);
+  ::close(err_fd);
+  if (null_fd >= 0) ::close(null_fd);
+  if (pid < 0) {
+    ADD_FAILURE() << "fork failed: " << std::strerror(errno);
+    return result;
+  }
+  int status = 0;
+  while (::waitpid(pid, &status, 0) < 0) {
+    if (errno != EINTR) {
+      ADD_FAILURE() << "waitpid failed: " << std::strerror(errno);
+      return result;
+    }
+  }
+  if (WIFEXITED(status))
+    result.exit_code = WEXITSTATUS(status);
+  else if (WIFSIGNALED(status))
+    result.exit_code = 128 + WTERMSIG(status);
+  result.out = read_file(out_path);
+  result.err = read_file(err_path);
+  return result;
+}
+
+/// \brief stdout split into lines; every line must end with '\n'.
+std::vector<std::string> lines_of(const std::string& text) {
+  std::vector<std::string> lines;
+  std::size_t start = 0;
+  while (start < text.size()) {
+    const std::size_t end = text.find('\n', start);
+    if (end == std::string::npos) {
+      ADD_FAILURE() << "output does not end with a newline: " << text.substr(start, 200);
+      lines.push_back(text.substr(start));
+      break;
+    }
+    lines.push_back(text.substr(start, end - start));
+    start = end + 1;
+  }
+  return lines;
+}
+
+/// \brief Every line of stdout parsed as one JSON object (a failure on any other line).
+std::vector<json> json_lines(const std::string& text) {
+  std::vector<json> objects;
+  for (const auto& line : lines_of(text)) {
+    json object = json::parse(line, nullptr, /*allow_exceptions=*/false);
+    EXPECT_FALSE(object.is_discarded()) << "not JSON: " << line.substr(0, 200);
+    EXPECT_TRUE(object.is_object()) << "not a JSON object: " << line.substr(0, 200);
+    objects.push_back(std::move(object));
+  }
+  return objects;
+}
+
+bool contains(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+/// \brief The digit string is a one-of-3 code of `length` slots (digits 1, 2, 4 only).
+void expect_one_of_3(const std::string& code, std::size_t length) {
+  EXPECT_EQ(code.size(), length) << code;
+  EXPECT_EQ(code.find_first_not_of("124"), std::string::npos)
+      << "not a one-of-3 code (digits 1, 2, 4 only): " << code;
+}
+
+constexpr const char* kSeedMaxMin1 = "2212441414112412441224111241244244242212442211444144";
+
+// ---------------------------------------------------------------------------
+// Fixture: a fresh temporary directory per test
+
+class CliTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    const char* base = std::getenv("TMPDIR");
+    std::string pattern = std::string(base && *base ? base : "/tmp") + "/flutterscan-cli-XXXXXX";
+    ASSERT_NE(::mkdtemp(pattern.data()), nullptr) << "mkdtemp: " << std::strerror(errno);
+    dir_ = pattern;
+  }
+
+  void TearDown() override {
+    std::error_code ignored;
+    if (!dir_.empty()) fs::remove_all(dir_, ignored);
+  }
+
+  RunResult run(const std::vector<std::string>& args) { return run_binary(args, dir_); }
+
+  /// \brief Bad usage or input: exit 2, nothing on stdout, and stderr holds every
+  /// one of `needles` (the message names what is wrong and where).
+  void expect_usage_error(const std::vector<std::string>& args,
+                          const std::vector<std::string>& needles) {
+    std::string command;
+    for (const auto& arg : args) command += " '" + arg.substr(0, 60) + "'";
+    SCOPED_TRACE("flutterscan" + command);
+    const RunResult result = run(args);
+    EXPECT_EQ(result.exit_code, 2) << result;
+    EXPECT_TRUE(result.out.empty()) << result;
+    EXPECT_FALSE(result.err.empty()) << result;
+    for (const auto& needle : needles)
+      EXPECT_TRUE(contains(result.err, needle)) << "stderr lacks \"" << needle << "\"\n"
+                                                << result;
+  }
+
+  /// \brief A successful search: exit 0, one JSON line, returned parsed.
+  json search_json(const std::vector<std::string>& options) {
+    std::vector<std::string> args{"codes", "search"};
+    args.insert(args.end(), options.begin(), options.end());
+    args.emplace_back("--json");
+    const RunResult result = run(args);
+    EXPECT_EQ(result.exit_code, 0) << result;
+    const auto objects = json_lines(result.out);
+    EXPECT_EQ(objects.size(), 1U) << result;
+    return objects.empty() ? json::object() : objects.front();
+  }
+
+  fs::path dir_;
+};
+
+// ---------------------------------------------------------------------------
+// codes score
+
+TEST_F(CliTest, ScoreSeedCodeJsonHasTheSeedsMaxMinAndPerLedCounts) {
+  const RunResult result = run({"codes", "score", kSeedMaxMin1, "--json"});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  EXPECT_TRUE(result.err.empty()) << result;
+  const auto objects = json_lines(result.out);
+  ASSERT_EQ(objects.size(), 1U) << result;
+  const json& report = objects.front();
+
+  EXPECT_EQ(report.at("code"), kSeedMaxMin1);
+  ASSERT_TRUE(report.at("merits").at("maxmin").is_number()) << report.dump();
+  EXPECT_NEAR(report["merits"]["maxmin"].get<double>(), -21.4382, 5e-5);
+  EXPECT_TRUE(report["merits"].contains("single"));
+  EXPECT_TRUE(report["merits"]["single"].is_null()) << "single is for one-LED codes";
+
+  const json& per_led = report.at("per_led");
+  ASSERT_TRUE(per_led.is_array());
+  ASSERT_EQ(per_led.size(), 3U);
+  int on_slots = 0;
+  for (const auto& led : per_led) on_slots += led.at("on_slots").get<int>();
+  EXPECT_EQ(on_slots, 52) << "a one-of-3 code has exactly one LED on in each of its 52 slots";
+}
+
+TEST_F(CliTest, ScoreTwoCodesGiveTwoJsonLinesInOrder) {
+  const RunResult result = run({"codes", "score", kSeedMaxMin1, "raskar", "--json"});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  const auto objects = json_lines(result.out);
+  ASSERT_EQ(objects.size(), 2U) << result;
+  EXPECT_EQ(objects[0].at("code"), kSeedMaxMin1);
+  EXPECT_EQ(objects[1].at("name"), "raskar");
+  EXPECT_EQ(objects[1].at("code"), "1010000111000001010000110011110111010111001001100111");
+}
+
+TEST_F(CliTest, ScoreRaskarJson) {
+  const RunResult result = run({"codes", "score", "raskar", "--json"});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  const auto objects = json_lines(result.out);
+  ASSERT_EQ(objects.size(), 1U) << result;
+  const json& merits = objects.front().at("merits");
+  ASSERT_TRUE(merits.at("maxmin").is_number()) << merits.dump();
+  EXPECT_NEAR(merits["maxmin"].get<double>(), -25.4359, 5e-5);
+  EXPECT_TRUE(merits.contains("pairs"));
+  EXPECT_TRUE(merits["pairs"].is_null()) << "pairs needs several LEDs; raskar has one";
+  ASSERT_TRUE(merits.at("single").is_number()) << merits.dump();
+  EXPECT_GT(merits["single"].get<double>(), 0.0);
+  EXPECT_EQ(objects.front().at("leds"), 1);
+}
+
+TEST_F(CliTest, ScoreTextOutputNamesTheCode) {
+  const RunResult result = run({"codes", "score", "raskar"});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  EXPECT_TRUE(contains(result.out, "raskar")) << result;
+  EXPECT_TRUE(contains(result.out, "-25.4359")) << result;
+}
+
+// ---------------------------------------------------------------------------
+// Bad input: exit 2, nothing on stdout, stderr names what and where
+
+TEST_F(CliTest, NonDigitInCodeNamesSlotAndCharacter) {
+  expect_usage_error({"codes", "score", "1212x4"}, {"1212x4", "slot 4", "'x'"});
+}
+
+TEST_F(CliTest, DigitLightingAMissingLedNamesTheSlot) {
+  expect_usage_error({"codes", "score", "12184"}, {"12184", "slot 3"});
+}
+
+TEST_F(CliTest, OneOfNRejectsADigitLightingTwoLeds) {
+  expect_usage_error({"codes", "score", "--one-of-n", "1213"},
+                     {"slot 3: digit 3 lights two LEDs in a one-of-3 code"});
+}
+
+TEST_F(CliTest, EmptyCodeIsRejected) {
+  expect_usage_error({"codes", "score", ""}, {"empty"});
+}
+
+TEST_F(CliTest, TooLongCodeIsRejected) {
+  expect_usage_error({"codes", "score", std::string(257, '1')}, {"257 slots"});
+  // 256 slots is the limit itself and is fine.
+  const RunResult result = run({"codes", "score", std::string(256, '1'), "--merit", "maxmin"});
+  EXPECT_EQ(result.exit_code, 0) << result;
+}
+
+TEST_F(CliTest, UnknownMeritIsNamed) {
+  expect_usage_error({"codes", "score", "raskar", "--merit", "foo"}, {"unknown merit 'foo'"});
+  expect_usage_error({"codes", "search", "--merit", "foo", "--evaluations", "100"},
+                     {"unknown merit 'foo'"});
+}
+
+TEST_F(CliTest, BadCrosstalkEntryNamesRowAndColumn) {
+  expect_usage_error(
+      {"codes", "score", kSeedMaxMin1, "--merit", "joint", "--crosstalk", "1,0;0,x"},
+      {"--crosstalk", "row 1, column 1"});
+}
+
+TEST_F(CliTest, NegativeElectronsIsRejected) {
+  expect_usage_error({"codes", "score", "raskar", "--electrons", "-5"}, {"--electrons"});
+}
+
+TEST_F(CliTest, SearchWithBothBudgetsIsRejected) {
+  expect_usage_error({"codes", "search", "--merit", "maxmin", "--seconds", "1", "--evaluations",
+                      "1000"},
+                     {"--seconds", "--evaluations"});
+}
+
+TEST_F(CliTest, SearchWithoutABudgetIsRejected) {
+  const RunResult result = run({"codes", "search", "--merit", "maxmin"});
+  EXPECT_EQ(result.exit_code, 2) << result;
+  EXPECT_TRUE(result.out.empty()) << result;
+  EXPECT_TRUE(contains(result.err, "--seconds") || contains(result.err, "--evaluations"))
+      << result;
+}
+
+TEST_F(CliTest, PairsSearchOfOneLedIsRejected) {
+  expect_usage_error({"codes", "search", "--merit", "pairs", "--leds", "1", "--evaluations", "1000"},
+                     {"pairs"});
+}
+
+TEST_F(CliTest, MissingOrUnknownSubcommandIsBadUsage) {
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"codes"}, std::vector<std::string>{"codes", "frob"},
+        std::vector<std::string>{}, std::vector<std::string>{"frob"}}) {
+    std::string command;
+    for (const auto& arg : args) command += " " + arg;
+    SCOPED_TRACE("flutterscan" + command);
+    const RunResult result = run(args);
+    EXPECT_EQ(result.exit_code, 2) << result;
+    EXPECT_TRUE(result.out.empty()) << result;
+    EXPECT_FALSE(result.err.empty()) << result;
+  }
+}
+
+// The error message should name the word it did not understand, like every
+// other usage error does.
+TEST_F(CliTest, UnknownSubcommandIsNamedInTheMessage) {
+  expect_usage_error({"codes", "frob"}, {"frob"});
+}
+
+TEST_F(CliTest, ALaterBadCodePrintsNothing) {
+  // Every argument is parsed before anything is printed.
+  expect_usage_error({"codes", "score", "raskar", kSeedMaxMin1, "12184", "--json"},
+                     {"12184", "slot 3"});
+  expect_usage_error({"codes", "score", "raskar", "1212x4"}, {"1212x4", "slot 4"});
+}
+
+// ---------------------------------------------------------------------------
+// codes search
+
+TEST_F(CliTest, AnnealSearchIsDeterministicWithASeed) {
+  const std::vector<std::string> options{"--merit", "maxmin", "--evaluations", "300000",
+                                         "--seed", "5"};
+  const json first = search_json(options);
+  const json second = search_json(options);
+  ASSERT_TRUE(first.contains("code") && second.contains("code"));
+  EXPECT_EQ(first["code"], second["code"]) << "same --seed and --evaluations, same code";
+  expect_one_of_3(first["code"].get<std::string>(), 52);
+  ASSERT_TRUE(first.contains("search"));
+  EXPECT_EQ(first["search"].at("evaluations"), 300000);
+  EXPECT_EQ(first["search"].at("merit"), "maxmin");
+  EXPECT_EQ(first["search"].at("seed"), 5);
+
+  // Another seed must also work (its code is allowed to match or differ).
+  const json other = search_json({"--merit", "maxmin", "--evaluations", "300000", "--seed", "6"});
+  ASSERT_TRUE(other.contains("code"));
+  expect_one_of_3(other["code"].get<std::string>(), 52);
+  EXPECT_EQ(other["search"].at("evaluations"), 300000);
+}
+
+TEST_F(CliTest, GeneticSearchIsDeterministicAndItsSelectionIsWeak) {
+  const std::vector<std::string> options{"--algorithm", "genetic", "--evaluations", "20000",
+                                         "--seed", "5"};
+  const json first = search_json(options);
+  const json second = search_json(options);
+  ASSERT_TRUE(first.contains("code") && second.contains("code"));
+  EXPECT_EQ(first["code"], second["code"]);
+  expect_one_of_3(first["code"].get<std::string>(), 52);
+  ASSERT_TRUE(first.contains("search"));
+  EXPECT_EQ(first["search"].at("evaluations"), 20000);
+  EXPECT_EQ(first["search"].at("algorithm"), "genetic");
+  ASSERT_TRUE(first["search"].contains("mean_selection_pressure")) << first["search"].dump();
+  const double pressure = first["search"]["mean_selection_pressure"].get<double>();
+  // The seed's roulette on 1000 + score barely favours the best.
+  EXPECT_GE(pressure, 1.0);
+  EXPECT_LE(pressure, 1.1);
+}
+
+TEST_F(CliTest, BalancedSearchGives17And18And17OnSlots) {
+  const json found = search_json(
+      {"--leds", "3", "--balanced", "--merit", "joint", "--evaluations", "100000", "--seed", "2"});
+  ASSERT_TRUE(found.contains("per_led")) << found.dump();
+  std::vector<int> counts;
+  for (const auto& led : found["per_led"]) counts.push_back(led.at("on_slots").get<int>());
+  std::sort(counts.begin(), counts.end());
+  EXPECT_EQ(counts, (std::vector<int>{17, 17, 18}));
+  expect_one_of_3(found.at("code").get<std::string>(), 52);
+}
+
+TEST_F(CliTest, SingleLedSearchWithOnesGivesThatManyOnes) {
+  const json found = search_json({"--leds", "1", "--merit", "single", "--ones", "26",
+                                  "--evaluations", "100000", "--seed", "2"});
+  ASSERT_TRUE(found.contains("code")) << found.dump();
+  const std::string code = found["code"].get<std::string>();
+  EXPECT_EQ(code.size(), 52U) << code;
+  EXPECT_EQ(code.find_first_not_of("01"), std::string::npos) << code;
+  EXPECT_EQ(std::count(code.begin(), code.end(), '1'), 26) << code;
+  EXPECT_EQ(found.at("leds"), 1);
+  ASSERT_TRUE(found.at("merits").at("single").is_number());
+  EXPECT_GT(found["merits"]["single"].get<double>(), 0.0);
+}
+
+// ---------------------------------------------------------------------------
+// codes plot
+
+TEST_F(CliTest, PlotWritesAPng) {
+  const fs::path png = dir_ / "s.png";
+  const RunResult result = run({"codes", "plot", "raskar", "seed-maxmin-1", "-o", png.string()});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  ASSERT_TRUE(fs::exists(png)) << result;
+  const std::string bytes = read_file(png);
+  const std::string signature("\x89PNG\r\n\x1a\n", 8);
+  ASSERT_GE(bytes.size(), signature.size());
+  EXPECT_EQ(bytes.substr(0, 8), signature);
+  EXPECT_GT(bytes.size(), 1000U) << "a chart is more than a header";
+}
+
+TEST_F(CliTest, PlotIntoAMissingDirectoryFailsAtRuntime) {
+  const std::string path = "/nonexistent-dir/x.png";
+  const RunResult result = run({"codes", "plot", "raskar", "-o", path});
+  EXPECT_EQ(result.exit_code, 1) << result;
+  EXPECT_TRUE(contains(result.err, path)) << result;
+  EXPECT_FALSE(fs::exists(path));
+}
+
+TEST_F(CliTest, PlotWithABadCodeLeavesAnExistingFileIntact) {
+  const fs::path png = dir_ / "keep.png";
+  const std::string original = "not really a png, but it must survive\n";
+  {
+    std::ofstream stream(png, std::ios::binary);
+    stream << original;
+  }
+  const RunResult result =
+      run({"codes", "plot", "raskar", "1212x4", "-o", png.string()});
+  EXPECT_EQ(result.exit_code, 2) << result;
+  EXPECT_TRUE(contains(result.err, "1212x4")) << result;
+  EXPECT_EQ(read_file(png), original);
+  // No stray temporary files next to it either.
+  std::vector<std::string> names;
+  for (const auto& entry : fs::directory_iterator(dir_)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind("stdout-", 0) != 0 && name.rfind("stderr-", 0) != 0) names.push_back(name);
+  }
+  EXPECT_EQ(names, std::vector<std::string>{"keep.png"});
+}
+
+// ---------------------------------------------------------------------------
+// codes list
+
+TEST_F(CliTest, ListShowsTheLibrary) {
+  const RunResult result = run({"codes", "list"});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  EXPECT_TRUE(contains(result.out, "seed-maxmin-1")) << result;
+  EXPECT_TRUE(contains(result.out, "raskar")) << result;
+}
+
+TEST_F(CliTest, ListJsonHasANameAndMeritsOnEveryLine) {
+  const RunResult result = run({"codes", "list", "--json"});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  const auto objects = json_lines(result.out);
+  ASSERT_GE(objects.size(), 2U) << result;
+  std::vector<std::string> names;
+  for (const auto& object : objects) {
+    ASSERT_TRUE(object.contains("name")) << object.dump();
+    ASSERT_TRUE(object.contains("merits")) << object.dump();
+    EXPECT_TRUE(object["merits"].is_object()) << object.dump();
+    names.push_back(object["name"].get<std::string>());
+  }
+  EXPECT_NE(std::find(names.begin(), names.end(), "seed-maxmin-1"), names.end());
+  EXPECT_NE(std::find(names.begin(), names.end(), "raskar"), names.end());
+}
+
+// ---------------------------------------------------------------------------
+// --help
+
+TEST_F(CliTest, HelpOnEverySubcommandSucceeds) {
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"--help"}, std::vector<std::string>{"codes", "--help"},
+        std::vector<std::string>{"codes", "score", "--help"},
+        std::vector<std::string>{"codes", "search", "--help"},
+        std::vector<std::string>{"codes", "plot", "--help"},
+        std::vector<std::string>{"codes", "list", "--help"}}) {
+    std::string command;
+    for (const auto& arg : args) command += " " + arg;
+    SCOPED_TRACE("flutterscan" + command);
+    const RunResult result = run(args);
+    EXPECT_EQ(result.exit_code, 0) << result;
+    EXPECT_TRUE(contains(result.out, "Usage")) << result;
+  }
+}
+
+}  // namespace
