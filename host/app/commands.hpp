@@ -11,5 +11,9 @@ void add_codes_score(CLI::App& codes);
 void add_codes_search(CLI::App& codes);
 void add_codes_plot(CLI::App& codes);
 void add_codes_list(CLI::App& codes);
+/// \brief `flutterscan simulate` (simulate.cpp).
+void add_simulate(CLI::App& app);
+/// \brief `flutterscan deblur` (deblur.cpp).
+void add_deblur(CLI::App& app);
 
 }  // namespace flutterscan::app

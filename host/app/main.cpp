@@ -15,6 +15,8 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", FLUTTERSCAN_VERSION);
   app.require_subcommand(1);
   add_codes_command(app);
+  add_simulate(app);
+  add_deblur(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -5,7 +5,7 @@
 namespace flutterscan::codes {
 namespace {
 
-constexpr std::array<LibraryCode, 15> kLibrary = {{
+constexpr std::array<LibraryCode, 17> kLibrary = {{
     {"rect", "1111111111111111111111111111111111111111111111111111", 1,
      "conventional exposure: one LED on in every slot", false},
     {"rect-white", "7777777777777777777777777777777777777777777777777777", 3,
@@ -31,12 +31,17 @@ constexpr std::array<LibraryCode, 15> kLibrary = {{
     {"seed-pairs", "2221421124421222111122142141211244121242241114221211", 3,
      "seed third section 5.1, pairs merit -21.6372 dB (printed with a stray '1' at index 48)",
      true},
-    {"found-joint", "2141422241421222444412211121421421144112442121242212", 3,
-     "flutterscan annealing search, joint merit (E 3000 e-, c 3, read noise 4 e-)", false},
-    {"found-maxmin", "2211221142442121241421224421112424412242111122124224", 3,
-     "flutterscan annealing search, max-min merit", false},
-    {"found-avgmin", "4224441224211121442242124112244224121241142212424241", 3,
-     "flutterscan annealing search, average-min merit", false},
+    {"found-joint", "4144414111414444112422141121412124421244141221422122", 3,
+     "flutterscan annealing, 60 s, joint merit (E 3000 e-, c 3, read noise 4 e-): 204.1 e-",
+     false},
+    {"found-maxmin", "4114141211221111241144112141141124421111422222121211", 3,
+     "flutterscan annealing, 60 s, max-min merit: -20.7890 dB", false},
+    {"found-avgmin", "4111424412221114412411244211214144114242111421414212", 3,
+     "flutterscan annealing, 60 s, average-min merit: -24.1266 dB", false},
+    {"found-pairs", "2441114424142411441121422441121142141421411414121112", 3,
+     "flutterscan annealing, 60 s, pairs merit: -20.7779 dB", false},
+    {"found-mse", "4242221144411121214241142422112112214412414144224412", 3,
+     "flutterscan annealing, 60 s, mse merit (E 3000 e-, c 3, read noise 4 e-, eps 10)", false},
 }};
 
 }  // namespace

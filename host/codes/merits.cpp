@@ -193,7 +193,8 @@ double merit_on_grid(Merit merit, const GridSpectra& spectra, const MeritSetting
 
 JointWeights::JointWeights(std::span<const int> on_slots, int length, const LightModel& light)
     : leds_(static_cast<int>(on_slots.size())),
-      channels_(light.crosstalk ? light.crosstalk->channels : leds_) {
+      channels_(light.crosstalk ? light.crosstalk->channels : leds_),
+      diagonal_(!light.crosstalk) {
   const double peak = light.cap * light.electrons / length;
   for (int k = 0; k < leds_; ++k) {
     const int n = on_slots[static_cast<std::size_t>(k)];
@@ -218,6 +219,13 @@ JointWeights::JointWeights(std::span<const int> on_slots, int length, const Ligh
 
 double JointWeights::value(std::span<const std::complex<double>> h_at_frequency) const {
   double total = 0;
+  if (diagonal_) {
+    for (int k = 0; k < leds_; ++k) {
+      const double a = amplitude_[static_cast<std::size_t>(k * leds_ + k)];
+      total += a * a * std::norm(h_at_frequency[static_cast<std::size_t>(k)]);
+    }
+    return total;
+  }
   for (int c = 0; c < channels_; ++c) {
     std::complex<double> channel = 0;
     for (int k = 0; k < leds_; ++k)

@@ -92,6 +92,7 @@ class JointWeights {
  private:
   int leds_;
   int channels_;
+  bool diagonal_;  ///< no crosstalk: channel k sees LED k alone
   std::array<double, kMaxLeds * kMaxLeds> amplitude_{};  ///< M[c][k] I_k / sqrt(v_c), by channel
   std::array<double, kMaxLeds> intensity_{};
 };

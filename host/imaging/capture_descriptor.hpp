@@ -1,0 +1,28 @@
+#pragma once
+// The capture descriptor: a CaptureModel as JSON, the file that travels beside
+// every captured or simulated frame (docs/formats.md).
+
+#include <nlohmann/json.hpp>
+
+#include <string>
+
+#include "flutterscan/common/result.hpp"
+#include "imaging/capture_model.hpp"
+
+namespace flutterscan::imaging {
+
+inline constexpr const char* kDescriptorFormat = "flutterscan-capture";
+inline constexpr int kDescriptorVersion = 1;
+
+/// \brief The descriptor of `model`.
+nlohmann::json to_descriptor(const CaptureModel& model);
+
+/// \brief Reads a descriptor; the error names the field and what is wrong with it.
+Result<CaptureModel, std::string> from_descriptor(const nlohmann::json& descriptor);
+
+/// \brief "+x", "-x", "+y", "-y".
+std::string direction_name(Direction direction);
+/// \brief Parses a direction name; false if it is none of the four.
+bool parse_direction(const std::string& text, Direction& direction);
+
+}  // namespace flutterscan::imaging

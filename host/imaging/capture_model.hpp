@@ -1,0 +1,64 @@
+#pragma once
+// The capture model of one frame (design.md, "Physics"): which code lit it,
+// how far the scene moved, how LED light reaches the camera channels, and the
+// camera's EMVA 1288 noise parameters. From it come each channel's effective
+// motion PSF and noise variance; the simulator and every deblurring method use
+// the same functions, so they agree to the last tap.
+
+#include <array>
+#include <string>
+#include <vector>
+
+#include "flutterscan/common/led_code.hpp"
+
+namespace flutterscan::imaging {
+
+/// \brief Scene motion during the exposure: +x = toward larger column index.
+enum class Direction { kPlusX, kMinusX, kPlusY, kMinusY };
+
+/// \brief How stored pixel values relate to light.
+enum class Encoding { kLinear, kSrgb, kGamma };
+
+struct CaptureModel {
+  LedCode code;                        ///< the exposure's LED pattern
+  std::array<int, kMaxLeds> led_of_bit{0, 1, 2, 3};  ///< code bit k drives LED led_of_bit[k]
+  double blur_px = 52;                 ///< total motion during the exposure, pixels
+  Direction direction = Direction::kPlusX;
+  int channels = 3;                    ///< camera channels: 3 (RGB) or 1 (mono)
+  /// crosstalk[c * leds + led]: share of LED `led`'s light in channel c (rows = channels).
+  std::vector<double> crosstalk = {1, 0, 0, 0, 1, 0, 0, 0, 1};
+  int leds = 3;                        ///< physical LEDs (columns of crosstalk)
+  std::vector<double> led_electrons = {0, 0, 0};  ///< I_k: e- per slot, white object, own channel
+  std::vector<double> ambient_electrons = {0, 0, 0};  ///< e- per exposure per channel, white
+  double black_level = 0;              ///< DN
+  double gain = 1;                     ///< conversion gain, e- per DN
+  double read_noise = 4;               ///< e- rms
+  double full_well = 12000;            ///< e-
+  int bit_depth = 12;
+  Encoding encoding = Encoding::kLinear;
+  double gamma = 2.2;                  ///< for Encoding::kGamma
+  bool bayer_rggb = false;             ///< raw Bayer RGGB mosaic rather than RGB
+};
+
+/// \brief The first problem with `model` (empty if none): non-finite or negative
+/// parameters, sizes that disagree, a code with more bits than LEDs.
+std::string capture_model_problem(const CaptureModel& model);
+
+/// \brief Electrons per slot of each code bit under the light budget of
+/// design.md: I = min(E / n, cap * E / L), n the bit's on-slots.
+std::vector<double> budgeted_led_electrons(const LedCode& code, double electrons, double cap);
+
+/// \brief Channel c's motion PSF along the motion, in e- per unit reflectance:
+/// tap j is the light that a white point deposits j pixels downstream. Each
+/// slot is a box of width blur / L (sub-pixel exact); ambient light is a box
+/// over the whole exposure. Sums to the white level of the channel.
+std::vector<double> channel_psf(const CaptureModel& model, int channel);
+
+/// \brief Expected electrons a white object gives channel c over the exposure.
+double channel_white_electrons(const CaptureModel& model, int channel);
+
+/// \brief Noise variance (e-^2) of channel c at a mean signal of `signal_electrons`:
+/// shot noise, read noise and quantisation.
+double channel_noise_variance(const CaptureModel& model, double signal_electrons);
+
+}  // namespace flutterscan::imaging

@@ -1,0 +1,99 @@
+#include "imaging/deblur.hpp"
+
+#include <cmath>
+
+#include "imaging/joint_wiener.hpp"
+#include "imaging/motion_frame.hpp"
+#include "imaging/richardson_lucy.hpp"
+
+namespace flutterscan::imaging {
+namespace {
+
+double mean_of(const Plane& plane) {
+  double sum = 0;
+  for (float v : plane.pixels) sum += v;
+  return plane.pixels.empty() ? 0.0 : sum / static_cast<double>(plane.pixels.size());
+}
+
+}  // namespace
+
+std::string method_name(Method method) {
+  switch (method) {
+    case Method::kJointWiener: return "joint-wiener";
+    case Method::kWienerAverage: return "wiener-avg";
+    case Method::kRichardsonLucy: return "rl";
+  }
+  return "?";
+}
+
+std::optional<Method> method_from_name(const std::string& name) {
+  for (Method m : {Method::kJointWiener, Method::kWienerAverage, Method::kRichardsonLucy})
+    if (method_name(m) == name) return m;
+  return std::nullopt;
+}
+
+Result<DeblurResult, std::string> deblur(const Image& electrons, const CaptureModel& model,
+                                         const DeblurOptions& options) {
+  using Out = Result<DeblurResult, std::string>;
+  if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
+  if (electrons.channel_count() != model.channels)
+    return Out::failure("the frame has " + std::to_string(electrons.channel_count()) +
+                        " channels but the capture model " + std::to_string(model.channels));
+  const bool along_x = model.direction == Direction::kPlusX || model.direction == Direction::kMinusX;
+  const int along = along_x ? electrons.width() : electrons.height();
+  if (model.blur_px >= along)
+    return Out::failure("the blur (" + std::to_string(model.blur_px) +
+                        " px) is not shorter than the image along the motion (" +
+                        std::to_string(along) + " px)");
+  if (!(options.gradient_variance > 0) || !std::isfinite(options.gradient_variance))
+    return Out::failure("the prior gradient variance must be a finite number > 0");
+  if (options.iterations < 1) return Out::failure("iterations must be at least 1");
+
+  DeblurResult result;
+  std::vector<Plane> rows;
+  std::vector<ChannelPsf> psfs;
+  for (int c = 0; c < model.channels; ++c) {
+    rows.push_back(to_motion_frame(electrons.channels[static_cast<std::size_t>(c)], model.direction));
+    const double variance = channel_noise_variance(model, mean_of(rows.back()));
+    result.noise_variance.push_back(variance);
+    psfs.push_back({channel_psf(model, c), variance});
+  }
+  double white = 0;
+  for (const auto& p : psfs)
+    for (double tap : p.taps) white += tap;
+  if (white <= 0) return Out::failure("the capture model lights no channel: every PSF is zero");
+
+  const int width = rows[0].width;
+  const double lambda = 1.0 / options.gradient_variance;
+  Plane latent;
+  switch (options.method) {
+    case Method::kJointWiener:
+      latent = JointWiener(psfs, width, lambda).deconvolve(rows, options.threads);
+      break;
+    case Method::kWienerAverage: {
+      int used = 0;
+      for (std::size_t c = 0; c < psfs.size(); ++c) {
+        double gain = 0;
+        for (double tap : psfs[c].taps) gain += tap;
+        if (gain <= 0) continue;  // a channel no LED reaches carries no image
+        const Plane one = JointWiener({&psfs[c], 1}, width, lambda)
+                              .deconvolve({&rows[c], 1}, options.threads);
+        if (latent.empty()) latent = Plane(one.width, one.height);
+        for (std::size_t i = 0; i < one.pixels.size(); ++i) latent.pixels[i] += one.pixels[i];
+        ++used;
+      }
+      for (float& v : latent.pixels) v /= static_cast<float>(used);
+      break;
+    }
+    case Method::kRichardsonLucy: {
+      const RichardsonLucySettings settings{options.iterations, options.accelerate, options.damping};
+      latent = RichardsonLucy(psfs, width, model.read_noise * model.read_noise, settings)
+                   .deconvolve(rows, options.threads);
+      break;
+    }
+  }
+  result.latent = from_motion_frame(latent, model.direction);
+  return Out::success(std::move(result));
+}
+
+}  // namespace flutterscan::imaging

@@ -1,0 +1,83 @@
+#pragma once
+// Joint Wiener deconvolution along rows (design.md):
+//   X = sum_c conj(G_c) Y_c / v_c / (sum_c |G_c|^2 / v_c + lambda P(w)),
+// G_c channel c's PSF spectrum, v_c its noise variance, P(w) = |1 - e^{-iw}|^2
+// the power of the gradient along the row (a smoothness prior). With one
+// channel it is the plain Wiener filter.
+//
+// Borders: each row of width W is extended to the padded FFT length N >= W + K
+// (K taps of PSF) by a raised-cosine blend from the row's last value back to
+// its first, so the padded row is periodic without a jump; the circular
+// deconvolution then has no edge to ring at, and the extension absorbs the
+// blur tail that entered the frame from the left. Output column n is the
+// latent at column n (registered at the start of slot 0).
+
+#include <complex>
+#include <functional>
+#include <span>
+#include <vector>
+
+#include "imaging/image.hpp"
+#include "imaging/row_fft.hpp"
+#include "imaging/row_pool.hpp"
+
+namespace flutterscan::imaging {
+
+/// \brief Raised-cosine weights for extending a row of `width` to `padded` samples.
+std::vector<float> periodic_blend(int width, int padded);
+
+/// \brief Fills padded[W..N) from padded[0..W) with the smooth periodic
+/// extension: blend[i] carries the row's last value back to its first.
+void extend_row_periodically(std::span<float> padded, int width, std::span<const float> blend);
+
+/// \brief One channel's part of the problem: PSF taps (e- per unit reflectance) and noise variance.
+struct ChannelPsf {
+  std::vector<double> taps;
+  double noise_variance = 1;
+};
+
+/// \brief A joint Wiener filter for rows of one width, plans and filters made
+/// once, reusable for any number of frames.
+class JointWiener {
+ public:
+  /// \brief `lambda` weights the gradient prior (inverse latent gradient variance).
+  JointWiener(std::span<const ChannelPsf> channels, int width, double lambda,
+              PlanEffort effort = PlanEffort::kEstimate);
+
+  int width() const { return width_; }
+  int channel_count() const { return static_cast<int>(filters_.size()); }
+  int padded_length() const { return fft_.length(); }
+
+  /// \brief Deconvolves one row. `rows[c]` is channel c's observed row (electrons,
+  /// width() samples); the latent row (reflectance) goes to `out`. `scratch` must
+  /// come from make_scratch() and not be shared between threads.
+  struct Scratch {
+    AlignedFloats padded;
+    AlignedFloats spectrum;
+    AlignedFloats sum;
+  };
+  Scratch make_scratch() const;
+  /// \brief Writes channel `channel`'s row `y` (electrons, width() samples) into `row`.
+  using RowLoader = std::function<void(int y, int channel, std::span<float> row)>;
+  void deconvolve_row(int y, const RowLoader& load, std::span<float> out, Scratch& scratch) const;
+
+  /// \brief Deconvolves `height` rows fetched by `load` into `out` (width() x height,
+  /// allocated by the caller) on `pool`. Buffers are made on the first call for a
+  /// pool size and reused: steady-state frames allocate nothing.
+  void deconvolve(const RowLoader& load, int height, Plane& out, RowPool& pool);
+
+  /// \brief Deconvolves whole planes (rows in the motion frame) on `threads` threads.
+  Plane deconvolve(std::span<const Plane> channels, int threads);
+
+ private:
+  int width_;
+  RowFft fft_;
+  std::vector<std::vector<std::complex<float>>> filters_;  ///< conj(G_c) / v_c / D / N
+  std::vector<float> blend_;
+  std::vector<Scratch> workers_;
+};
+
+/// \brief Spectrum of `taps` on the bins of an n-point real FFT.
+std::vector<std::complex<double>> psf_spectrum(std::span<const double> taps, int n);
+
+}  // namespace flutterscan::imaging

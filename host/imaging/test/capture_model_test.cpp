@@ -1,0 +1,131 @@
+#include "imaging/capture_model.hpp"
+
+#include <gtest/gtest.h>
+
+#include <numeric>
+
+#include "imaging/capture_descriptor.hpp"
+#include "imaging/motion_frame.hpp"
+
+namespace flutterscan::imaging {
+namespace {
+
+CaptureModel seed_capture(double blur) {
+  CaptureModel m;
+  m.code = LedCode::parse("2212441414112412441224111241244244242212442211444144", 3).value();
+  m.blur_px = blur;
+  m.led_electrons = budgeted_led_electrons(m.code, 3000, 3);
+  return m;
+}
+
+double sum(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0); }
+
+TEST(CaptureModel, BudgetCapsShortLeds) {
+  const auto code = LedCode::parse("1111111111111111122222222222222222244444444444444444", 3).value();
+  const auto I = budgeted_led_electrons(code, 3000, 3);
+  EXPECT_NEAR(I[0], 3000.0 / 17, 1e-9);           // 17 slots: E / n below the cap
+  EXPECT_NEAR(I[1], 3000.0 / 18, 1e-9);
+  const auto capped = budgeted_led_electrons(code, 3000, 1);
+  EXPECT_NEAR(capped[0], 3000.0 / 52, 1e-9);      // c = 1: peak limit E / L
+}
+
+TEST(CaptureModel, PsfCarriesTheWhiteLevelOfItsChannel) {
+  const CaptureModel m = seed_capture(52);
+  for (int c = 0; c < 3; ++c) {
+    const auto psf = channel_psf(m, c);
+    EXPECT_NEAR(sum(psf), m.code.on_slots(c) * m.led_electrons[static_cast<std::size_t>(c)], 1e-9);
+    EXPECT_LE(psf.size(), 53u);
+  }
+  // One slot per pixel: tap t is lit exactly when the code lights that LED in slot t.
+  const auto red = channel_psf(m, 0);
+  for (int t = 0; t < static_cast<int>(red.size()); ++t)
+    EXPECT_NEAR(red[static_cast<std::size_t>(t)], m.code.is_on(t, 0) ? m.led_electrons[0] : 0.0, 1e-9) << t;
+}
+
+TEST(CaptureModel, SubPixelSlotsAreExact) {
+  const CaptureModel m = seed_capture(13);  // four slots per pixel
+  const auto blue = channel_psf(m, 2);
+  EXPECT_EQ(blue.size(), 13u);
+  for (int p = 0; p < 13; ++p) {
+    int lit = 0;
+    for (int t = 4 * p; t < 4 * p + 4; ++t) lit += m.code.is_on(t, 2);
+    EXPECT_NEAR(blue[static_cast<std::size_t>(p)], lit * m.led_electrons[2], 1e-9);
+  }
+  const CaptureModel still = seed_capture(0);
+  EXPECT_EQ(channel_psf(still, 1).size(), 1u);
+}
+
+TEST(CaptureModel, CrosstalkAndAmbientEnterEveryChannel) {
+  CaptureModel m = seed_capture(52);
+  m.crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
+  m.ambient_electrons = {100, 0, 0};
+  double expected = 100;
+  for (int k = 0; k < 3; ++k) expected += m.crosstalk[static_cast<std::size_t>(k)] * m.led_electrons[static_cast<std::size_t>(k)] * m.code.on_slots(k);
+  EXPECT_NEAR(channel_white_electrons(m, 0), expected, 1e-6);
+}
+
+TEST(CaptureModel, ProblemsAreNamed) {
+  CaptureModel m = seed_capture(52);
+  EXPECT_EQ(capture_model_problem(m), "");
+  m.blur_px = -1;
+  EXPECT_NE(capture_model_problem(m).find("blur"), std::string::npos);
+  m = seed_capture(52);
+  m.gain = 0;
+  EXPECT_NE(capture_model_problem(m).find("gain"), std::string::npos);
+  m = seed_capture(52);
+  m.crosstalk.pop_back();
+  EXPECT_NE(capture_model_problem(m).find("crosstalk"), std::string::npos);
+}
+
+TEST(CaptureDescriptor, RoundTrips) {
+  CaptureModel m = seed_capture(37.5);
+  m.direction = Direction::kMinusY;
+  m.crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
+  m.encoding = Encoding::kSrgb;
+  m.black_level = 64;
+  const auto back = from_descriptor(to_descriptor(m));
+  ASSERT_TRUE(back.ok()) << back.error();
+  EXPECT_EQ(back.value().code, m.code);
+  EXPECT_EQ(back.value().direction, Direction::kMinusY);
+  EXPECT_EQ(back.value().crosstalk, m.crosstalk);
+  EXPECT_EQ(back.value().blur_px, 37.5);
+  EXPECT_EQ(back.value().encoding, Encoding::kSrgb);
+  EXPECT_EQ(back.value().black_level, 64);
+  EXPECT_EQ(to_descriptor(back.value()), to_descriptor(m));
+}
+
+TEST(CaptureDescriptor, BadFieldsAreNamed) {
+  auto d = to_descriptor(seed_capture(52));
+  d["blur_px"] = "fast";
+  EXPECT_EQ(from_descriptor(d).error(), "field 'blur_px' must be a number");
+  d = to_descriptor(seed_capture(52));
+  d.erase("gain_e_per_dn");
+  EXPECT_EQ(from_descriptor(d).error(), "missing field 'gain_e_per_dn'");
+  d = to_descriptor(seed_capture(52));
+  d["version"] = 9;
+  EXPECT_NE(from_descriptor(d).error().find("version 9"), std::string::npos);
+  d = to_descriptor(seed_capture(52));
+  d["code"] = "12x4";
+  EXPECT_NE(from_descriptor(d).error().find("slot 2"), std::string::npos);
+  d = to_descriptor(seed_capture(52));
+  d["crosstalk"][1] = {1, 2};
+  EXPECT_NE(from_descriptor(d).error().find("row 1"), std::string::npos);
+  EXPECT_FALSE(from_descriptor(nlohmann::json::array()).ok());
+}
+
+TEST(MotionFrame, EveryDirectionRoundTrips) {
+  Plane p(5, 3);
+  for (std::size_t i = 0; i < p.pixels.size(); ++i) p.pixels[i] = static_cast<float>(i);
+  for (Direction d : {Direction::kPlusX, Direction::kMinusX, Direction::kPlusY, Direction::kMinusY}) {
+    const Plane moved = to_motion_frame(p, d);
+    EXPECT_EQ(from_motion_frame(moved, d).pixels, p.pixels);
+  }
+  // +y: the motion runs down the columns, so column 0 becomes row 0.
+  const Plane down = to_motion_frame(p, Direction::kPlusY);
+  EXPECT_EQ(down.width, 3);
+  EXPECT_EQ(down.at(1, 0), p.at(0, 1));
+  EXPECT_EQ(to_motion_frame(p, Direction::kMinusX).at(0, 0), p.at(4, 0));
+}
+
+}  // namespace
+}  // namespace flutterscan::imaging

@@ -1,0 +1,85 @@
+#include "sim/forward_model.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "imaging/motion_frame.hpp"
+
+namespace flutterscan::sim {
+namespace {
+
+using imaging::Plane;
+
+/// y[n] = sum_j taps[j] * r[n - j] along each row, r clamped at the left edge.
+Plane blur_rows(const Plane& r, const std::vector<double>& taps) {
+  Plane out(r.width, r.height);
+  for (int y = 0; y < r.height; ++y) {
+    const auto in = r.row(y);
+    auto dst = out.row(y);
+    for (int n = 0; n < r.width; ++n) {
+      double sum = 0;
+      for (std::size_t j = 0; j < taps.size(); ++j) {
+        const int source = std::max(0, n - static_cast<int>(j));
+        sum += taps[j] * in[static_cast<std::size_t>(source)];
+      }
+      dst[static_cast<std::size_t>(n)] = static_cast<float>(sum);
+    }
+  }
+  return out;
+}
+
+double linear_to_srgb(double v) {
+  return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
+}
+
+}  // namespace
+
+imaging::Image expected_electrons(const Plane& reflectance, const imaging::CaptureModel& model) {
+  const Plane moving = imaging::to_motion_frame(reflectance, model.direction);
+  imaging::Image out;
+  for (int c = 0; c < model.channels; ++c)
+    out.channels.push_back(imaging::from_motion_frame(
+        blur_rows(moving, imaging::channel_psf(model, c)), model.direction));
+  return out;
+}
+
+imaging::Image record_frame(const imaging::Image& expected, const imaging::CaptureModel& model,
+                            std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> read(0.0, model.read_noise);
+  const double full_scale = std::pow(2.0, model.bit_depth) - 1.0;
+  auto record = [&](double electrons) {
+    const double mean = std::max(0.0, electrons);
+    double e = mean > 0 ? static_cast<double>(std::poisson_distribution<long long>(mean)(rng)) : 0.0;
+    e = std::min(e, model.full_well) + (model.read_noise > 0 ? read(rng) : 0.0);
+    double dn = std::clamp(std::round(e / model.gain + model.black_level), 0.0, full_scale);
+    if (model.encoding != imaging::Encoding::kLinear) {
+      const double unit = dn / full_scale;
+      dn = std::round(full_scale * (model.encoding == imaging::Encoding::kSrgb
+                                        ? linear_to_srgb(unit)
+                                        : std::pow(unit, 1.0 / model.gamma)));
+    }
+    return static_cast<float>(dn);
+  };
+  imaging::Image out;
+  if (model.bayer_rggb) {
+    const int w = expected.width(), h = expected.height();
+    Plane mosaic(w, h);
+    for (int y = 0; y < h; ++y)
+      for (int x = 0; x < w; ++x) {
+        const int channel = (y % 2 == 0) ? (x % 2 == 0 ? 0 : 1) : (x % 2 == 0 ? 1 : 2);
+        mosaic.at(x, y) = record(expected.channels[static_cast<std::size_t>(channel)].at(x, y));
+      }
+    out.channels.push_back(std::move(mosaic));
+    return out;
+  }
+  for (const Plane& plane : expected.channels) {
+    Plane dn(plane.width, plane.height);
+    for (std::size_t i = 0; i < plane.pixels.size(); ++i) dn.pixels[i] = record(plane.pixels[i]);
+    out.channels.push_back(std::move(dn));
+  }
+  return out;
+}
+
+}  // namespace flutterscan::sim

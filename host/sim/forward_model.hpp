@@ -1,0 +1,27 @@
+#pragma once
+// The forward model of design.md: a grey scene (reflectance) moving under
+// coded LED light, seen through the camera's channels with crosstalk and
+// ambient light, and recorded with EMVA 1288 noise.
+
+#include <cstdint>
+
+#include "imaging/capture_model.hpp"
+#include "imaging/image.hpp"
+
+namespace flutterscan::sim {
+
+/// \brief Expected electrons per channel (no noise): channel_psf applied along
+/// the motion. Scene content upstream of the frame edge repeats the edge pixels
+/// (the belt continues).
+imaging::Image expected_electrons(const imaging::Plane& reflectance,
+                                  const imaging::CaptureModel& model);
+
+/// \brief One recorded frame in DN (integer-valued floats): Poisson shot noise,
+/// Gaussian read noise, saturation at the full well, DN = e / gain + black
+/// level, rounded and clipped to the bit depth, then encoded (sRGB or gamma)
+/// if the model says so. Deterministic for a given seed. A Bayer model gives
+/// one plane holding the RGGB mosaic.
+imaging::Image record_frame(const imaging::Image& expected, const imaging::CaptureModel& model,
+                            std::uint64_t seed);
+
+}  // namespace flutterscan::sim

@@ -1,0 +1,185 @@
+// The forward model, and deblurring its frames: the simulator and every
+// method share channel_psf, so a frame simulated here is the exact problem
+// each method claims to solve.
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "imaging/deblur.hpp"
+#include "imaging/frame_conversion.hpp"
+#include "imaging/capture_descriptor.hpp"
+#include "imaging/metrics.hpp"
+#include "imaging/motion_frame.hpp"
+#include "sim/forward_model.hpp"
+
+namespace flutterscan::sim {
+namespace {
+
+using imaging::CaptureModel;
+using imaging::Direction;
+using imaging::Plane;
+
+/// A label-like scene: random bars along x (2-6 px wide, ink 0.06 or paper 0.9), on belt grey rows.
+Plane bars(int width, int height, unsigned seed) {
+  Plane p(width, height, 0.35f);
+  std::mt19937 rng(seed);
+  std::vector<float> pattern(static_cast<std::size_t>(width));
+  for (int x = 0; x < width;) {
+    const int run = 2 + static_cast<int>(rng() % 5);
+    const float value = (rng() % 2) ? 0.9f : 0.06f;
+    for (int i = 0; i < run && x < width; ++i, ++x) pattern[static_cast<std::size_t>(x)] = value;
+  }
+  for (int y = height / 8; y < height - height / 8; ++y)
+    for (int x = 0; x < width; ++x) p.at(x, y) = pattern[static_cast<std::size_t>(x)];
+  return p;
+}
+
+CaptureModel coded_capture(double electrons, double blur) {
+  CaptureModel m;
+  m.code = LedCode::parse("2212441414112412441224111241244244242212442211444144", 3).value();
+  m.blur_px = blur;
+  m.led_electrons = imaging::budgeted_led_electrons(m.code, electrons, 3);
+  m.read_noise = 4;
+  m.full_well = 1e9;  // no saturation unless a test asks for it
+  m.bit_depth = 16;
+  m.gain = 1;
+  return m;
+}
+
+imaging::Image simulate(const Plane& scene, const CaptureModel& m, std::uint64_t seed) {
+  return imaging::dn_to_electrons(record_frame(expected_electrons(scene, m), m, seed), m);
+}
+
+double deblurred_psnr(const Plane& scene, const CaptureModel& m, imaging::DeblurOptions options,
+                      std::uint64_t seed = 1) {
+  const auto result = imaging::deblur(simulate(scene, m, seed), m, options);
+  EXPECT_TRUE(result.ok()) << (result.ok() ? "" : result.error());
+  const auto region = imaging::scored_region(scene.width, scene.height, m.blur_px, m.direction);
+  return imaging::psnr(scene, result.value().latent, region);
+}
+
+TEST(ForwardModel, WhiteSceneGivesTheChannelWhiteLevel) {
+  const CaptureModel m = coded_capture(3000, 52);
+  const auto e = expected_electrons(Plane(200, 10, 1.0f), m);
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(e.channels[static_cast<std::size_t>(c)].at(100, 5), imaging::channel_white_electrons(m, c), 1e-3);
+}
+
+TEST(ForwardModel, ShotAndReadNoiseHaveTheirVariance) {
+  CaptureModel m = coded_capture(3000, 0);
+  const auto frame = simulate(Plane(256, 256, 0.5f), m, 7);
+  const Plane& red = frame.channels[0];
+  double mean = 0, square = 0;
+  for (float v : red.pixels) mean += v;
+  mean /= static_cast<double>(red.pixels.size());
+  for (float v : red.pixels) square += (v - mean) * (v - mean);
+  const double variance = square / static_cast<double>(red.pixels.size() - 1);
+  const double expected_mean = 0.5 * imaging::channel_white_electrons(m, 0);
+  EXPECT_NEAR(mean, expected_mean, 0.01 * expected_mean);
+  EXPECT_NEAR(variance, expected_mean + 16 + 1.0 / 12, 0.05 * expected_mean);
+}
+
+TEST(ForwardModel, SameSeedSameFrameOtherSeedOtherNoise) {
+  const CaptureModel m = coded_capture(1000, 20);
+  const Plane scene = bars(128, 16, 1);
+  const auto e = expected_electrons(scene, m);
+  EXPECT_EQ(record_frame(e, m, 3).channels[1].pixels, record_frame(e, m, 3).channels[1].pixels);
+  EXPECT_NE(record_frame(e, m, 3).channels[1].pixels, record_frame(e, m, 4).channels[1].pixels);
+}
+
+TEST(ForwardModel, SaturatesAtFullWellAndQuantises) {
+  CaptureModel m = coded_capture(3000, 0);
+  m.full_well = 500;
+  m.gain = 2;
+  m.bit_depth = 8;
+  m.black_level = 10;
+  const auto frame = record_frame(expected_electrons(Plane(32, 32, 1.0f), m), m, 1);
+  for (float v : frame.channels[0].pixels) {
+    EXPECT_LE(v, 255.0f);
+    EXPECT_EQ(v, std::round(v));
+  }
+  // 500 e- / 2 + 10 = 260 DN, clipped to 255.
+  EXPECT_EQ(frame.channels[0].at(5, 5), 255.0f);
+}
+
+TEST(ForwardModel, BayerMosaicTakesEachSiteFromItsChannel) {
+  CaptureModel m = coded_capture(3000, 0);
+  m.read_noise = 0;
+  m.bayer_rggb = true;
+  imaging::Image expected;
+  for (float level : {100.0f, 200.0f, 300.0f}) expected.channels.push_back(Plane(4, 4, level));
+  m.ambient_electrons = {0, 0, 0};
+  const auto mosaic = record_frame(expected, m, 1);
+  ASSERT_EQ(mosaic.channel_count(), 1);
+  // Poisson noise around each channel's level: R at (0,0), G at (1,0) and (0,1), B at (1,1).
+  EXPECT_NEAR(mosaic.channels[0].at(0, 0), 100, 50);
+  EXPECT_NEAR(mosaic.channels[0].at(1, 0), 200, 60);
+  EXPECT_NEAR(mosaic.channels[0].at(1, 1), 300, 70);
+}
+
+TEST(Deblur, JointWienerRecoversACodedBlur) {
+  const Plane scene = bars(512, 64, 2);
+  const CaptureModel m = coded_capture(3000, 52);
+  const double restored = deblurred_psnr(scene, m, {});
+  // The blurred frame itself, scaled to reflectance, scores far lower.
+  const auto frame = simulate(scene, m, 1);
+  Plane blurred(scene.width, scene.height);
+  double white = 0;
+  for (int c = 0; c < 3; ++c) white += imaging::channel_white_electrons(m, c);
+  for (std::size_t i = 0; i < blurred.pixels.size(); ++i)
+    blurred.pixels[i] = static_cast<float>((frame.channels[0].pixels[i] + frame.channels[1].pixels[i] +
+                                            frame.channels[2].pixels[i]) / white);
+  const auto region = imaging::scored_region(scene.width, scene.height, 52, Direction::kPlusX);
+  EXPECT_GT(restored, 20.0);
+  EXPECT_GT(restored, imaging::psnr(scene, blurred, region) + 8.0);
+}
+
+TEST(Deblur, EveryDirectionGivesTheSameQuality) {
+  const Plane along_x = bars(384, 48, 3);
+  CaptureModel m = coded_capture(3000, 40);
+  const double reference = deblurred_psnr(along_x, m, {});
+  for (Direction d : {Direction::kMinusX, Direction::kPlusY, Direction::kMinusY}) {
+    m.direction = d;
+    const Plane scene = imaging::from_motion_frame(along_x, d);
+    EXPECT_NEAR(deblurred_psnr(scene, m, {}), reference, 0.5) << imaging::direction_name(d);
+  }
+}
+
+TEST(Deblur, JointBeatsPerChannelAveraging) {
+  const Plane scene = bars(512, 64, 4);
+  CaptureModel m = coded_capture(1000, 52);
+  m.crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
+  imaging::DeblurOptions average;
+  average.method = imaging::Method::kWienerAverage;
+  EXPECT_GT(deblurred_psnr(scene, m, {}), deblurred_psnr(scene, m, average) + 1.0);
+}
+
+TEST(Deblur, RichardsonLucyConvergesTowardTheScene) {
+  const Plane scene = bars(384, 32, 5);
+  const CaptureModel m = coded_capture(3000, 52);
+  imaging::DeblurOptions one;
+  one.method = imaging::Method::kRichardsonLucy;
+  one.iterations = 1;
+  imaging::DeblurOptions twenty = one;
+  twenty.iterations = 20;
+  const double after_one = deblurred_psnr(scene, m, one);
+  const double after_twenty = deblurred_psnr(scene, m, twenty);
+  EXPECT_GT(after_twenty, after_one + 3.0);
+  EXPECT_GT(after_twenty, 17.0);
+}
+
+TEST(Deblur, RefusesBlurLongerThanTheImageAndChannelMismatch) {
+  const CaptureModel m = coded_capture(3000, 52);
+  imaging::Image small;
+  for (int c = 0; c < 3; ++c) small.channels.push_back(Plane(40, 8));
+  const auto refused = imaging::deblur(small, m, {});
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().find("not shorter than the image"), std::string::npos);
+  small.channels.pop_back();
+  EXPECT_FALSE(imaging::deblur(small, coded_capture(3000, 4), {}).ok());
+}
+
+}  // namespace
+}  // namespace flutterscan::sim
