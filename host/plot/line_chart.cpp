@@ -66,7 +66,9 @@ struct Range {
   double lo, hi;
 };
 
-double to_axis(double value, bool log) { return log ? std::log10(value) : value; }
+double to_axis(double value, bool log) {
+  return log ? std::log10(value) : value;
+}
 
 bool plottable(double x, double y, bool log_x) {
   return std::isfinite(x) && std::isfinite(y) && (!log_x || x > 0);
@@ -161,6 +163,7 @@ Range fit_y(const LineChart& chart, Range x_range) {
 struct Tick {
   double value;  ///< data space
   std::string label;
+  std::string exponent = {};  ///< drawn as a superscript after the label when not empty
 };
 
 struct AxisTicks {
@@ -209,16 +212,17 @@ std::string step_label(double value, double step) {
   return tidy_number(text);
 }
 
-/// Label of `mantissa` x 10^`exponent` on a log axis.
-std::string decade_label(int mantissa, int exponent) {
-  char text[48];
-  if (exponent >= -3 && exponent <= 5) {
-    std::snprintf(text, sizeof text, "%.*f", std::max(0, -exponent),
-                  mantissa * std::pow(10.0, exponent));
-  } else {
-    std::snprintf(text, sizeof text, "%de%d", mantissa, exponent);
+/// The log-axis tick at `mantissa` x 10^`exponent`: written out ("0.002", "500"), or
+/// as a power of ten ("2×10" with superscript "6") when `powers`.
+Tick decade_tick(int mantissa, int exponent, bool powers) {
+  const double value = mantissa * std::pow(10.0, exponent);
+  if (powers) {
+    return {value, mantissa == 1 ? "10" : std::to_string(mantissa) + "\u00d710",
+            tidy_number(std::to_string(exponent).c_str())};
   }
-  return tidy_number(text);
+  char text[48];
+  std::snprintf(text, sizeof text, "%.*f", std::max(0, -exponent), value);
+  return {value, text};
 }
 
 /// Ticks at multiples of a 1-2-5 step, at most `max_count` of them, over values lo..hi.
@@ -235,6 +239,8 @@ std::vector<Tick> linear_ticks(double lo, double hi, int max_count) {
 /// there are many), else 1-2-5 steps of the value when the range is under a decade.
 AxisTicks log_ticks(Range range, int max_count) {
   constexpr double kEps = 1e-9;
+  // Values are written out when all labels would lie within 0.001..500000.
+  const bool powers = std::floor(range.lo + kEps) < -3 || std::floor(range.hi + kEps) > 5;
   AxisTicks one_two_five;
   std::vector<int> decades;
   std::vector<double> between_decades;  // m x 10^k for m = 2..9
@@ -243,16 +249,16 @@ AxisTicks log_ticks(Range range, int max_count) {
     for (int m = 1; m <= 9; ++m) {
       const double t = k + std::log10(m);
       if (t < range.lo - kEps || t > range.hi + kEps) continue;
-      const double value = m * std::pow(10.0, k);
+      const Tick tick = decade_tick(m, k, powers);
       if (m == 1) {
         decades.push_back(k);
       } else {
-        between_decades.push_back(value);
+        between_decades.push_back(tick.value);
       }
       if (m == 1 || m == 2 || m == 5) {
-        one_two_five.major.push_back({value, decade_label(m, k)});
+        one_two_five.major.push_back(tick);
       } else {
-        one_two_five.minor.push_back(value);
+        one_two_five.minor.push_back(tick.value);
       }
     }
   }
@@ -263,7 +269,7 @@ AxisTicks log_ticks(Range range, int max_count) {
     const int stride = (static_cast<int>(decades.size()) + max_count - 1) / max_count;
     for (const int k : decades) {
       if (k % stride == 0) {
-        ticks.major.push_back({std::pow(10.0, k), decade_label(1, k)});
+        ticks.major.push_back(decade_tick(1, k, powers));
       } else {
         ticks.minor.push_back(std::pow(10.0, k));
       }
@@ -327,11 +333,42 @@ void draw_text(cairo_t* cr, const std::string& text, double x, double y, double 
   cairo_show_text(cr, text.c_str());
 }
 
+/// Size of a tick label's exponent relative to its font.
+constexpr double kSuperscript = 0.7;
+
+double tick_width(cairo_t* cr, const Tick& tick) {
+  double width = text_width(cr, tick.label);
+  if (!tick.exponent.empty()) {
+    cairo_matrix_t font;
+    cairo_get_font_matrix(cr, &font);
+    cairo_set_font_size(cr, kSuperscript * font.xx);
+    width += text_width(cr, tick.exponent);
+    cairo_set_font_matrix(cr, &font);
+  }
+  return width;
+}
+
+/// Draws a tick label like draw_text, its exponent raised after it.
+void draw_tick(cairo_t* cr, const Tick& tick, double x, double y, double ax, double ay) {
+  const double left = x - ax * tick_width(cr, tick);
+  draw_text(cr, tick.label, left, y, 0, ay);
+  if (tick.exponent.empty()) return;
+  const double cap = cap_height(cr);
+  cairo_move_to(cr, left + text_width(cr, tick.label) + 0.05 * cap, y + (0.45 - ay) * cap);
+  cairo_matrix_t font;
+  cairo_get_font_matrix(cr, &font);
+  cairo_set_font_size(cr, kSuperscript * font.xx);
+  cairo_show_text(cr, tick.exponent.c_str());
+  cairo_set_font_matrix(cr, &font);
+}
+
 /// The device coordinate of the middle of the pixel nearest `v`, for crisp 1-pixel lines.
-double crisp(double v) { return std::round(v - 0.5) + 0.5; }
+double crisp(double v) {
+  return std::round(v - 0.5) + 0.5;
+}
 
 /// Chooses ticks for an axis `length` pixels long whose labels fit their spacing:
-/// `label_extent` gives a label's size along the axis.
+/// `label_extent` gives a tick label's size along the axis.
 template <typename LabelExtent>
 AxisTicks fitting_ticks(Range range, bool log, double length, double per_tick,
                         LabelExtent label_extent) {
@@ -342,8 +379,7 @@ AxisTicks fitting_ticks(Range range, bool log, double length, double per_tick,
     bool fits = true;
     for (std::size_t i = 1; i < ticks.major.size(); ++i) {
       const double gap = std::abs(map(ticks.major[i].value) - map(ticks.major[i - 1].value));
-      const double need =
-          (label_extent(ticks.major[i].label) + label_extent(ticks.major[i - 1].label)) / 2;
+      const double need = (label_extent(ticks.major[i]) + label_extent(ticks.major[i - 1])) / 2;
       fits = fits && gap >= need * 1.25;
     }
     if (fits || max_count <= 2) return ticks;
@@ -392,8 +428,8 @@ std::optional<ClippedSegment> clip_segment(Point a, Point b, const Box& box) {
       !keep(dy, box.bottom - a.y)) {
     return std::nullopt;
   }
-  return ClippedSegment{{a.x + t0 * dx, a.y + t0 * dy}, {a.x + t1 * dx, a.y + t1 * dy}, t0 > 0,
-                        t1 < 1};
+  return ClippedSegment{
+      {a.x + t0 * dx, a.y + t0 * dy}, {a.x + t1 * dx, a.y + t1 * dy}, t0 > 0, t1 < 1};
 }
 
 /// Draws one series' line and markers; the caller clips to the plot area.
@@ -411,9 +447,9 @@ void draw_series(cairo_t* cr, const Series& series, bool log_x, const AxisMap& x
     const Box bounds{plot.left - reach, plot.top - reach, plot.right + reach, plot.bottom + reach};
     bool open = false;  // the path ends at the previous point
     for (std::size_t i = 1; i < points.size(); ++i) {
-      const auto segment =
-          points[i - 1] && points[i] ? clip_segment(*points[i - 1], *points[i], bounds)
-                                     : std::nullopt;
+      const auto segment = points[i - 1] && points[i]
+                               ? clip_segment(*points[i - 1], *points[i], bounds)
+                               : std::nullopt;
       if (!segment) {
         open = false;
         continue;
@@ -540,21 +576,19 @@ void draw_chart(cairo_t* cr, const LineChart& chart, int width, int height) {
 
   const Range x_range = fit_x(chart);
   const Range y_range = fit_y(chart, x_range);
-  const AxisTicks y_ticks =
-      fitting_ticks(y_range, false, bottom - top, 55 * scale,
-                    [tick_cap](const std::string&) { return 1.4 * tick_cap; });
+  const AxisTicks y_ticks = fitting_ticks(y_range, false, bottom - top, 55 * scale,
+                                          [tick_cap](const Tick&) { return 1.4 * tick_cap; });
   double y_tick_width = 0;
   for (const Tick& tick : y_ticks.major) {
-    y_tick_width = std::max(y_tick_width, text_width(cr, tick.label));
+    y_tick_width = std::max(y_tick_width, tick_width(cr, tick));
   }
   const double y_label_space = chart.y_label.empty() ? 0 : 1.3 * kLabelFont * scale + 6 * scale;
   const Box plot{std::round(pad + y_label_space + y_tick_width + tick_gap + tick_length), top,
                  std::round(width - 2.2 * pad), bottom};
   const AxisMap x_map{x_range, chart.log_x, plot.left, plot.right};
   const AxisMap y_map{y_range, false, plot.bottom, plot.top};
-  const AxisTicks x_ticks =
-      fitting_ticks(x_range, chart.log_x, plot.right - plot.left, 110 * scale,
-                    [cr](const std::string& label) { return text_width(cr, label); });
+  const AxisTicks x_ticks = fitting_ticks(x_range, chart.log_x, plot.right - plot.left, 110 * scale,
+                                          [cr](const Tick& tick) { return tick_width(cr, tick); });
 
   draw_grid(cr, x_ticks, y_ticks, x_map, y_map, plot);
 
@@ -586,18 +620,18 @@ void draw_chart(cairo_t* cr, const LineChart& chart, int width, int height) {
   cairo_stroke(cr);
   cairo_set_source_rgb(cr, 0.15, 0.15, 0.15);
   for (const Tick& tick : x_ticks.major) {
-    draw_text(cr, tick.label, x_map(tick.value), plot.bottom + tick_length + tick_gap, 0.5, 0);
+    draw_tick(cr, tick, x_map(tick.value), plot.bottom + tick_length + tick_gap, 0.5, 0);
   }
   for (const Tick& tick : y_ticks.major) {
-    draw_text(cr, tick.label, plot.left - tick_length - tick_gap, y_map(tick.value), 1, 0.5);
+    draw_tick(cr, tick, plot.left - tick_length - tick_gap, y_map(tick.value), 1, 0.5);
   }
 
   // Axis labels, title and notes.
   set_font(cr, kLabelFont * scale);
   cairo_set_source_rgb(cr, 0.1, 0.1, 0.1);
   if (!chart.x_label.empty()) {
-    draw_text(cr, chart.x_label, (plot.left + plot.right) / 2, height - pad - 0.3 * kLabelFont * scale,
-              0.5, 1);
+    draw_text(cr, chart.x_label, (plot.left + plot.right) / 2,
+              height - pad - 0.3 * kLabelFont * scale, 0.5, 1);
   }
   if (!chart.y_label.empty()) {
     cairo_save(cr);

@@ -41,7 +41,7 @@ struct Series {
   std::string label;         ///< legend text; empty = not in the legend
   std::vector<double> x, y;  ///< same length
   Rgb colour{0, 0, 0};
-  double line_width = 1.5;   ///< 0 = no line (markers only)
+  double line_width = 1.5;  ///< 0 = no line (markers only)
   bool dashed = false;
   double marker_radius = 0;  ///< > 0 draws a filled circle at each point
 };
@@ -52,7 +52,7 @@ struct LineChart {
   std::vector<Series> series;
   bool log_x = false;
   std::optional<double> x_min, x_max, y_min, y_max;  ///< unset = fitted to the data
-  std::vector<std::string> notes;  ///< small text lines drawn under the title
+  std::vector<std::string> notes;                    ///< small text lines drawn under the title
 };
 
 /// \brief Renders `chart` and writes it as a `width` x `height` PNG to `path`.

@@ -23,8 +23,8 @@ double sum(const std::vector<double>& v) { return std::accumulate(v.begin(), v.e
 TEST(CaptureModel, BudgetCapsShortLeds) {
   const auto code = LedCode::parse("1111111111111111122222222222222222244444444444444444", 3).value();
   const auto I = budgeted_led_electrons(code, 3000, 3);
-  EXPECT_NEAR(I[0], 3000.0 / 17, 1e-9);           // 17 slots: E / n below the cap
-  EXPECT_NEAR(I[1], 3000.0 / 18, 1e-9);
+  EXPECT_NEAR(I[0], 3.0 * 3000.0 / 52, 1e-9);  // 17 slots: E / 17 would pass the cap c E / L
+  EXPECT_NEAR(I[1], 3000.0 / 18, 1e-9);        // 18 slots: the whole budget fits under it
   const auto capped = budgeted_led_electrons(code, 3000, 1);
   EXPECT_NEAR(capped[0], 3000.0 / 52, 1e-9);      // c = 1: peak limit E / L
 }
