@@ -70,31 +70,44 @@ JointWiener::JointWiener(std::span<const ChannelPsf> channels, int width, double
 JointWiener::Scratch JointWiener::make_scratch() const {
   const auto n = static_cast<std::size_t>(fft_.length());
   const auto complex_floats = static_cast<std::size_t>(2 * fft_.bins());
-  return {AlignedFloats(n), AlignedFloats(complex_floats), AlignedFloats(complex_floats)};
+  Scratch scratch{{}, {}, AlignedFloats(complex_floats), AlignedFloats(complex_floats)};
+  for (std::size_t c = 0; c < filters_.size(); ++c) {
+    scratch.padded.emplace_back(n);
+    scratch.rows.push_back(scratch.padded.back().span().first(static_cast<std::size_t>(width_)));
+  }
+  return scratch;
 }
 
 void JointWiener::deconvolve_row(int y, const RowLoader& load, std::span<float> out,
                                  Scratch& scratch) const {
   const auto bins = static_cast<std::size_t>(fft_.bins());
-  // Interleaved re/im: written out so no complex multiply goes through the
-  // NaN-checking library routine, and the loop vectorises.
+  load(y, scratch.rows);
+  // Interleaved re/im written out: no complex multiply goes through the
+  // NaN-checking library routine, and the loops vectorise.
   float* sum = scratch.sum.data();
   const float* spectrum = scratch.spectrum.data();
-  const std::span<float> padded = scratch.padded.span();
   for (std::size_t c = 0; c < filters_.size(); ++c) {
-    load(y, static_cast<int>(c), padded.first(static_cast<std::size_t>(width_)));
+    const std::span<float> padded = scratch.padded[c].span();
     extend_row_periodically(padded, width_, blend_);
     fft_.forward(padded.data(), scratch.spectrum.complex());
     const float* filter = reinterpret_cast<const float*>(filters_[c].data());
-    if (c == 0) std::fill(sum, sum + 2 * bins, 0.0f);
+    if (c == 0) {
+      for (std::size_t j = 0; j < 2 * bins; j += 2) {
+        const float fr = filter[j], fi = filter[j + 1], sr = spectrum[j], si = spectrum[j + 1];
+        sum[j] = fr * sr - fi * si;
+        sum[j + 1] = fr * si + fi * sr;
+      }
+      continue;
+    }
     for (std::size_t j = 0; j < 2 * bins; j += 2) {
       const float fr = filter[j], fi = filter[j + 1], sr = spectrum[j], si = spectrum[j + 1];
       sum[j] += fr * sr - fi * si;
       sum[j + 1] += fr * si + fi * sr;
     }
   }
-  fft_.inverse(scratch.sum.complex(), padded.data());
-  std::copy(padded.data(), padded.data() + out.size(), out.begin());
+  float* result = scratch.padded[0].data();
+  fft_.inverse(scratch.sum.complex(), result);
+  std::copy(result, result + out.size(), out.begin());
 }
 
 void JointWiener::deconvolve(const RowLoader& load, int height, Plane& out, RowPool& pool) {
@@ -110,9 +123,11 @@ Plane JointWiener::deconvolve(std::span<const Plane> channels, int threads) {
   Plane latent(width_, height);
   RowPool pool(std::max(1, std::min(threads, height)));
   deconvolve(
-      [&](int y, int c, std::span<float> row) {
-        const auto source = channels[static_cast<std::size_t>(c)].row(y);
-        std::copy(source.begin(), source.end(), row.begin());
+      [&](int y, std::span<const std::span<float>> rows) {
+        for (std::size_t c = 0; c < rows.size(); ++c) {
+          const auto source = channels[c].row(y);
+          std::copy(source.begin(), source.end(), rows[c].begin());
+        }
       },
       height, latent, pool);
   return latent;

@@ -52,13 +52,14 @@ class JointWiener {
   /// width() samples); the latent row (reflectance) goes to `out`. `scratch` must
   /// come from make_scratch() and not be shared between threads.
   struct Scratch {
-    AlignedFloats padded;
+    std::vector<AlignedFloats> padded;  ///< one per channel
+    std::vector<std::span<float>> rows; ///< the first width() samples of each
     AlignedFloats spectrum;
     AlignedFloats sum;
   };
   Scratch make_scratch() const;
-  /// \brief Writes channel `channel`'s row `y` (electrons, width() samples) into `row`.
-  using RowLoader = std::function<void(int y, int channel, std::span<float> row)>;
+  /// \brief Writes row `y` of every channel (electrons, width() samples) into `rows[c]`.
+  using RowLoader = std::function<void(int y, std::span<const std::span<float>> rows)>;
   void deconvolve_row(int y, const RowLoader& load, std::span<float> out, Scratch& scratch) const;
 
   /// \brief Deconvolves `height` rows fetched by `load` into `out` (width() x height,
