@@ -143,7 +143,7 @@ void RichardsonLucy20(benchmark::State& state) {
       for (int x = 0; x < kWidth; ++x) p.at(x, y) = static_cast<float>(split[c].at<std::uint8_t>(y, x) * f.model.gain);
     planes.channels.push_back(std::move(p));
   }
-  const imaging::RichardsonLucy rl(f.psfs, kWidth, 16.0, {20, true, 0});
+  const imaging::RichardsonLucy rl(f.psfs, kWidth, 16.0, {20, true, 0}, imaging::PlanEffort::kMeasure);
   for (auto _ : state) {
     const Plane latent = rl.deconvolve(planes.channels, static_cast<int>(state.range(0)));
     benchmark::DoNotOptimize(latent.pixels.data());

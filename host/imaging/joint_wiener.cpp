@@ -82,8 +82,6 @@ void JointWiener::deconvolve_row(int y, const RowLoader& load, std::span<float> 
                                  Scratch& scratch) const {
   const auto bins = static_cast<std::size_t>(fft_.bins());
   load(y, scratch.rows);
-  // Interleaved re/im written out: no complex multiply goes through the
-  // NaN-checking library routine, and the loops vectorise.
   float* sum = scratch.sum.data();
   const float* spectrum = scratch.spectrum.data();
   for (std::size_t c = 0; c < filters_.size(); ++c) {
@@ -91,19 +89,10 @@ void JointWiener::deconvolve_row(int y, const RowLoader& load, std::span<float> 
     extend_row_periodically(padded, width_, blend_);
     fft_.forward(padded.data(), scratch.spectrum.complex());
     const float* filter = reinterpret_cast<const float*>(filters_[c].data());
-    if (c == 0) {
-      for (std::size_t j = 0; j < 2 * bins; j += 2) {
-        const float fr = filter[j], fi = filter[j + 1], sr = spectrum[j], si = spectrum[j + 1];
-        sum[j] = fr * sr - fi * si;
-        sum[j + 1] = fr * si + fi * sr;
-      }
-      continue;
-    }
-    for (std::size_t j = 0; j < 2 * bins; j += 2) {
-      const float fr = filter[j], fi = filter[j + 1], sr = spectrum[j], si = spectrum[j + 1];
-      sum[j] += fr * sr - fi * si;
-      sum[j + 1] += fr * si + fi * sr;
-    }
+    if (c == 0)
+      multiply_spectra(filter, spectrum, sum, bins);
+    else
+      accumulate_spectra(filter, spectrum, sum, bins, false);
   }
   float* result = scratch.padded[0].data();
   fft_.inverse(scratch.sum.complex(), result);

@@ -7,6 +7,7 @@
 namespace flutterscan::imaging {
 
 struct RichardsonLucy::Scratch {
+  std::vector<AlignedFloats> observed;  ///< per channel: the row plus the offset
   AlignedFloats x, x_previous, ahead;   ///< latent rows (extended length)
   AlignedFloats step, step_before;      ///< the last two RL steps, for acceleration
   AlignedFloats real;                   ///< padded real buffer
@@ -14,7 +15,8 @@ struct RichardsonLucy::Scratch {
 };
 
 RichardsonLucy::RichardsonLucy(std::span<const ChannelPsf> channels, int width,
-                               double read_variance, const RichardsonLucySettings& settings)
+                               double read_variance, const RichardsonLucySettings& settings,
+                               PlanEffort effort)
     : width_(width),
       taps_([&] {
         std::size_t longest = 1;
@@ -22,7 +24,7 @@ RichardsonLucy::RichardsonLucy(std::span<const ChannelPsf> channels, int width,
         return static_cast<int>(longest);
       }()),
       extended_(width + taps_ - 1),
-      fft_(row_fft_length(extended_ + taps_ - 1)),
+      fft_(row_fft_length(extended_ + taps_ - 1), effort),
       offset_(std::max(read_variance, 1e-3)),
       settings_(settings) {
   const int n = fft_.length();
@@ -34,7 +36,7 @@ RichardsonLucy::RichardsonLucy(std::span<const ChannelPsf> channels, int width,
     spectra_.push_back(std::move(scaled));
   }
   // Normaliser: latent pixel i (extended index) reaches observed n = i - (K-1) + j.
-  normaliser_.assign(static_cast<std::size_t>(extended_), 0.0f);
+  std::vector<double> normaliser(static_cast<std::size_t>(extended_), 0.0);
   white_gain_ = 0;
   for (const auto& c : channels) {
     for (std::size_t j = 0; j < c.taps.size(); ++j) white_gain_ += c.taps[j];
@@ -44,9 +46,11 @@ RichardsonLucy::RichardsonLucy(std::span<const ChannelPsf> channels, int width,
         const int observed = i - (taps_ - 1) + static_cast<int>(j);
         if (observed >= 0 && observed < width_) s += c.taps[j];
       }
-      normaliser_[static_cast<std::size_t>(i)] += static_cast<float>(s);
+      normaliser[static_cast<std::size_t>(i)] += s;
     }
   }
+  for (double value : normaliser)
+    inverse_normaliser_.push_back(value > 0 ? static_cast<float>(1.0 / value) : 0.0f);
 }
 
 void RichardsonLucy::deconvolve_row(std::span<const std::span<const float>> rows,
@@ -66,54 +70,64 @@ void RichardsonLucy::deconvolve_row(std::span<const std::span<const float>> rows
     x[i] = static_cast<float>(std::max(1e-3, sum / white_gain_));
   }
 
+  for (std::size_t c = 0; c < rows.size(); ++c)
+    for (int m = 0; m < width_; ++m) s.observed[c][static_cast<std::size_t>(m)] = rows[c][static_cast<std::size_t>(m)] + offset;
+
+  float* real = s.real.data();
+  float* spectrum = s.spectrum.data();
+  float* work = s.work.data();
+  float* sum = s.sum.data();
   for (int iteration = 0; iteration < settings_.iterations; ++iteration) {
     // Biggs-Andrews: extrapolate along the last step by alpha = <g1, g2> / <g2, g2>.
     const float* base = x;
     if (settings_.accelerate && iteration >= 2) {
-      double numerator = 0, denominator = 0;
+      float numerator = 0, denominator = 0;
+      const float* step = s.step.data();
+      const float* step_before = s.step_before.data();
+#pragma omp simd reduction(+ : numerator, denominator)
       for (std::size_t i = 0; i < ext; ++i) {
-        numerator += static_cast<double>(s.step[i]) * s.step_before[i];
-        denominator += static_cast<double>(s.step_before[i]) * s.step_before[i];
+        numerator += step[i] * step_before[i];
+        denominator += step_before[i] * step_before[i];
       }
-      const double alpha = denominator > 0 ? std::clamp(numerator / denominator, 0.0, 1.0) : 0.0;
-      for (std::size_t i = 0; i < ext; ++i)
-        s.ahead[i] = std::max(0.0f, x[i] + static_cast<float>(alpha) * (x[i] - s.x_previous[i]));
+      const float alpha = denominator > 0 ? std::clamp(numerator / denominator, 0.0f, 1.0f) : 0.0f;
+      for (std::size_t i = 0; i < ext; ++i) s.ahead[i] = std::max(0.0f, x[i] + alpha * (x[i] - s.x_previous[i]));
       base = s.ahead.data();
     }
-    std::fill(s.real.data(), s.real.data() + n, 0.0f);
-    std::copy(base, base + ext, s.real.data());
-    fft_.forward(s.real.data(), s.spectrum.complex());
-    std::complex<float>* sum = s.sum.complex();
-    std::fill(sum, sum + bins, std::complex<float>{});
+    std::copy(base, base + ext, real);
+    std::fill(real + ext, real + n, 0.0f);
+    fft_.forward(real, s.spectrum.complex());
+    std::fill(sum, sum + 2 * bins, 0.0f);
     for (std::size_t c = 0; c < rows.size(); ++c) {
-      const std::complex<float>* g = spectra_[c].data();
-      std::complex<float>* w = s.work.complex();
-      for (std::size_t j = 0; j < bins; ++j) w[j] = g[j] * s.spectrum.complex()[j];
-      fft_.inverse(w, s.real.data());
-      // Observed pixel m is linear-convolution index m + K - 1; the ratio goes to index m.
-      float* ratio = s.real.data();
-      for (int m = 0; m < width_; ++m) {
-        const float observed = rows[c][static_cast<std::size_t>(m)];
-        const float predicted = std::max(ratio[static_cast<std::size_t>(m) + lead] + offset, 1e-6f);
-        float r = (observed + offset) / predicted;
-        if (settings_.damping > 0) {
-          const double z = (observed + offset - predicted) / (settings_.damping * std::sqrt(predicted));
-          r = static_cast<float>(1.0 + std::min(1.0, z * z) * (r - 1.0));
+      const float* g = reinterpret_cast<const float*>(spectra_[c].data());
+      multiply_spectra(g, spectrum, work, bins);
+      fft_.inverse(s.work.complex(), real);
+      // Observed pixel m is linear-convolution index m + K - 1; its ratio goes to index m.
+      const float* observed = s.observed[c].data();
+      if (settings_.damping > 0) {
+        for (int m = 0; m < width_; ++m) {
+          const float predicted = std::max(real[static_cast<std::size_t>(m) + lead] + offset, 1e-6f);
+          const double z = (observed[m] - predicted) / (settings_.damping * std::sqrt(predicted));
+          real[m] = static_cast<float>(1.0 + std::min(1.0, z * z) * (observed[m] / predicted - 1.0));
         }
-        ratio[m] = r;
+      } else {
+        for (int m = 0; m < width_; ++m)
+          real[m] = observed[m] / std::max(real[static_cast<std::size_t>(m) + lead] + offset, 1e-6f);
       }
-      std::fill(ratio + width_, ratio + n, 0.0f);
-      fft_.forward(ratio, w);
-      for (std::size_t j = 0; j < bins; ++j) sum[j] += std::conj(g[j]) * w[j];
+      std::fill(real + width_, real + n, 0.0f);
+      fft_.forward(real, s.work.complex());
+      accumulate_spectra(g, work, sum, bins, true);
     }
-    fft_.inverse(sum, s.real.data());
-    // Correlation: latent i (extended) collects the ratio at m = i - (K-1) + j: index i - (K-1) mod n.
+    fft_.inverse(s.sum.complex(), real);
+    // Correlation: latent i (extended) collects the ratio at m = i - (K-1) + j, i.e.
+    // circular index i - (K-1): the first K-1 wrap around to the end of the buffer.
     std::copy(x, x + ext, s.x_previous.data());
+    std::copy(s.step.data(), s.step.data() + ext, s.step_before.data());
+    const float* correlation_head = real + n - lead;
+    const float* correlation_tail = real - lead;
+    const float* inverse_norm = inverse_normaliser_.data();
     for (std::size_t i = 0; i < ext; ++i) {
-      const std::size_t source = (i + static_cast<std::size_t>(n) - lead) % static_cast<std::size_t>(n);
-      const float norm = normaliser_[i];
-      const float updated = norm > 0 ? std::max(0.0f, base[i] * s.real.data()[source] / norm) : base[i];
-      s.step_before[i] = s.step[i];
+      const float back = i < lead ? correlation_head[i] : correlation_tail[i];
+      const float updated = inverse_norm[i] > 0 ? std::max(0.0f, base[i] * back * inverse_norm[i]) : base[i];
       s.step[i] = updated - base[i];
       x[i] = updated;
     }
@@ -128,11 +142,12 @@ Plane RichardsonLucy::deconvolve(std::span<const Plane> channels, int threads) c
   pool.run(height, [&](int first, int last, int) {
     const auto ext = static_cast<std::size_t>(extended_);
     const auto complex_floats = static_cast<std::size_t>(2 * fft_.bins());
-    Scratch scratch{AlignedFloats(ext), AlignedFloats(ext), AlignedFloats(ext),
+    Scratch scratch{{}, AlignedFloats(ext), AlignedFloats(ext), AlignedFloats(ext),
                     AlignedFloats(ext), AlignedFloats(ext),
                     AlignedFloats(static_cast<std::size_t>(fft_.length())),
                     AlignedFloats(complex_floats), AlignedFloats(complex_floats),
                     AlignedFloats(complex_floats)};
+    for (std::size_t c = 0; c < channels.size(); ++c) scratch.observed.emplace_back(static_cast<std::size_t>(width_));
     std::vector<std::span<const float>> rows(channels.size());
     for (int y = first; y < last; ++y) {
       for (std::size_t c = 0; c < channels.size(); ++c) rows[c] = channels[c].row(y);

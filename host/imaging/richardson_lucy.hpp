@@ -34,7 +34,8 @@ struct RichardsonLucySettings {
 class RichardsonLucy {
  public:
   RichardsonLucy(std::span<const ChannelPsf> channels, int width, double read_variance,
-                 const RichardsonLucySettings& settings);
+                 const RichardsonLucySettings& settings,
+                 PlanEffort effort = PlanEffort::kEstimate);
 
   /// \brief Deconvolves whole planes (electrons, motion frame) on `threads` threads.
   Plane deconvolve(std::span<const Plane> channels, int threads) const;
@@ -51,7 +52,7 @@ class RichardsonLucy {
   double offset_;
   RichardsonLucySettings settings_;
   std::vector<std::vector<std::complex<float>>> spectra_;  ///< G_c / N
-  std::vector<float> normaliser_;                            ///< sum_c G_c^T 1, per latent pixel
+  std::vector<float> inverse_normaliser_;  ///< 1 / sum_c G_c^T 1 per latent pixel (0 where unseen)
   double white_gain_ = 1;                                    ///< sum over channels and taps
 };
 

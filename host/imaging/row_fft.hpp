@@ -65,4 +65,26 @@ class RowFft {
   fftwf_plan inverse_ = nullptr;
 };
 
+/// \brief out[j] = a[j] * b[j] over `bins` complex values stored as interleaved
+/// floats. Written out: std::complex<float> products go through a NaN-checking
+/// library call and do not vectorise.
+inline void multiply_spectra(const float* __restrict a, const float* __restrict b,
+                             float* __restrict out, std::size_t bins) {
+  for (std::size_t j = 0; j < 2 * bins; j += 2) {
+    out[j] = a[j] * b[j] - a[j + 1] * b[j + 1];
+    out[j + 1] = a[j] * b[j + 1] + a[j + 1] * b[j];
+  }
+}
+
+/// \brief acc[j] += a[j] * b[j] (conjugating a when `conjugate_a`), interleaved floats.
+inline void accumulate_spectra(const float* __restrict a, const float* __restrict b,
+                               float* __restrict acc, std::size_t bins, bool conjugate_a) {
+  const float sign = conjugate_a ? -1.0f : 1.0f;
+  for (std::size_t j = 0; j < 2 * bins; j += 2) {
+    const float ai = sign * a[j + 1];
+    acc[j] += a[j] * b[j] - ai * b[j + 1];
+    acc[j + 1] += a[j] * b[j + 1] + ai * b[j];
+  }
+}
+
 }  // namespace flutterscan::imaging
