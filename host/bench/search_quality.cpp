@@ -2,7 +2,7 @@
 // cores, against the seed's published values and Raskar's code. Prints a
 // Markdown table and writes the same rows as CSV.
 //
-//   search_quality [--budgets 10,60] [--csv FILE]
+//   search_quality [--budgets 10,60] [--csv FILE] [--only MERIT]
 
 #include <cstdio>
 #include <cstdlib>
@@ -72,10 +72,12 @@ std::vector<double> parse_budgets(const char* text) {
 int main(int argc, char** argv) {
   std::vector<double> budgets = {10, 60};
   std::string csv_path;
+  std::string only;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--budgets") budgets = parse_budgets(argv[i + 1]);
     else if (flag == "--csv") csv_path = argv[i + 1];
+    else if (flag == "--only") only = argv[i + 1];
   }
   const MeritSettings settings;
   const int threads = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
@@ -95,6 +97,7 @@ int main(int argc, char** argv) {
   std::printf("| merit | search | budget (s) | evaluations | best found | reference | reference value | ratio or margin | code |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& plan : plans) {
+    if (!only.empty() && merit_name(plan.merit) != only) continue;
     const Reference reference = reference_for(plan.merit, settings);
     for (double seconds : budgets) {
       SearchOptions options;

@@ -5,7 +5,7 @@
 namespace flutterscan::codes {
 namespace {
 
-constexpr std::array<LibraryCode, 17> kLibrary = {{
+constexpr std::array<LibraryCode, 18> kLibrary = {{
     {"rect", "1111111111111111111111111111111111111111111111111111", 1,
      "conventional exposure: one LED on in every slot", false},
     {"rect-white", "7777777777777777777777777777777777777777777777777777", 3,
@@ -40,6 +40,8 @@ constexpr std::array<LibraryCode, 17> kLibrary = {{
      "flutterscan annealing, 60 s, average-min merit: -24.1266 dB", false},
     {"found-pairs", "2441114424142411441121422441121142141421411414121112", 3,
      "flutterscan annealing, 60 s, pairs merit: -20.7779 dB", false},
+    {"found-single", "1001001101100110101011101011010000100011110100001110", 1,
+     "flutterscan annealing, 60 s, single merit with 26 ones (pad 256): 0.0800", false},
     {"found-mse", "4242221144411121214241142422112112214412414144224412", 3,
      "flutterscan annealing, 60 s, mse merit (E 3000 e-, c 3, read noise 4 e-, eps 10)", false},
 }};
