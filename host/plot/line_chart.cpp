@@ -1,8 +1,8 @@
 #include "plot/line_chart.hpp"
 
+#include "plot/png_file.hpp"
+
 #include <cairo.h>
-#include <fcntl.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <atomic>
@@ -658,70 +658,6 @@ void draw_chart(cairo_t* cr, const LineChart& chart, int width, int height) {
   draw_legend(cr, chart, plot, scale);
 }
 
-// ---------------------------------------------------------------- atomic file output
-
-struct PngSink {
-  int fd;
-  int error = 0;  ///< errno of a failed write
-};
-
-cairo_status_t write_to_sink(void* closure, const unsigned char* data, unsigned int length) {
-  auto* sink = static_cast<PngSink*>(closure);
-  while (length > 0) {
-    const ssize_t written = ::write(sink->fd, data, length);
-    if (written < 0) {
-      if (errno == EINTR) continue;
-      sink->error = errno;
-      return CAIRO_STATUS_WRITE_ERROR;
-    }
-    data += written;
-    length -= static_cast<unsigned int>(written);
-  }
-  return CAIRO_STATUS_SUCCESS;
-}
-
-/// Creates a new, uniquely named file beside `path`; returns its descriptor (or -1 with errno).
-int create_temporary(const std::string& path, std::string& temporary) {
-  static std::atomic<unsigned> counter{0};
-  for (int attempt = 0; attempt < 100; ++attempt) {
-    temporary = path + ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter++);
-    const int fd = ::open(temporary.c_str(), O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
-    if (fd >= 0 || errno != EEXIST) return fd;
-  }
-  return -1;
-}
-
-/// Writes `surface` as a PNG to `path` through a temporary file; returns an error or "".
-std::string write_atomically(cairo_surface_t* surface, const std::string& path) {
-  std::string temporary;
-  const int fd = create_temporary(path, temporary);
-  if (fd < 0) {
-    const int error = errno;
-    const std::filesystem::path directory = std::filesystem::path(path).parent_path();
-    if (error == ENOENT && !directory.empty()) {
-      return "directory '" + directory.string() + "' does not exist";
-    }
-    return std::string("cannot create a temporary file beside it: ") + std::strerror(error);
-  }
-  PngSink sink{fd};
-  const cairo_status_t status = cairo_surface_write_to_png_stream(surface, write_to_sink, &sink);
-  std::string failure;
-  if (status != CAIRO_STATUS_SUCCESS) {
-    failure = std::string("writing PNG data failed: ") +
-              (sink.error != 0 ? std::strerror(sink.error) : cairo_status_to_string(status));
-  } else if (::fsync(fd) != 0) {
-    failure = std::string("fsync failed: ") + std::strerror(errno);
-  }
-  if (::close(fd) != 0 && failure.empty()) {
-    failure = std::string("closing the file failed: ") + std::strerror(errno);
-  }
-  if (failure.empty() && std::rename(temporary.c_str(), path.c_str()) != 0) {
-    failure = std::string("renaming '") + temporary + "' over it failed: " + std::strerror(errno);
-  }
-  if (!failure.empty()) ::unlink(temporary.c_str());
-  return failure;
-}
-
 }  // namespace
 
 std::string write_png(const LineChart& chart, const std::string& path, int width, int height) {
@@ -740,7 +676,7 @@ std::string write_png(const LineChart& chart, const std::string& path, int width
   if (const cairo_status_t status = cairo_status(cr.get()); status != CAIRO_STATUS_SUCCESS) {
     return failed(std::string("drawing failed: ") + cairo_status_to_string(status));
   }
-  if (const std::string problem = write_atomically(surface.get(), path); !problem.empty()) {
+  if (const std::string problem = write_surface_png(surface.get(), path); !problem.empty()) {
     return failed(problem);
   }
   return {};
