@@ -15,5 +15,7 @@ void add_codes_list(CLI::App& codes);
 void add_simulate(CLI::App& app);
 /// \brief `flutterscan deblur` (deblur.cpp).
 void add_deblur(CLI::App& app);
+/// \brief `flutterscan bench` (bench.cpp).
+void add_bench(CLI::App& app);
 
 }  // namespace flutterscan::app

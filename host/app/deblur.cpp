@@ -32,7 +32,7 @@ struct DeblurFlags {
   double gain = 1;
   double read_noise = 4;
   std::string method = "joint-wiener";
-  int iterations = 20;
+  int iterations = 0;  ///< 0 = the method's default
   int threads = 2;
   std::string output;
   bool decode = false;
@@ -135,7 +135,7 @@ imaging::CaptureModel model_from_descriptor(const DeblurFlags& f, const LoadedFr
 
 void run(const DeblurFlags& f) {
   const auto method = imaging::method_from_name(f.method);
-  if (!method) throw UsageError("unknown method '" + f.method + "': the methods are joint-wiener, wiener-avg, rl");
+  if (!method) throw UsageError("unknown method '" + f.method + "': the methods are joint-wiener, wiener-avg, rl or tv");
   if (!f.descriptor.empty() && f.blur >= 0) throw UsageError("give either --descriptor or --blur, not both");
   auto start = std::chrono::steady_clock::now();
   const auto frame = read_frame(f.input);
@@ -147,7 +147,7 @@ void run(const DeblurFlags& f) {
   start = std::chrono::steady_clock::now();
   imaging::DeblurOptions options;
   options.method = *method;
-  options.iterations = f.iterations;
+  if (f.iterations > 0) options.iterations = f.iterations;
   options.threads = f.threads;
   const auto result = imaging::deblur(imaging::dn_to_electrons(frame.value().dn, model), model, options);
   if (!result.ok()) throw UsageError("'" + f.input + "': " + result.error());
@@ -201,8 +201,11 @@ void add_deblur(CLI::App& app) {
   command->add_option("--black-level", f->black_level, "DN")->capture_default_str();
   command->add_option("--gain", f->gain, "e- per DN")->capture_default_str();
   command->add_option("--read-noise", f->read_noise, "e- rms")->capture_default_str();
-  command->add_option("--method", f->method, "joint-wiener, wiener-avg or rl")->capture_default_str();
-  command->add_option("--iterations", f->iterations, "rl iterations")->check(CLI::Range(1, 10000))->capture_default_str();
+  command->add_option("--method", f->method, "joint-wiener, wiener-avg, rl or tv")->capture_default_str();
+  command->add_option("--iterations", f->iterations, "rl iterations (default " + std::to_string(imaging::kRichardsonLucyIterations) +
+                                                     "), tv iterations (default " +
+                                                     std::to_string(imaging::kTotalVariationIterations) + ")")
+      ->check(CLI::Range(1, 10000));
   command->add_option("--threads", f->threads, "threads")->check(CLI::Range(1, 64))->capture_default_str();
   command->add_option("-o,--output", f->output, "16-bit grey PNG to write")->required();
   command->add_flag("--decode", f->decode, "also decode the barcodes on the result");

@@ -17,6 +17,7 @@ int main(int argc, char** argv) {
   add_codes_command(app);
   add_simulate(app);
   add_deblur(app);
+  add_bench(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

@@ -1,0 +1,160 @@
+// `flutterscan bench speed [--json] [--repeats N] [--scaling FILE.png]`:
+// medians of the deblurring methods on a 1920x1080 RGB8 frame, frame in memory
+// to fused grey, against the OpenCV way; optionally how the cost grows with
+// frame size and blur length.
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <functional>
+#include <iostream>
+#include <memory>
+#include <random>
+
+#include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+
+#include "app/cli_errors.hpp"
+#include "app/commands.hpp"
+#include "bench/speed_frame.hpp"
+#include "codes/library.hpp"
+#include "imaging/joint_wiener.hpp"
+#include "imaging/richardson_lucy.hpp"
+#include "plot/line_chart.hpp"
+
+namespace flutterscan::app {
+namespace {
+
+struct SpeedOptions {
+  bool json = false;
+  int repeats = 15;
+  std::string scaling;
+};
+
+/// Median wall time in ms of `repeats` runs after one warm-up run.
+double median_ms(int repeats, const std::function<void()>& run) {
+  run();
+  std::vector<double> times;
+  for (int i = 0; i < repeats; ++i) {
+    const auto start = std::chrono::steady_clock::now();
+    run();
+    times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  }
+  std::nth_element(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(times.size() / 2), times.end());
+  return times[times.size() / 2];
+}
+
+double joint_wiener_ms(const bench::SpeedFrame& frame, int threads, int repeats) {
+  imaging::JointWiener wiener(frame.psfs, frame.rgb8.cols, 1.0 / 0.05, imaging::PlanEffort::kMeasure);
+  imaging::RowPool pool(threads);
+  imaging::Plane latent(frame.rgb8.cols, frame.rgb8.rows);
+  const auto load = bench::rgb8_row_loader(frame);
+  return median_ms(repeats, [&] { wiener.deconvolve(load, frame.rgb8.rows, latent, pool); });
+}
+
+double richardson_lucy_ms(const bench::SpeedFrame& frame, int threads, int repeats) {
+  std::vector<imaging::Plane> planes(3, imaging::Plane(frame.rgb8.cols, frame.rgb8.rows));
+  const auto load = bench::rgb8_row_loader(frame);
+  for (int y = 0; y < frame.rgb8.rows; ++y) {
+    std::vector<std::span<float>> rows;
+    for (auto& p : planes) rows.push_back(p.row(y));
+    load(y, rows);
+  }
+  const imaging::RichardsonLucy rl(frame.psfs, frame.rgb8.cols, 16.0, {20, true, 0}, imaging::PlanEffort::kMeasure);
+  return median_ms(repeats, [&] { rl.deconvolve(planes, threads); });
+}
+
+/// A balanced one-of-3 code of `slots` slots (fixed seed): the cost depends on its length only.
+LedCode code_of_length(int slots) {
+  std::vector<std::uint8_t> masks;
+  for (int t = 0; t < slots; ++t) masks.push_back(static_cast<std::uint8_t>(1U << (t % 3)));
+  std::shuffle(masks.begin(), masks.end(), std::mt19937(7));
+  return LedCode::from_masks(masks, 3).value();
+}
+
+void write_scaling_chart(const std::string& path, int repeats) {
+  plot::LineChart chart;
+  chart.title = "Joint Wiener: time per frame against frame size";
+  chart.x_label = "frame size (megapixels, 16:9, RGB8)";
+  chart.y_label = "ms per frame (median)";
+  chart.log_x = true;
+  chart.notes.push_back("52-px blur, seed max-min code; dashed: 1 thread, solid: 2 threads");
+  const LedCode code = codes::to_code(*codes::find_library_code("seed-maxmin-1"));
+  plot::Series one{"1 thread", {}, {}, {0.85, 0.1, 0.1}, 2, true, 4};
+  plot::Series two{"2 threads", {}, {}, {0.1, 0.25, 0.85}, 2, false, 4};
+  for (double megapixels : {0.3, 1.0, 2.07, 5.0, 12.0}) {
+    const int height = static_cast<int>(std::sqrt(megapixels * 1e6 * 9 / 16));
+    const int width = height * 16 / 9;
+    const auto frame = bench::make_speed_frame(width, height, code, 52);
+    one.x.push_back(megapixels);
+    one.y.push_back(joint_wiener_ms(frame, 1, repeats));
+    two.x.push_back(megapixels);
+    two.y.push_back(joint_wiener_ms(frame, 2, repeats));
+    std::fprintf(stderr, "  %.2f Mpx: %.2f ms (1 thread), %.2f ms (2 threads)\n", megapixels, one.y.back(), two.y.back());
+  }
+  chart.series = {one, two};
+  if (auto error = plot::write_png(chart, path); !error.empty()) throw RuntimeFailure(error);
+
+  plot::LineChart blur;
+  blur.title = "Time per 1080p frame against blur length";
+  blur.x_label = "blur length = code length (pixels = slots)";
+  blur.y_label = "ms per frame (median), 2 threads";
+  blur.log_x = true;
+  plot::Series wiener{"joint Wiener", {}, {}, {0.1, 0.25, 0.85}, 2, false, 4};
+  plot::Series rl{"Richardson-Lucy, 20 iterations", {}, {}, {0.85, 0.1, 0.1}, 2, false, 4};
+  for (int slots : {13, 26, 52, 104, 208}) {
+    const auto frame = bench::make_speed_frame(1920, 1080, code_of_length(slots), slots);
+    wiener.x.push_back(slots);
+    wiener.y.push_back(joint_wiener_ms(frame, 2, repeats));
+    rl.x.push_back(slots);
+    rl.y.push_back(richardson_lucy_ms(frame, 2, std::max(1, repeats / 5)));
+    std::fprintf(stderr, "  blur %d: %.2f ms (joint Wiener), %.1f ms (RL)\n", slots, wiener.y.back(), rl.y.back());
+  }
+  blur.series = {wiener, rl};
+  const std::string blur_path = path.substr(0, path.rfind('.')) + "-blur.png";
+  if (auto error = plot::write_png(blur, blur_path); !error.empty()) throw RuntimeFailure(error);
+}
+
+void run_speed(const SpeedOptions& options) {
+  if (options.repeats < 1) throw UsageError("--repeats must be at least 1");
+  const LedCode code = codes::to_code(*codes::find_library_code("seed-maxmin-1"));
+  const auto frame = bench::make_speed_frame(1920, 1080, code, 52);
+  nlohmann::json medians;
+  medians["joint-wiener/1-thread"] = joint_wiener_ms(frame, 1, options.repeats);
+  medians["joint-wiener/2-threads"] = joint_wiener_ms(frame, 2, options.repeats);
+  medians["rl-20/2-threads"] = richardson_lucy_ms(frame, 2, std::max(3, options.repeats / 5));
+  cv::setNumThreads(2);
+  bench::OpenCvWiener baseline(frame);
+  medians["opencv-dft-wiener/2-threads"] = median_ms(options.repeats, [&] { baseline.run(frame.rgb8); });
+  const double ratio = medians["opencv-dft-wiener/2-threads"].get<double>() /
+                       medians["joint-wiener/2-threads"].get<double>();
+  if (options.json) {
+    std::cout << nlohmann::json{{"frame", "1920x1080 RGB8, 52 px blur, seed-maxmin-1"},
+                                {"medians_ms", medians},
+                                {"opencv_over_joint_wiener", ratio},
+                                {"repeats", options.repeats}}
+                     .dump()
+              << "\n";
+  } else {
+    std::printf("1920x1080 RGB8 frame to fused grey, medians of %d runs:\n", options.repeats);
+    for (const auto& [name, ms] : medians.items()) std::printf("  %-28s %8.2f ms\n", name.c_str(), ms.get<double>());
+    std::printf("  OpenCV baseline / joint Wiener (2 threads): %.1fx\n", ratio);
+  }
+  if (!options.scaling.empty()) write_scaling_chart(options.scaling, std::max(3, options.repeats / 3));
+}
+
+}  // namespace
+
+void add_bench(CLI::App& app) {
+  CLI::App* bench = app.add_subcommand("bench", "Measure speed (more in make bench)");
+  bench->require_subcommand(1);
+  auto options = std::make_shared<SpeedOptions>();
+  CLI::App* speed = bench->add_subcommand("speed", "Median ms per 1080p frame per method, and the OpenCV ratio");
+  speed->add_flag("--json", options->json, "print one JSON object");
+  speed->add_option("--repeats", options->repeats, "timed runs per method")->capture_default_str();
+  speed->add_option("--scaling", options->scaling, "also chart cost against frame size and blur (PNG)");
+  speed->callback([options] { run_speed(*options); });
+}
+
+}  // namespace flutterscan::app
