@@ -33,6 +33,7 @@ struct DeblurFlags {
   double read_noise = 4;
   std::string method = "joint-wiener";
   int iterations = 0;  ///< 0 = the method's default
+  std::string edge_prior = "tv";
   int threads = 2;
   std::string output;
   bool decode = false;
@@ -136,6 +137,8 @@ imaging::CaptureModel model_from_descriptor(const DeblurFlags& f, const LoadedFr
 void run(const DeblurFlags& f) {
   const auto method = imaging::method_from_name(f.method);
   if (!method) throw UsageError("unknown method '" + f.method + "': the methods are joint-wiener, wiener-avg, rl or tv");
+  if (f.edge_prior != "tv" && f.edge_prior != "l0")
+    throw UsageError("--edge-prior must be tv or l0, not '" + f.edge_prior + "'");
   if (!f.descriptor.empty() && f.blur >= 0) throw UsageError("give either --descriptor or --blur, not both");
   auto start = std::chrono::steady_clock::now();
   const auto frame = read_frame(f.input);
@@ -148,6 +151,7 @@ void run(const DeblurFlags& f) {
   imaging::DeblurOptions options;
   options.method = *method;
   if (f.iterations > 0) options.iterations = f.iterations;
+  if (f.edge_prior == "l0") options.edge_prior = imaging::EdgePrior::kL0Gradient;
   options.threads = f.threads;
   const auto result = imaging::deblur(imaging::dn_to_electrons(frame.value().dn, model), model, options);
   if (!result.ok()) throw UsageError("'" + f.input + "': " + result.error());
@@ -206,6 +210,10 @@ void add_deblur(CLI::App& app) {
                                                      "), tv iterations (default " +
                                                      std::to_string(imaging::kTotalVariationIterations) + ")")
       ->check(CLI::Range(1, 10000));
+  command->add_option("--edge-prior", f->edge_prior,
+                      "tv method's prior: tv (|gradient|) or l0 (count of edges: sharper on "
+                      "axis-aligned two-tone print, worse on rotated labels)")
+      ->capture_default_str();
   command->add_option("--threads", f->threads, "threads")->check(CLI::Range(1, 64))->capture_default_str();
   command->add_option("-o,--output", f->output, "16-bit grey PNG to write")->required();
   command->add_flag("--decode", f->decode, "also decode the barcodes on the result");

@@ -22,12 +22,13 @@ std::string method_name(Method method) {
     case Method::kJointWiener: return "joint-wiener";
     case Method::kWienerAverage: return "wiener-avg";
     case Method::kRichardsonLucy: return "rl";
+    case Method::kTotalVariation: return "tv";
   }
   return "?";
 }
 
 std::optional<Method> method_from_name(const std::string& name) {
-  for (Method m : {Method::kJointWiener, Method::kWienerAverage, Method::kRichardsonLucy})
+  for (Method m : {Method::kJointWiener, Method::kWienerAverage, Method::kRichardsonLucy, Method::kTotalVariation})
     if (method_name(m) == name) return m;
   return std::nullopt;
 }
@@ -47,7 +48,7 @@ Result<DeblurResult, std::string> deblur(const Image& electrons, const CaptureMo
                         std::to_string(along) + " px)");
   if (!(options.gradient_variance > 0) || !std::isfinite(options.gradient_variance))
     return Out::failure("the prior gradient variance must be a finite number > 0");
-  if (options.iterations < 1) return Out::failure("iterations must be at least 1");
+  if (options.iterations && *options.iterations < 1) return Out::failure("iterations must be at least 1");
 
   DeblurResult result;
   std::vector<Plane> rows;
@@ -86,9 +87,20 @@ Result<DeblurResult, std::string> deblur(const Image& electrons, const CaptureMo
       break;
     }
     case Method::kRichardsonLucy: {
-      const RichardsonLucySettings settings{options.iterations, options.accelerate, options.damping};
+      const RichardsonLucySettings settings{options.iterations.value_or(kRichardsonLucyIterations),
+                                            options.accelerate, options.damping};
       latent = RichardsonLucy(psfs, width, model.read_noise * model.read_noise, settings)
                    .deconvolve(rows, options.threads);
+      break;
+    }
+    case Method::kTotalVariation: {
+      // Warm start: the joint Wiener solution with the same prior, made inside
+      // the solver from the data spectra it needs anyway (an empty start plane).
+      TotalVariationSettings settings =
+          options.edge_prior == EdgePrior::kL0Gradient ? l0_settings() : TotalVariationSettings{};
+      settings.iterations = options.iterations.value_or(kTotalVariationIterations);
+      settings.wiener_lambda = lambda;
+      latent = TotalVariation(psfs, width, settings).deconvolve(rows, Plane(), options.threads);
       break;
     }
   }
