@@ -19,8 +19,10 @@
 #include "app/commands.hpp"
 #include "bench/speed_frame.hpp"
 #include "codes/library.hpp"
+#include "imaging/deblur.hpp"
 #include "imaging/joint_wiener.hpp"
 #include "imaging/richardson_lucy.hpp"
+#include "imaging/total_variation.hpp"
 #include "plot/line_chart.hpp"
 
 namespace flutterscan::app {
@@ -46,7 +48,8 @@ double median_ms(int repeats, const std::function<void()>& run) {
 }
 
 double joint_wiener_ms(const bench::SpeedFrame& frame, int threads, int repeats) {
-  imaging::JointWiener wiener(frame.psfs, frame.rgb8.cols, 1.0 / 0.05, imaging::PlanEffort::kMeasure);
+  imaging::JointWiener wiener(frame.psfs, frame.rgb8.cols, 1.0 / imaging::kLabelGradientVariance,
+                              imaging::PlanEffort::kMeasure);
   imaging::RowPool pool(threads);
   imaging::Plane latent(frame.rgb8.cols, frame.rgb8.rows);
   const auto load = bench::rgb8_row_loader(frame);
@@ -57,12 +60,23 @@ double richardson_lucy_ms(const bench::SpeedFrame& frame, int threads, int repea
   std::vector<imaging::Plane> planes(3, imaging::Plane(frame.rgb8.cols, frame.rgb8.rows));
   const auto load = bench::rgb8_row_loader(frame);
   for (int y = 0; y < frame.rgb8.rows; ++y) {
-    std::vector<std::span<float>> rows;
-    for (auto& p : planes) rows.push_back(p.row(y));
+    const std::span<float> rows[3] = {planes[0].row(y), planes[1].row(y), planes[2].row(y)};
     load(y, rows);
   }
   const imaging::RichardsonLucy rl(frame.psfs, frame.rgb8.cols, 16.0, {20, true, 0}, imaging::PlanEffort::kMeasure);
   return median_ms(repeats, [&] { rl.deconvolve(planes, threads); });
+}
+
+double total_variation_ms(const bench::SpeedFrame& frame, int threads, int repeats) {
+  imaging::TotalVariationSettings settings;
+  settings.iterations = imaging::kTotalVariationIterations;
+  settings.wiener_lambda = 1.0 / imaging::kLabelGradientVariance;
+  imaging::TotalVariation tv(frame.psfs, frame.rgb8.cols, settings, imaging::PlanEffort::kMeasure);
+  imaging::RowPool pool(threads);
+  imaging::Plane latent(frame.rgb8.cols, frame.rgb8.rows);
+  const auto load = bench::rgb8_row_loader(frame);
+  const imaging::Plane warm_start;
+  return median_ms(repeats, [&] { tv.deconvolve(load, frame.rgb8.rows, warm_start, latent, pool); });
 }
 
 /// A balanced one-of-3 code of `slots` slots (fixed seed): the cost depends on its length only.
@@ -124,6 +138,7 @@ void run_speed(const SpeedOptions& options) {
   medians["joint-wiener/1-thread"] = joint_wiener_ms(frame, 1, options.repeats);
   medians["joint-wiener/2-threads"] = joint_wiener_ms(frame, 2, options.repeats);
   medians["rl-20/2-threads"] = richardson_lucy_ms(frame, 2, std::max(3, options.repeats / 5));
+  medians["tv-40/2-threads"] = total_variation_ms(frame, 2, std::max(3, options.repeats / 5));
   cv::setNumThreads(2);
   bench::OpenCvWiener baseline(frame);
   medians["opencv-dft-wiener/2-threads"] = median_ms(options.repeats, [&] { baseline.run(frame.rgb8); });
