@@ -3,7 +3,7 @@
 //
 //   accuracy_sweep --electrons 100,300,1000,3000,10000 --caps 1,3,8 [--read-noise 4,...]
 //                  [--seeds 3] [--methods joint-wiener,rl,tv] [--csv FILE]
-//                  [--chart FILE.png] [--regime PREFIX] [--quiet]
+//                  [--chart FILE.png] [--regime PREFIX] [--quiet] [--psnr-only]
 //
 // Prints one Markdown table per (E, c, read noise): mean PSNR / SSIM / decode
 // rate per scheme and method (--quiet: none). --chart plots PSNR against E per
@@ -106,14 +106,16 @@ int main(int argc, char** argv) {
   std::vector<double> read_noises = {4};
   int seeds = 3;
   bool quiet = false;
+  bool psnr_only = false;  // skip SSIM and decoding (the regime maps need PSNR alone)
   std::string regime_prefix;
   std::vector<std::string> method_names = {"joint-wiener", "rl", "tv"};
   std::string csv_path, chart_path;
   for (int i = 1; i < argc; ++i)
     if (std::string(argv[i]) == "--quiet") quiet = true;
+    else if (std::string(argv[i]) == "--psnr-only") psnr_only = true;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
-    if (flag == "--quiet") {
+    if (flag == "--quiet" || flag == "--psnr-only") {
       --i;
       continue;
     }
@@ -169,6 +171,7 @@ int main(int argc, char** argv) {
         if (!result.ok()) continue;
         Score& s = scores[i][m];
         s.psnr = imaging::psnr(scene.reflectance, result.value().latent, region);
+        if (psnr_only) continue;
         s.ssim = imaging::ssim(scene.reflectance, result.value().latent, region);
         if (!scene.content.empty()) {
           const auto decoded = sim::decode_barcodes(result.value().latent);

@@ -501,4 +501,116 @@ TEST_F(CliTest, HelpOnEverySubcommandSucceeds) {
   }
 }
 
+// ---------------------------------------------------------------------------
+// simulate and deblur
+
+constexpr const char* kCrosstalk = "0.90,0.08,0.01;0.10,0.85,0.12;0.01,0.07,0.88";
+
+bool is_png(const fs::path& path) { return read_file(path).rfind("\x89PNG\r\n\x1a\n", 0) == 0; }
+
+class ImagingCliTest : public CliTest {
+ protected:
+  /// Simulates the Code 128 label FS-0042 into dir_/frame.png (+ .json, .truth.png).
+  void simulate_label() {
+    const RunResult result = run({"simulate", "--scene", "code128:FS-0042", "--code", "found-joint", "--blur", "52",
+                                  "--electrons", "3000", "--crosstalk", kCrosstalk, "--seed", "3", "-o",
+                                  (dir_ / "frame.png").string()});
+    ASSERT_EQ(result.exit_code, 0) << result;
+  }
+  std::string frame() const { return (dir_ / "frame.png").string(); }
+  std::string descriptor() const { return (dir_ / "frame.json").string(); }
+  std::string output() const { return (dir_ / "sharp.png").string(); }
+};
+
+TEST_F(ImagingCliTest, SimulateWritesFrameDescriptorAndTruth) {
+  simulate_label();
+  EXPECT_TRUE(is_png(dir_ / "frame.png"));
+  EXPECT_TRUE(is_png(dir_ / "frame.truth.png"));
+  const json descriptor = json::parse(read_file(dir_ / "frame.json"));
+  EXPECT_EQ(descriptor["format"], "flutterscan-capture");
+  EXPECT_EQ(descriptor["version"], 1);
+  EXPECT_EQ(descriptor["blur_px"], 52.0);
+  EXPECT_EQ(descriptor["crosstalk"][1][2], 0.12);
+}
+
+TEST_F(ImagingCliTest, SimulateIsDeterministicForASeed) {
+  simulate_label();
+  const std::string first = read_file(dir_ / "frame.png");
+  simulate_label();
+  EXPECT_EQ(read_file(dir_ / "frame.png"), first);
+}
+
+TEST_F(ImagingCliTest, DeblurWithTheDescriptorDecodesTheLabel) {
+  simulate_label();
+  for (const char* method : {"joint-wiener", "tv"}) {
+    const RunResult result =
+        run({"deblur", frame(), "--descriptor", descriptor(), "--method", method, "--decode", "--json", "-o", output()});
+    ASSERT_EQ(result.exit_code, 0) << result;
+    const auto objects = json_lines(result.out);
+    ASSERT_EQ(objects.size(), 1U);
+    EXPECT_EQ(objects[0]["method"], method);
+    EXPECT_TRUE(objects[0]["timings_ms"].contains("deblur"));
+    ASSERT_TRUE(objects[0]["decoded"].is_array()) << result;
+    EXPECT_EQ(objects[0]["decoded"].size(), 1U) << result;
+    EXPECT_EQ(objects[0]["decoded"][0], "FS-0042") << result;
+    EXPECT_TRUE(is_png(output()));
+  }
+}
+
+TEST_F(ImagingCliTest, DeblurFromFlagsAlsoDecodes) {
+  simulate_label();
+  const json descriptor_json = json::parse(read_file(descriptor()));
+  const RunResult result =
+      run({"deblur", frame(), "--code", "found-joint", "--blur", "52", "--crosstalk", kCrosstalk, "--black-level",
+           "64", "--gain", std::to_string(descriptor_json["gain_e_per_dn"].get<double>()), "--decode", "-o", output()});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  EXPECT_TRUE(contains(result.out, "decoded: FS-0042")) << result;
+}
+
+TEST_F(ImagingCliTest, DeblurRefusesBadInputNamingIt) {
+  simulate_label();
+  const std::string not_an_image = (dir_ / "notes.png").string();
+  std::ofstream(not_an_image) << "hello";
+  expect_usage_error({"deblur", (dir_ / "missing.png").string(), "--descriptor", descriptor(), "-o", output()},
+                     {"missing.png", "does not exist"});
+  expect_usage_error({"deblur", not_an_image, "--code", "found-joint", "--blur", "52", "-o", output()},
+                     {"notes.png", "cannot read"});
+  expect_usage_error({"deblur", frame(), "--code", "found-joint", "--blur", "900", "-o", output()},
+                     {"not shorter than the image"});
+  expect_usage_error({"deblur", frame(), "--descriptor", descriptor(), "--code", "seed-maxmin-1", "-o", output()},
+                     {"disagrees with the descriptor"});
+  expect_usage_error({"deblur", frame(), "--code", "found-joint", "--blur", "nan", "-o", output()}, {"blur"});
+  expect_usage_error({"deblur", frame(), "--code", "found-joint", "--blur", "52", "--read-noise", "-3", "-o", output()},
+                     {"read noise"});
+  expect_usage_error({"deblur", frame(), "--code", "found-joint", "--blur", "52", "--crosstalk",
+                      "1,0,0;1,0,0;0,0,1", "-o", output()},
+                     {"singular"});
+  expect_usage_error({"deblur", frame(), "-o", output()}, {"--descriptor", "--code"});
+  expect_usage_error({"deblur", frame(), "--descriptor", descriptor(), "--method", "magic", "-o", output()},
+                     {"unknown method 'magic'"});
+  expect_usage_error({"deblur", frame(), "--code", "raskar", "--blur", "52", "-o", output()}, {"grey frame"});
+  EXPECT_FALSE(fs::exists(output()));
+}
+
+TEST_F(ImagingCliTest, FailedDeblurLeavesAnExistingOutputAlone) {
+  simulate_label();
+  std::ofstream(output(), std::ios::binary) << "previous result";
+  expect_usage_error({"deblur", frame(), "--descriptor", descriptor(), "--method", "magic", "-o", output()}, {"magic"});
+  EXPECT_EQ(read_file(output()), "previous result");
+}
+
+TEST_F(ImagingCliTest, SimulateRefusesBadScenesAndCodes) {
+  expect_usage_error({"simulate", "--scene", "poster:X", "--code", "found-joint", "-o", frame()}, {"poster"});
+  expect_usage_error({"simulate", "--scene", "code128:X", "--code", "12x4", "-o", frame()}, {"slot 2"});
+  expect_usage_error({"simulate", "--scene", "code128:X", "--code", "found-joint", "--blur", "700", "-o", frame()},
+                     {"--blur"});
+  EXPECT_FALSE(fs::exists(frame()));
+}
+
+TEST_F(ImagingCliTest, BenchSpeedHasHelp) {
+  const RunResult result = run({"bench", "speed", "--help"});
+  EXPECT_EQ(result.exit_code, 0) << result;
+  EXPECT_TRUE(contains(result.out, "--json")) << result;
+}
+
 }  // namespace
