@@ -63,8 +63,10 @@ double richardson_lucy_ms(const bench::SpeedFrame& frame, int threads, int repea
     const std::span<float> rows[3] = {planes[0].row(y), planes[1].row(y), planes[2].row(y)};
     load(y, rows);
   }
-  const imaging::RichardsonLucy rl(frame.psfs, frame.rgb8.cols, 16.0, {20, true, 0}, imaging::PlanEffort::kMeasure);
-  return median_ms(repeats, [&] { rl.deconvolve(planes, threads); });
+  imaging::RichardsonLucy rl(frame.psfs, frame.rgb8.cols, 16.0, {20, true, 0}, imaging::PlanEffort::kMeasure);
+  imaging::RowPool pool(threads);
+  imaging::Plane latent(frame.rgb8.cols, frame.rgb8.rows);
+  return median_ms(repeats, [&] { rl.deconvolve(planes, latent, pool); });
 }
 
 double total_variation_ms(const bench::SpeedFrame& frame, int threads, int repeats) {

@@ -110,7 +110,7 @@ Plane expose_and_deblur(const Plane& image, const Exposure& exposure, bool emva,
   std::vector<double> taps;
   for (double p : psf) taps.push_back(p * scale);
   const imaging::ChannelPsf channel{taps, 1.0};
-  const imaging::RichardsonLucy rl({&channel, 1}, observed.width, emva ? kReadNoise * kReadNoise : 0.0,
+  imaging::RichardsonLucy rl({&channel, 1}, observed.width, emva ? kReadNoise * kReadNoise : 0.0,
                                    {20, true, 0});
   const Plane full = rl.deconvolve({&observed, 1}, 2);
   Plane latent(image.width, image.height);

@@ -97,8 +97,8 @@ double frame_ms(const bench::SpeedFrame& frame, const Setting& s, int repeats) {
         const std::span<float> rows[3] = {planes[0].row(y), planes[1].row(y), planes[2].row(y)};
         load(y, rows);
       }
-      const imaging::RichardsonLucy rl(frame.psfs, width, 16.0, {s.iterations, true, 0}, imaging::PlanEffort::kMeasure);
-      return median_ms(std::max(1, repeats / 2), [&] { latent = rl.deconvolve(planes, 2); });
+      imaging::RichardsonLucy rl(frame.psfs, width, 16.0, {s.iterations, true, 0}, imaging::PlanEffort::kMeasure);
+      return median_ms(std::max(1, repeats / 2), [&] { rl.deconvolve(planes, latent, pool); });
     }
     case imaging::Method::kTotalVariation: {
       imaging::TotalVariationSettings settings;

@@ -6,14 +6,6 @@
 
 namespace flutterscan::imaging {
 
-struct RichardsonLucy::Scratch {
-  std::vector<AlignedFloats> observed;  ///< per channel: the row plus the offset
-  AlignedFloats x, x_previous, ahead;   ///< latent rows (extended length)
-  AlignedFloats step, step_before;      ///< the last two RL steps, for acceleration
-  AlignedFloats real;                   ///< padded real buffer
-  AlignedFloats spectrum, work, sum;    ///< half-complex buffers
-};
-
 RichardsonLucy::RichardsonLucy(std::span<const ChannelPsf> channels, int width,
                                double read_variance, const RichardsonLucySettings& settings,
                                PlanEffort effort)
@@ -135,25 +127,40 @@ void RichardsonLucy::deconvolve_row(std::span<const std::span<const float>> rows
   std::copy(x + lead, x + lead + out.size(), out.begin());
 }
 
-Plane RichardsonLucy::deconvolve(std::span<const Plane> channels, int threads) const {
+RichardsonLucy::Scratch RichardsonLucy::make_scratch(std::size_t channels) const {
+  const auto ext = static_cast<std::size_t>(extended_);
+  const auto complex_floats = static_cast<std::size_t>(2 * fft_.bins());
+  Scratch scratch{{},
+                  std::vector<std::span<const float>>(channels),
+                  AlignedFloats(ext),
+                  AlignedFloats(ext),
+                  AlignedFloats(ext),
+                  AlignedFloats(ext),
+                  AlignedFloats(ext),
+                  AlignedFloats(static_cast<std::size_t>(fft_.length())),
+                  AlignedFloats(complex_floats),
+                  AlignedFloats(complex_floats),
+                  AlignedFloats(complex_floats)};
+  for (std::size_t c = 0; c < channels; ++c) scratch.observed.emplace_back(static_cast<std::size_t>(width_));
+  return scratch;
+}
+
+void RichardsonLucy::deconvolve(std::span<const Plane> channels, Plane& out, RowPool& pool) {
+  while (static_cast<int>(workers_.size()) < pool.threads()) workers_.push_back(make_scratch(spectra_.size()));
+  pool.run(channels[0].height, [&](int first, int last, int worker) {
+    Scratch& scratch = workers_[static_cast<std::size_t>(worker)];
+    for (int y = first; y < last; ++y) {
+      for (std::size_t c = 0; c < channels.size(); ++c) scratch.rows[c] = channels[c].row(y);
+      deconvolve_row(scratch.rows, out.row(y), scratch);
+    }
+  });
+}
+
+Plane RichardsonLucy::deconvolve(std::span<const Plane> channels, int threads) {
   const int height = channels[0].height;
   Plane latent(width_, height);
   RowPool pool(std::max(1, std::min(threads, height)));
-  pool.run(height, [&](int first, int last, int) {
-    const auto ext = static_cast<std::size_t>(extended_);
-    const auto complex_floats = static_cast<std::size_t>(2 * fft_.bins());
-    Scratch scratch{{}, AlignedFloats(ext), AlignedFloats(ext), AlignedFloats(ext),
-                    AlignedFloats(ext), AlignedFloats(ext),
-                    AlignedFloats(static_cast<std::size_t>(fft_.length())),
-                    AlignedFloats(complex_floats), AlignedFloats(complex_floats),
-                    AlignedFloats(complex_floats)};
-    for (std::size_t c = 0; c < channels.size(); ++c) scratch.observed.emplace_back(static_cast<std::size_t>(width_));
-    std::vector<std::span<const float>> rows(channels.size());
-    for (int y = first; y < last; ++y) {
-      for (std::size_t c = 0; c < channels.size(); ++c) rows[c] = channels[c].row(y);
-      deconvolve_row(rows, latent.row(y), scratch);
-    }
-  });
+  deconvolve(channels, latent, pool);
   return latent;
 }
 

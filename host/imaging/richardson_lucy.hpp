@@ -22,6 +22,7 @@
 
 #include "imaging/image.hpp"
 #include "imaging/joint_wiener.hpp"
+#include "imaging/row_pool.hpp"
 
 namespace flutterscan::imaging {
 
@@ -38,10 +39,23 @@ class RichardsonLucy {
                  PlanEffort effort = PlanEffort::kEstimate);
 
   /// \brief Deconvolves whole planes (electrons, motion frame) on `threads` threads.
-  Plane deconvolve(std::span<const Plane> channels, int threads) const;
+  Plane deconvolve(std::span<const Plane> channels, int threads);
+
+  /// \brief Deconvolves `channels` into `out` (width() x height, allocated by the
+  /// caller) on `pool`. Worker buffers are made on the first call for a pool size
+  /// and reused: steady-state frames allocate nothing.
+  void deconvolve(std::span<const Plane> channels, Plane& out, RowPool& pool);
 
  private:
-  struct Scratch;
+  struct Scratch {
+    std::vector<AlignedFloats> observed;  ///< per channel: the row plus the offset
+    std::vector<std::span<const float>> rows;  ///< per channel: the row being solved
+    AlignedFloats x, x_previous, ahead;   ///< latent rows (extended length)
+    AlignedFloats step, step_before;      ///< the last two RL steps, for acceleration
+    AlignedFloats real;                   ///< padded real buffer
+    AlignedFloats spectrum, work, sum;    ///< half-complex buffers
+  };
+  Scratch make_scratch(std::size_t channels) const;
   void deconvolve_row(std::span<const std::span<const float>> rows, std::span<float> out,
                       Scratch& scratch) const;
 
@@ -54,6 +68,7 @@ class RichardsonLucy {
   std::vector<std::vector<std::complex<float>>> spectra_;  ///< G_c / N
   std::vector<float> inverse_normaliser_;  ///< 1 / sum_c G_c^T 1 per latent pixel (0 where unseen)
   double white_gain_ = 1;                                    ///< sum over channels and taps
+  std::vector<Scratch> workers_;
 };
 
 }  // namespace flutterscan::imaging
