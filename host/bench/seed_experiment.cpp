@@ -1,14 +1,4 @@
-// The seed's Section 6 / Appendix A experiment, rerun: flat 52, Raskar,
-// Raskar + inverted averaged, the triplet averaged, three short flat-17
-// exposures averaged; each deblurred by Richardson-Lucy with 20 iterations
-// (deconvlucy's default Biggs-Andrews acceleration), per channel, as the seed
-// did. Once under the seed's noise model (Gaussian noise with mean and standard
-// deviation 0.01 x the duty factor, which makes the SNR independent of the
-// light collected) and once under the EMVA 1288 model at the same light budget
-// (3000 e- for a white object over the whole exposure, Poisson shot noise, 4 e-
-// read noise). Prints one Markdown table of PSNR per row and model.
-//
-//   seed_experiment --image PHOTO.png [--seed N]
+#include "bench/seed_experiment.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -17,16 +7,14 @@
 #include <string>
 #include <vector>
 
-#include <opencv2/imgcodecs.hpp>
-
 #include "codes/library.hpp"
 #include "imaging/metrics.hpp"
 #include "imaging/richardson_lucy.hpp"
 #include "sim/scene.hpp"
 
+namespace flutterscan::bench {
 namespace {
 
-using namespace flutterscan;
 using imaging::Plane;
 
 constexpr int kSlots = 52;
@@ -137,39 +125,16 @@ double row_psnr(const std::vector<Plane>& channels, const Row& row, bool emva, s
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  std::string photo;
-  std::uint64_t seed = 1;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string flag = argv[i];
-    if (flag == "--image") photo = argv[i + 1];
-    else if (flag == "--seed") seed = std::stoull(argv[i + 1]);
-  }
-  // The photograph as the seed used it: im2double of the stored values, per channel.
-  std::vector<Plane> natural;
-  const cv::Mat image = cv::imread(photo, cv::IMREAD_COLOR);
-  if (image.empty()) {
-    std::fprintf(stderr, "seed_experiment: cannot read --image '%s'\n", photo.c_str());
-    return 2;
-  }
-  for (int c = 2; c >= 0; --c) {
-    Plane p(image.cols, image.rows);
-    for (int y = 0; y < image.rows; ++y)
-      for (int x = 0; x < image.cols; ++x) p.at(x, y) = image.at<cv::Vec3b>(y, x)[c] / 255.0f;
-    natural.push_back(std::move(p));
-  }
-  auto spec = sim::parse_scene("code128:FS-0042");
-  spec.value().width = 640;
-  spec.value().height = 360;
-  const std::vector<Plane> label = {sim::render_scene(spec.value()).value()};
-
-  std::printf("| row | photo, seed noise | photo, EMVA 3000 e- | label, seed noise | label, EMVA 3000 e- |\n");
-  std::printf("|---|---|---|---|---|\n");
-  for (const Row& row : seed_rows()) {
-    std::printf("| %s | %.2f | %.2f | %.2f | %.2f |\n", row.name.c_str(), row_psnr(natural, row, false, seed),
-                row_psnr(natural, row, true, seed), row_psnr(label, row, false, seed),
-                row_psnr(label, row, true, seed));
-    std::fflush(stdout);
-  }
-  return 0;
+std::vector<SeedExperimentRow> run_seed_experiment(const std::vector<imaging::Plane>& photo, std::uint64_t seed) {
+  auto spec = sim::parse_scene("code128:FS-0042").value();
+  spec.width = 640;
+  spec.height = 360;
+  const std::vector<Plane> label = {sim::render_scene(spec).value()};
+  std::vector<SeedExperimentRow> rows;
+  for (const Row& row : seed_rows())
+    rows.push_back({row.name, row_psnr(photo, row, false, seed), row_psnr(photo, row, true, seed),
+                    row_psnr(label, row, false, seed), row_psnr(label, row, true, seed)});
+  return rows;
 }
+
+}  // namespace flutterscan::bench
