@@ -1,6 +1,8 @@
 // `flutterscan deblur IN.png (--descriptor IN.json | --code DIGITS --blur PX ...) -o OUT.png`
 // writes the fused latent image as a 16-bit grey PNG (reflectance 0..1 as
-// 0..65535, same size and registration as the input).
+// 0..65535, same size and registration as the input). A raw Bayer RGGB frame
+// (one channel, descriptor "bayer": "RGGB") is deblurred on its raw colour
+// planes, or demosaicked first with --bayer-mode demosaic (imaging/bayer.hpp).
 
 #include <algorithm>
 #include <chrono>
@@ -13,6 +15,7 @@
 #include "app/commands.hpp"
 #include "app/image_io.hpp"
 #include "codes/code_report.hpp"
+#include "imaging/bayer.hpp"
 #include "imaging/capture_descriptor.hpp"
 #include "imaging/deblur.hpp"
 #include "imaging/frame_conversion.hpp"
@@ -34,6 +37,7 @@ struct DeblurFlags {
   std::string method = "joint-wiener";
   int iterations = 0;  ///< 0 = the method's default
   std::string edge_prior = "tv";
+  std::string bayer_mode = "raw";
   int threads = 2;
   std::string output;
   bool decode = false;
@@ -127,8 +131,10 @@ imaging::CaptureModel model_from_descriptor(const DeblurFlags& f, const LoadedFr
       throw UsageError("--code " + codes::format_code(given) + " disagrees with the descriptor's code " +
                        codes::format_code(m.code));
   }
-  if (m.bayer_rggb) throw UsageError("'" + f.input + "' is a raw Bayer frame: Bayer input is not supported yet");
-  if (frame.dn.channel_count() != m.channels)
+  if (m.bayer_rggb && frame.dn.channel_count() != 1)
+    throw UsageError("'" + f.input + "' has " + std::to_string(frame.dn.channel_count()) +
+                     " channels but its descriptor says it is a raw Bayer mosaic (one channel)");
+  if (!m.bayer_rggb && frame.dn.channel_count() != m.channels)
     throw UsageError("'" + f.input + "' has " + std::to_string(frame.dn.channel_count()) +
                      " channels but its descriptor says " + std::to_string(m.channels));
   return m;
@@ -139,6 +145,8 @@ void run(const DeblurFlags& f) {
   if (!method) throw UsageError("unknown method '" + f.method + "': the methods are joint-wiener, wiener-avg, rl or tv");
   if (f.edge_prior != "tv" && f.edge_prior != "l0")
     throw UsageError("--edge-prior must be tv or l0, not '" + f.edge_prior + "'");
+  const auto bayer_mode = imaging::bayer_mode_from_name(f.bayer_mode);
+  if (!bayer_mode) throw UsageError("--bayer-mode must be raw or demosaic, not '" + f.bayer_mode + "'");
   if (!f.descriptor.empty() && f.blur >= 0) throw UsageError("give either --descriptor or --blur, not both");
   auto start = std::chrono::steady_clock::now();
   const auto frame = read_frame(f.input);
@@ -153,7 +161,10 @@ void run(const DeblurFlags& f) {
   if (f.iterations > 0) options.iterations = f.iterations;
   if (f.edge_prior == "l0") options.edge_prior = imaging::EdgePrior::kL0Gradient;
   options.threads = f.threads;
-  const auto result = imaging::deblur(imaging::dn_to_electrons(frame.value().dn, model), model, options);
+  const imaging::Image electrons = imaging::dn_to_electrons(frame.value().dn, model);
+  const auto result = model.bayer_rggb
+                          ? imaging::deblur_bayer(electrons.channels[0], model, options, *bayer_mode)
+                          : imaging::deblur(electrons, model, options);
   if (!result.ok()) throw UsageError("'" + f.input + "': " + result.error());
   const double deblur_ms = elapsed_ms(start);
 
@@ -196,7 +207,7 @@ void run(const DeblurFlags& f) {
 void add_deblur(CLI::App& app) {
   auto f = std::make_shared<DeblurFlags>();
   CLI::App* command = app.add_subcommand("deblur", "Deblur a coded-light frame into one sharp grey image");
-  command->add_option("input", f->input, "8- or 16-bit RGB (or grey, one-LED code) PNG or TIFF")->required();
+  command->add_option("input", f->input, "8- or 16-bit RGB (or grey: one-LED code, or a raw Bayer mosaic with its descriptor) PNG or TIFF")->required();
   command->add_option("--descriptor", f->descriptor, "the frame's capture descriptor (JSON)");
   command->add_option("--code", f->code, "LED code (without a descriptor)");
   command->add_option("--blur", f->blur, "motion during the exposure, pixels (without a descriptor)");
@@ -213,6 +224,10 @@ void add_deblur(CLI::App& app) {
   command->add_option("--edge-prior", f->edge_prior,
                       "tv method's prior: tv (|gradient|) or l0 (count of edges: sharper on "
                       "axis-aligned two-tone print, worse on rotated labels)")
+      ->capture_default_str();
+  command->add_option("--bayer-mode", f->bayer_mode,
+                      "raw Bayer frames: raw (deblur the four colour planes) or demosaic (bilinear "
+                      "demosaic, then deblur as RGB)")
       ->capture_default_str();
   command->add_option("--threads", f->threads, "threads")->check(CLI::Range(1, 64))->capture_default_str();
   command->add_option("-o,--output", f->output, "16-bit grey PNG to write")->required();
