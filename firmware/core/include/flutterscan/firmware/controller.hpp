@@ -1,0 +1,173 @@
+#pragma once
+// The controller: code table, state machine (idle, armed, exposing, fault) and
+// the sequencing of exposures through the Port. Each command method validates
+// everything before changing anything: on an error status nothing changed.
+//
+// Exposures: in slave mode the strobe's active edge starts one, in master and
+// free-run modes the frame timer does. An exposure plays the active code's slot
+// table (double-buffered: SelectCode prepares the other table, the swap happens
+// at the next exposure start, never mid-sequence) and ends with every LED off;
+// then an ExposureEvent is queued. With SlotTimeSource::kFollowExposure (slave
+// mode) the slot time of an exposure is the previous strobe pulse width / L,
+// since the current pulse's width is known only at its end.
+// The thermal guard checks every exposure before it starts; an exposure it
+// refuses stays dark and its event carries kEventGuardHit.
+//
+// On the MCU the Port callbacks run in interrupt context and the command
+// methods in the main loop: the stm32f4 port must mask the strobe, frame and
+// slot interrupts around command handling (not needed on the sim port).
+// Freestanding C++20: no heap, no exceptions, no RTTI.
+
+#include <array>
+#include <cstdint>
+
+#include "flutterscan/common/protocol.hpp"
+#include "flutterscan/common/result.hpp"
+#include "flutterscan/common/sequencer.hpp"
+#include "flutterscan/firmware/event_queue.hpp"
+#include "flutterscan/firmware/port.hpp"
+#include "flutterscan/firmware/settings.hpp"
+
+namespace flutterscan::firmware {
+
+/// Exposure events kept until the host reads them.
+inline constexpr std::size_t kEventQueueCapacity = 16;
+
+/// \brief The LED controller core, hardware-independent.
+class Controller final : public PortListener {
+ public:
+  /// \brief A controller driving `port` (which must outlive it) on `board`.
+  Controller(Port& port, const BoardConfig& board);
+  Controller(const Controller&) = delete;
+  Controller& operator=(const Controller&) = delete;
+  ~Controller() { port_.set_listener(nullptr); }
+
+  /// \brief Boot: every LED off, the last reset cause noted, the configuration
+  /// loaded from flash (defaults if it is missing or corrupt), brightness applied.
+  void start();
+  /// \brief Main-loop work: kicks the watchdog; enters the bootloader once
+  /// EnterBootloader was accepted and its reply sent.
+  void poll();
+
+  // Commands ---------------------------------------------------------------
+  /// \brief GetInfo.
+  protocol::InfoReply info() const;
+  /// \brief SetCode: stores one chunk; the last chunk validates and stores the code.
+  Result<protocol::SetCodeReply, protocol::Status> set_code_chunk(
+      const protocol::SetCodeRequest& r);
+  /// \brief SelectCode: idle, the code for the next Arm; armed, the code from the next exposure on.
+  Result<protocol::SelectCodeReply, protocol::Status> select_code(
+      const protocol::SelectCodeRequest& r);
+  /// \brief SetTiming (idle only).
+  protocol::Status set_timing(const protocol::SetTimingRequest& r);
+  /// \brief SetMode (idle only).
+  protocol::Status set_mode(const protocol::SetModeRequest& r);
+  /// \brief SetBrightness (any state; applied at once).
+  protocol::Status set_brightness(const protocol::SetBrightnessRequest& r);
+  /// \brief SetGuard (idle only).
+  protocol::Status set_guard(const protocol::SetGuardRequest& r);
+  /// \brief Arm: checks code, timing and guard, then waits for triggers or starts frames.
+  protocol::Status arm();
+  /// \brief Disarm: stops everything, all LEDs off; leaves the fault state.
+  protocol::Status disarm();
+  /// \brief GetStatus.
+  protocol::StatusReply status() const;
+  /// \brief SelfTest (idle only): each LED on for step_time_us in turn.
+  Result<protocol::SelfTestReply, protocol::Status> self_test(const protocol::SelfTestRequest& r);
+  /// \brief SaveConfig (idle only).
+  Result<protocol::SaveConfigReply, protocol::Status> save_config();
+  /// \brief EnterBootloader: disarms; poll() then resets into the bootloader.
+  protocol::Status enter_bootloader(const protocol::EnterBootloaderRequest& r);
+
+  // Other inputs -----------------------------------------------------------
+  /// \brief The USB host reset the bus: disarm, drop an unfinished code upload.
+  void on_usb_reset();
+  /// \brief The hardware layer detected a fault: all LEDs off, fault state.
+  void on_port_fault();
+
+  /// \brief Takes the oldest unsent exposure event; false if there is none.
+  bool pop_event(protocol::ExposureEvent& out) { return events_.pop(out); }
+
+  protocol::ControllerState state() const { return state_; }
+  const ControllerSettings& settings() const { return settings_; }
+  bool bootloader_requested() const { return bootloader_requested_; }
+
+  // PortListener -----------------------------------------------------------
+  void on_strobe_edge(bool active, std::uint64_t time_us) override;
+  void on_slot_table_done(std::uint64_t time_us) override;
+  void on_frame_tick(std::uint64_t time_us) override;
+
+ private:
+  /// One slot table: BSRR words for one code, plus what the guard needs.
+  struct SlotTable {
+    std::array<std::uint32_t, kMaxSlotWords> words{};
+    std::uint16_t word_count = 0;
+    std::uint8_t code_id = protocol::kNoCode;
+    LedOnStats stats;
+  };
+
+  /// A SetCode upload in progress.
+  struct CodeUpload {
+    bool active = false;
+    std::uint8_t code_id = 0;
+    std::uint8_t led_count = 0;
+    std::uint8_t flags = 0;
+    std::uint16_t total_slots = 0;
+    std::uint16_t received = 0;
+    std::array<std::uint8_t, kMaxSlots> masks{};
+  };
+
+  bool is_armed() const {
+    return state_ == protocol::ControllerState::kArmed ||
+           state_ == protocol::ControllerState::kExposing;
+  }
+  bool uses_frame_timer() const { return settings_.mode.sync != protocol::SyncMode::kSlave; }
+  /// Fills `table` for stored code `code_id` (which must be present).
+  void build_table(SlotTable& table, std::uint8_t code_id) const;
+  /// kOk if code `code_id` may run with the current timing (frame period, guard).
+  protocol::Status check_code_runnable(std::uint8_t code_id) const;
+  void begin_exposure(std::uint64_t time_us);
+  std::uint32_t slot_time_for_next_exposure(int code_length, std::uint16_t& flags) const;
+  void queue_event(const protocol::ExposureEvent& event);
+  void stop_sequencing();
+  void all_leds_off();
+  void apply_brightness();
+  void enter_fault(protocol::FaultCode fault);
+
+  Port& port_;
+  BoardConfig board_;
+  ControllerSettings settings_;
+  protocol::ControllerState state_ = protocol::ControllerState::kIdle;
+  protocol::FaultCode last_fault_ = protocol::FaultCode::kNone;
+  std::uint8_t config_flags_ = 0;
+
+  CodeUpload upload_;
+  std::array<SlotTable, 2> tables_{};
+  int playing_table_ = 0;   ///< table of the active code
+  int pending_table_ = -1;  ///< table taking over at the next exposure, -1 if none
+
+  // The exposure in progress (or the last one).
+  std::uint64_t exposure_start_us_ = 0;
+  std::int32_t encoder_at_start_ = 0;
+  std::uint32_t exposure_slot_time_us_ = 0;
+  std::uint16_t exposure_flags_ = 0;
+  std::uint32_t exposure_pulse_width_us_ = 0;
+  bool have_previous_start_ = false;
+  std::uint64_t previous_start_us_ = 0;
+  // Strobe pulse measurement (slave mode).
+  bool strobe_active_ = false;
+  std::uint64_t strobe_start_us_ = 0;
+  std::uint32_t last_pulse_width_us_ = 0;
+
+  std::uint32_t frame_counter_ = 0;
+  std::uint32_t missed_triggers_ = 0;
+  std::uint32_t overruns_ = 0;
+  std::uint32_t guard_hits_ = 0;
+  std::uint32_t events_dropped_ = 0;
+  bool self_test_running_ = false;
+  bool bootloader_requested_ = false;
+  bool bootloader_entered_ = false;
+  EventQueue<protocol::ExposureEvent, kEventQueueCapacity> events_;
+};
+
+}  // namespace flutterscan::firmware

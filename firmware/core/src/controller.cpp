@@ -1,0 +1,484 @@
+#include "flutterscan/firmware/controller.hpp"
+
+#include "flutterscan/firmware/config_store.hpp"
+
+namespace flutterscan::firmware {
+
+using protocol::ControllerState;
+using protocol::Status;
+using protocol::SyncMode;
+
+namespace {
+
+std::uint32_t exposure_duration_us(int length, std::uint32_t slot_time_us) {
+  return static_cast<std::uint32_t>(length) * slot_time_us;
+}
+
+}  // namespace
+
+Controller::Controller(Port& port, const BoardConfig& board)
+    : port_(port), board_(board), settings_(default_settings(board)) {
+  port_.set_listener(this);
+}
+
+void Controller::start() {
+  stop_sequencing();
+  state_ = ControllerState::kIdle;
+  if (port_.reset_cause() == ResetCause::kWatchdog)
+    last_fault_ = protocol::FaultCode::kWatchdogReset;
+  const auto loaded = load_config(port_, board_);
+  if (loaded.ok()) {
+    settings_ = loaded.value();
+    config_flags_ = protocol::kStatusConfigFromFlash;
+  } else {
+    settings_ = default_settings(board_);
+    config_flags_ = loaded.error() == ConfigError::kEmpty ? 0 : protocol::kStatusConfigCorrupt;
+  }
+  apply_brightness();
+}
+
+void Controller::poll() {
+  port_.kick_watchdog();
+  if (bootloader_requested_ && !bootloader_entered_) {
+    bootloader_entered_ = true;
+    port_.enter_bootloader();
+  }
+}
+
+// ---------------------------------------------------------------------------
+// Commands
+
+protocol::InfoReply Controller::info() const {
+  protocol::InfoReply reply{};
+  reply.protocol_major = protocol::kProtocolMajor;
+  reply.protocol_minor = protocol::kProtocolMinor;
+  reply.firmware_major = board_.firmware_major;
+  reply.firmware_minor = board_.firmware_minor;
+  reply.firmware_patch = board_.firmware_patch;
+  reply.led_count = static_cast<std::uint8_t>(board_.pins.led_count);
+  reply.max_codes = protocol::kMaxCodes;
+  reply.build_id = board_.build_id;
+  reply.features = protocol::kFeatureSlaveSync | protocol::kFeatureMasterSync |
+                   protocol::kFeatureFreeRun | protocol::kFeatureFollowExposure |
+                   protocol::kFeatureEncoder | protocol::kFeatureBrightness |
+                   protocol::kFeatureThermalGuard | protocol::kFeatureConfigFlash;
+  reply.board_id = board_.board_id;
+  reply.max_slots = static_cast<std::uint16_t>(kMaxSlots);
+  reply.min_slot_time_us = protocol::kMinSlotTimeUs;
+  reply.max_slot_time_us = protocol::kMaxSlotTimeUs;
+  return reply;
+}
+
+Result<protocol::SetCodeReply, Status> Controller::set_code_chunk(
+    const protocol::SetCodeRequest& r) {
+  using Out = Result<protocol::SetCodeReply, Status>;
+  if (r.code_id >= protocol::kMaxCodes || r.led_count < 1 || r.led_count > board_.pins.led_count ||
+      r.total_slots < 1 || r.total_slots > kMaxSlots || r.slot_count < 1 ||
+      r.slot_count > protocol::kSlotsPerCodeChunk || r.first_slot + r.slot_count > r.total_slots ||
+      (r.flags & ~protocol::kCodeFlagOneOfN) != 0)
+    return Out::failure(Status::kOutOfRange);
+  if (is_armed() && (tables_[static_cast<std::size_t>(playing_table_)].code_id == r.code_id ||
+                     (pending_table_ >= 0 &&
+                      tables_[static_cast<std::size_t>(pending_table_)].code_id == r.code_id)))
+    return Out::failure(Status::kBadState);  // that code is in use
+  if (r.first_slot != 0) {
+    const bool continues = upload_.active && upload_.code_id == r.code_id &&
+                           upload_.led_count == r.led_count && upload_.flags == r.flags &&
+                           upload_.total_slots == r.total_slots && upload_.received == r.first_slot;
+    if (!continues) return Out::failure(Status::kOutOfOrder);
+  }
+
+  const bool last_chunk = r.first_slot + r.slot_count == r.total_slots;
+  if (last_chunk) {
+    // Validate the whole code before touching the upload or the table.
+    std::array<std::uint8_t, kMaxSlots> masks = upload_.masks;
+    for (std::size_t i = 0; i < r.slot_count; ++i) masks[r.first_slot + i] = r.masks[i];
+    const CodeRule rule =
+        (r.flags & protocol::kCodeFlagOneOfN) ? CodeRule::kOneOfN : CodeRule::kAnyMask;
+    const auto code = LedCode::from_masks(
+        std::span<const std::uint8_t>(masks.data(), r.total_slots), r.led_count, rule);
+    if (!code.ok()) return Out::failure(Status::kBadCode);
+    StoredCode& stored = settings_.codes[r.code_id];
+    stored.present = true;
+    stored.code = code.value();
+    upload_.active = false;
+    return Out::success({r.total_slots, 1, 0});
+  }
+  // A middle chunk: check its masks now so a bad digit is reported where it is.
+  const auto all_leds = static_cast<std::uint8_t>((1u << r.led_count) - 1u);
+  for (std::size_t i = 0; i < r.slot_count; ++i)
+    if ((r.masks[i] & ~all_leds) != 0) return Out::failure(Status::kBadCode);
+  if (r.first_slot == 0) {
+    upload_.active = true;
+    upload_.code_id = r.code_id;
+    upload_.led_count = r.led_count;
+    upload_.flags = r.flags;
+    upload_.total_slots = r.total_slots;
+    upload_.received = 0;
+  }
+  for (std::size_t i = 0; i < r.slot_count; ++i) upload_.masks[r.first_slot + i] = r.masks[i];
+  upload_.received = static_cast<std::uint16_t>(r.first_slot + r.slot_count);
+  return Out::success({upload_.received, 0, 0});
+}
+
+Status Controller::check_code_runnable(std::uint8_t code_id) const {
+  const LedCode& code = settings_.codes[code_id].code;
+  const TimingSettings& timing = settings_.timing;
+  const std::uint32_t duration = exposure_duration_us(code.length(), timing.slot_time_us);
+  if (uses_frame_timer() && (timing.frame_period_us == 0 || timing.frame_period_us < duration))
+    return Status::kTimingConflict;
+  const std::uint64_t period = uses_frame_timer() ? timing.frame_period_us : 0;
+  const GuardVerdict verdict =
+      check_led_guard(led_on_stats(code), timing.slot_time_us, period, settings_.guard);
+  return verdict.status == GuardStatus::kOk ? Status::kOk : Status::kGuardLimit;
+}
+
+Result<protocol::SelectCodeReply, Status> Controller::select_code(
+    const protocol::SelectCodeRequest& r) {
+  using Out = Result<protocol::SelectCodeReply, Status>;
+  if (r.code_id >= protocol::kMaxCodes || r.reserved != std::array<std::uint8_t, 3>{})
+    return Out::failure(Status::kOutOfRange);
+  if (!settings_.codes[r.code_id].present) return Out::failure(Status::kNoSuchCode);
+  if (!is_armed()) {
+    settings_.selected_code = r.code_id;
+    return Out::success({r.code_id, protocol::kNoCode, {}});
+  }
+  const Status runnable = check_code_runnable(r.code_id);
+  if (runnable != Status::kOk) return Out::failure(runnable);
+  settings_.selected_code = r.code_id;
+  const auto& playing = tables_[static_cast<std::size_t>(playing_table_)];
+  if (playing.code_id == r.code_id) {
+    pending_table_ = -1;  // back to the code that is playing: cancel a pending switch
+  } else {
+    // Build into the table that is not playing; publish it only when complete.
+    const int spare = 1 - playing_table_;
+    pending_table_ = -1;
+    build_table(tables_[static_cast<std::size_t>(spare)], r.code_id);
+    pending_table_ = spare;
+  }
+  const std::uint8_t pending = pending_table_ < 0 ? protocol::kNoCode : r.code_id;
+  return Out::success({playing.code_id, pending, {}});
+}
+
+Status Controller::set_timing(const protocol::SetTimingRequest& r) {
+  const auto timing = timing_from_request(r);
+  if (!timing.ok()) return timing.error();
+  if (state_ != ControllerState::kIdle && state_ != ControllerState::kFault)
+    return Status::kBadState;
+  if (self_test_running_) return Status::kBusy;
+  settings_.timing = timing.value();
+  return Status::kOk;
+}
+
+Status Controller::set_mode(const protocol::SetModeRequest& r) {
+  const auto mode = mode_from_request(r);
+  if (!mode.ok()) return mode.error();
+  if (state_ != ControllerState::kIdle && state_ != ControllerState::kFault)
+    return Status::kBadState;
+  if (self_test_running_) return Status::kBusy;
+  settings_.mode = mode.value();
+  return Status::kOk;
+}
+
+Status Controller::set_brightness(const protocol::SetBrightnessRequest& r) {
+  const Status range = check_brightness(r.permille, board_.pins.led_count);
+  if (range != Status::kOk) return range;
+  settings_.brightness_permille = r.permille;
+  apply_brightness();
+  return Status::kOk;
+}
+
+Status Controller::set_guard(const protocol::SetGuardRequest& r) {
+  GuardLimits limits;
+  limits.max_on_time_us = r.max_on_time_us;
+  limits.max_duty_permille = r.max_duty_permille;
+  const Status range = check_guard_limits(limits, board_.pins.led_count);
+  if (range != Status::kOk) return range;
+  if (state_ != ControllerState::kIdle && state_ != ControllerState::kFault)
+    return Status::kBadState;
+  if (self_test_running_) return Status::kBusy;
+  settings_.guard = limits;
+  return Status::kOk;
+}
+
+Status Controller::arm() {
+  if (state_ != ControllerState::kIdle) return Status::kBadState;
+  if (self_test_running_) return Status::kBusy;
+  const std::uint8_t id = settings_.selected_code;
+  if (id >= protocol::kMaxCodes || !settings_.codes[id].present) return Status::kNoSuchCode;
+  const Status runnable = check_code_runnable(id);
+  if (runnable != Status::kOk) return runnable;
+
+  build_table(tables_[0], id);
+  playing_table_ = 0;
+  pending_table_ = -1;
+  frame_counter_ = 0;
+  have_previous_start_ = false;
+  strobe_active_ = false;
+  last_pulse_width_us_ = 0;
+  events_.clear();
+  port_.configure_strobe_input(settings_.mode.strobe_active_low);
+  if (uses_frame_timer()) {
+    const std::uint32_t trigger_us =
+        settings_.mode.sync == SyncMode::kMaster
+            ? exposure_duration_us(settings_.codes[id].code.length(), settings_.timing.slot_time_us)
+            : 0;
+    if (port_.start_frame_timer(settings_.timing.frame_period_us, trigger_us) != PortStatus::kOk)
+      return Status::kHardwareError;
+  }
+  state_ = ControllerState::kArmed;
+  return Status::kOk;
+}
+
+Status Controller::disarm() {
+  stop_sequencing();
+  state_ = ControllerState::kIdle;
+  return Status::kOk;
+}
+
+protocol::StatusReply Controller::status() const {
+  protocol::StatusReply reply{};
+  reply.state = static_cast<std::uint8_t>(state_);
+  reply.sync_mode = static_cast<std::uint8_t>(settings_.mode.sync);
+  reply.active_code_id = is_armed() ? tables_[static_cast<std::size_t>(playing_table_)].code_id
+                                    : settings_.selected_code;
+  reply.pending_code_id = is_armed() && pending_table_ >= 0
+                              ? tables_[static_cast<std::size_t>(pending_table_)].code_id
+                              : protocol::kNoCode;
+  reply.last_fault = static_cast<std::uint8_t>(last_fault_);
+  reply.flags = config_flags_;
+  if (self_test_running_) reply.flags |= protocol::kStatusSelfTestRunning;
+  if (upload_.active) reply.flags |= protocol::kStatusUploadInProgress;
+  for (std::size_t i = 0; i < settings_.codes.size(); ++i)
+    if (settings_.codes[i].present) reply.codes_stored |= static_cast<std::uint8_t>(1u << i);
+  reply.slot_time_us =
+      state_ == ControllerState::kExposing ? exposure_slot_time_us_ : settings_.timing.slot_time_us;
+  reply.frame_counter = frame_counter_;
+  reply.missed_triggers = missed_triggers_;
+  reply.overruns = overruns_;
+  reply.guard_hits = guard_hits_;
+  reply.events_dropped = events_dropped_;
+  reply.uptime_us = port_.now_us();
+  return reply;
+}
+
+Result<protocol::SelfTestReply, Status> Controller::self_test(const protocol::SelfTestRequest& r) {
+  using Out = Result<protocol::SelfTestReply, Status>;
+  if (r.step_time_us < protocol::kMinSlotTimeUs || r.step_time_us > protocol::kMaxSlotTimeUs)
+    return Out::failure(Status::kOutOfRange);
+  if (self_test_running_) return Out::failure(Status::kBusy);
+  if (state_ != ControllerState::kIdle) return Out::failure(Status::kBadState);
+  for (int led = 0; led < board_.pins.led_count; ++led)
+    if (r.step_time_us > settings_.guard.max_on_time_us[static_cast<std::size_t>(led)])
+      return Out::failure(Status::kGuardLimit);
+
+  std::array<std::uint8_t, kMaxLeds> steps{};
+  for (int led = 0; led < board_.pins.led_count; ++led)
+    steps[static_cast<std::size_t>(led)] = static_cast<std::uint8_t>(1u << led);
+  const int leds = board_.pins.led_count;
+  const auto code = LedCode::from_masks(
+      std::span<const std::uint8_t>(steps.data(), static_cast<std::size_t>(leds)), leds);
+  SlotTable& table = tables_[0];
+  const auto schedule = build_slot_table(code.value(), r.step_time_us, board_.pins, table.words);
+  if (!schedule.ok()) return Out::failure(Status::kHardwareError);
+  table.word_count = schedule.value().word_count;
+  table.code_id = protocol::kNoCode;
+  if (port_.start_slot_table(std::span<const std::uint32_t>(table.words.data(), table.word_count),
+                             r.step_time_us) != PortStatus::kOk)
+    return Out::failure(Status::kHardwareError);
+  self_test_running_ = true;
+  protocol::SelfTestReply reply{};
+  reply.leds_stepped = static_cast<std::uint8_t>(leds);
+  reply.duration_us = schedule.value().duration_us;
+  return Out::success(reply);
+}
+
+Result<protocol::SaveConfigReply, Status> Controller::save_config() {
+  using Out = Result<protocol::SaveConfigReply, Status>;
+  if (state_ != ControllerState::kIdle) return Out::failure(Status::kBadState);
+  if (self_test_running_) return Out::failure(Status::kBusy);
+  const auto saved = firmware::save_config(port_, settings_);
+  if (!saved.ok()) return Out::failure(saved.error());
+  return Out::success({static_cast<std::uint32_t>(sizeof(ConfigImage)), saved.value()});
+}
+
+Status Controller::enter_bootloader(const protocol::EnterBootloaderRequest& r) {
+  if (r.magic != protocol::kEnterBootloaderMagic) return Status::kOutOfRange;
+  disarm();
+  bootloader_requested_ = true;
+  return Status::kOk;
+}
+
+// ---------------------------------------------------------------------------
+// Other inputs
+
+void Controller::on_usb_reset() {
+  disarm();
+  upload_.active = false;
+}
+
+void Controller::on_port_fault() {
+  enter_fault(protocol::FaultCode::kPort);
+}
+
+// ---------------------------------------------------------------------------
+// Sequencing
+
+void Controller::on_strobe_edge(bool active, std::uint64_t time_us) {
+  if (settings_.mode.sync != SyncMode::kSlave || !is_armed()) return;
+  if (active) {
+    strobe_active_ = true;
+    strobe_start_us_ = time_us;
+    begin_exposure(time_us);
+    return;
+  }
+  if (!strobe_active_) return;  // armed mid-pulse: no start edge to measure from
+  strobe_active_ = false;
+  last_pulse_width_us_ = static_cast<std::uint32_t>(time_us - strobe_start_us_);
+  if (state_ == ControllerState::kExposing && strobe_start_us_ == exposure_start_us_) {
+    exposure_pulse_width_us_ = last_pulse_width_us_;
+    // The camera stopped exposing while LEDs are still sequencing.
+    exposure_flags_ |= protocol::kEventOverrun;
+    ++overruns_;
+  }
+}
+
+void Controller::on_frame_tick(std::uint64_t time_us) {
+  if (!uses_frame_timer() || !is_armed()) return;
+  begin_exposure(time_us);
+}
+
+std::uint32_t Controller::slot_time_for_next_exposure(int code_length, std::uint16_t& flags) const {
+  const TimingSettings& timing = settings_.timing;
+  if (settings_.mode.sync != SyncMode::kSlave ||
+      timing.source != protocol::SlotTimeSource::kFollowExposure || last_pulse_width_us_ == 0)
+    return timing.slot_time_us;
+  std::uint32_t slot = slot_time_for_exposure(last_pulse_width_us_, code_length);
+  if (slot < protocol::kMinSlotTimeUs) {
+    slot = protocol::kMinSlotTimeUs;
+    flags |= protocol::kEventSlotTimeClamped;
+  } else if (slot > protocol::kMaxSlotTimeUs) {
+    slot = protocol::kMaxSlotTimeUs;
+    flags |= protocol::kEventSlotTimeClamped;
+  }
+  return slot;
+}
+
+void Controller::begin_exposure(std::uint64_t time_us) {
+  if (state_ == ControllerState::kExposing) {
+    // A trigger while the previous sequence still runs: that frame gets no light.
+    ++missed_triggers_;
+    exposure_flags_ |= protocol::kEventMissedTrigger;
+    return;
+  }
+  if (state_ != ControllerState::kArmed) return;
+
+  std::uint16_t flags = 0;
+  if (pending_table_ >= 0) {
+    playing_table_ = pending_table_;
+    pending_table_ = -1;
+    flags |= protocol::kEventCodeSwitched;
+  }
+  const SlotTable& table = tables_[static_cast<std::size_t>(playing_table_)];
+  const int length = table.stats.length;
+  const std::uint32_t slot_time = slot_time_for_next_exposure(length, flags);
+  const std::uint64_t period = have_previous_start_
+                                   ? time_us - previous_start_us_
+                                   : (uses_frame_timer() ? settings_.timing.frame_period_us : 0);
+  have_previous_start_ = true;
+  previous_start_us_ = time_us;
+  ++frame_counter_;
+
+  exposure_start_us_ = time_us;
+  exposure_slot_time_us_ = slot_time;
+  exposure_pulse_width_us_ = 0;
+  exposure_flags_ = flags;
+
+  const GuardVerdict verdict = check_led_guard(table.stats, slot_time, period, settings_.guard);
+  if (verdict.status != GuardStatus::kOk) {
+    ++guard_hits_;
+    protocol::ExposureEvent event{};
+    event.frame_counter = frame_counter_;
+    event.slot_time_us = slot_time;
+    event.start_time_us = time_us;
+    event.flags = static_cast<std::uint16_t>(flags | protocol::kEventGuardHit);
+    event.code_id = table.code_id;
+    event.slot_count = static_cast<std::uint16_t>(length);
+    queue_event(event);
+    return;  // the LEDs stay off; still armed for the next exposure
+  }
+
+  encoder_at_start_ = port_.encoder_count();
+  if (port_.start_slot_table(std::span<const std::uint32_t>(table.words.data(), table.word_count),
+                             slot_time) != PortStatus::kOk) {
+    enter_fault(protocol::FaultCode::kSlotTimer);
+    return;
+  }
+  state_ = ControllerState::kExposing;
+}
+
+void Controller::on_slot_table_done(std::uint64_t) {
+  if (self_test_running_) {
+    self_test_running_ = false;
+    return;
+  }
+  if (state_ != ControllerState::kExposing) return;
+  const SlotTable& table = tables_[static_cast<std::size_t>(playing_table_)];
+  protocol::ExposureEvent event{};
+  event.frame_counter = frame_counter_;
+  event.slot_time_us = exposure_slot_time_us_;
+  event.start_time_us = exposure_start_us_;
+  event.encoder_delta =
+      static_cast<std::int32_t>(static_cast<std::uint32_t>(port_.encoder_count()) -
+                                static_cast<std::uint32_t>(encoder_at_start_));
+  event.pulse_width_us = exposure_pulse_width_us_;
+  event.flags = exposure_flags_;
+  event.code_id = table.code_id;
+  event.slot_count = static_cast<std::uint16_t>(table.stats.length);
+  state_ = ControllerState::kArmed;
+  queue_event(event);
+}
+
+// ---------------------------------------------------------------------------
+// Helpers
+
+void Controller::build_table(SlotTable& table, std::uint8_t code_id) const {
+  const LedCode& code = settings_.codes[code_id].code;
+  // Codes are checked against the board's LEDs on upload and load, and the
+  // slot time only matters to the timer, so this cannot fail; any valid slot
+  // time will do for the table.
+  const auto schedule = build_slot_table(code, protocol::kMinSlotTimeUs, board_.pins, table.words);
+  table.word_count = schedule.ok() ? schedule.value().word_count : 0;
+  table.code_id = code_id;
+  table.stats = led_on_stats(code);
+}
+
+void Controller::queue_event(const protocol::ExposureEvent& event) {
+  if (!events_.push(event)) ++events_dropped_;
+}
+
+void Controller::stop_sequencing() {
+  port_.stop_frame_timer();
+  port_.stop_slot_table();
+  all_leds_off();
+  self_test_running_ = false;
+  pending_table_ = -1;
+  strobe_active_ = false;
+}
+
+void Controller::all_leds_off() {
+  port_.write_led_bank(bsrr_all_off(board_.pins));
+}
+
+void Controller::apply_brightness() {
+  for (int led = 0; led < board_.pins.led_count; ++led)
+    port_.set_led_brightness(led, settings_.brightness_permille[static_cast<std::size_t>(led)]);
+}
+
+void Controller::enter_fault(protocol::FaultCode fault) {
+  stop_sequencing();
+  state_ = ControllerState::kFault;
+  last_fault_ = fault;
+}
+
+}  // namespace flutterscan::firmware

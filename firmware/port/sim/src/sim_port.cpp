@@ -1,0 +1,128 @@
+#include "flutterscan/firmware/sim/sim_port.hpp"
+
+#include <algorithm>
+#include <limits>
+
+namespace flutterscan::firmware::sim {
+
+SimPort::SimPort(const LedPinMap& pins, std::size_t config_page_size)
+    : pins_(pins), flash_(config_page_size, 0xFF) {}
+
+void SimPort::apply_bsrr(std::uint32_t bsrr) {
+  // RM0090: a set bit wins over the reset bit of the same pin.
+  const auto set = static_cast<std::uint16_t>(bsrr & 0xFFFFu);
+  const auto reset = static_cast<std::uint16_t>(bsrr >> 16);
+  pin_levels_ = static_cast<std::uint16_t>((pin_levels_ & ~reset) | set);
+  transitions_.push_back({now_us_, bsrr, pin_levels_, led_mask_from_pins(pin_levels_)});
+}
+
+void SimPort::write_led_bank(std::uint32_t bsrr) {
+  apply_bsrr(bsrr);
+}
+
+std::uint8_t SimPort::led_mask_from_pins(std::uint16_t levels) const {
+  std::uint8_t mask = 0;
+  for (int led = 0; led < pins_.led_count; ++led)
+    if ((levels >> pins_.pins[static_cast<std::size_t>(led)]) & 1u)
+      mask = static_cast<std::uint8_t>(mask | (1u << led));
+  return mask;
+}
+
+void SimPort::set_led_brightness(int led, std::uint16_t permille) {
+  if (led >= 0 && led < kMaxLeds) brightness_[static_cast<std::size_t>(led)] = permille;
+}
+
+std::uint16_t SimPort::led_brightness(int led) const {
+  return led >= 0 && led < kMaxLeds ? brightness_[static_cast<std::size_t>(led)] : 0;
+}
+
+PortStatus SimPort::start_slot_table(std::span<const std::uint32_t> words,
+                                     std::uint32_t slot_time_us) {
+  if (slot_timer_fails_ || words.empty() || slot_time_us == 0) return PortStatus::kError;
+  table_ = {words, slot_time_us, now_us_, 0};
+  return PortStatus::kOk;
+}
+
+PortStatus SimPort::start_frame_timer(std::uint32_t period_us, std::uint32_t trigger_pulse_us) {
+  if (period_us == 0) return PortStatus::kError;
+  frame_period_us_ = period_us;
+  trigger_pulse_us_ = trigger_pulse_us;
+  next_frame_us_ = now_us_;
+  return PortStatus::kOk;
+}
+
+std::int32_t SimPort::encoder_count() {
+  const auto elapsed = static_cast<std::int64_t>(now_us_ - encoder_base_time_us_);
+  const std::int64_t count = encoder_base_ + elapsed * encoder_velocity_ / 1'000'000;
+  return static_cast<std::int32_t>(static_cast<std::uint32_t>(count));
+}
+
+void SimPort::set_encoder_velocity(std::int32_t counts_per_second) {
+  const auto elapsed = static_cast<std::int64_t>(now_us_ - encoder_base_time_us_);
+  encoder_base_ = encoder_base_ + elapsed * encoder_velocity_ / 1'000'000;
+  encoder_base_time_us_ = now_us_;
+  encoder_velocity_ = counts_per_second;
+}
+
+void SimPort::add_encoder_counts(std::int32_t counts) {
+  encoder_base_ += counts;
+}
+
+void SimPort::inject_strobe(std::uint64_t start_us, std::uint32_t width_us) {
+  strobe_edges_.push_back({start_us, true});
+  strobe_edges_.push_back({start_us + width_us, false});
+  std::stable_sort(strobe_edges_.begin(), strobe_edges_.end(),
+                   [](const StrobeEdge& a, const StrobeEdge& b) { return a.time_us < b.time_us; });
+}
+
+void SimPort::run_until(std::uint64_t time_us) {
+  constexpr std::uint64_t kNever = std::numeric_limits<std::uint64_t>::max();
+  for (;;) {
+    const std::uint64_t slot_at =
+        table_.words.empty() ? kNever : table_.start_us + table_.next_word * table_.slot_time_us;
+    const std::uint64_t strobe_at = strobe_edges_.empty() ? kNever : strobe_edges_.front().time_us;
+    const std::uint64_t frame_at = frame_period_us_ == 0 ? kNever : next_frame_us_;
+    const std::uint64_t next = std::min({slot_at, strobe_at, frame_at});
+    if (next == kNever || next > time_us) break;
+    now_us_ = std::max(now_us_, next);
+    if (slot_at == next) {
+      apply_bsrr(table_.words[table_.next_word]);
+      if (++table_.next_word == table_.words.size()) {
+        table_ = {};
+        if (listener_) listener_->on_slot_table_done(now_us_);
+      }
+    } else if (strobe_at == next) {
+      const StrobeEdge edge = strobe_edges_.front();
+      strobe_edges_.erase(strobe_edges_.begin());
+      if (listener_) listener_->on_strobe_edge(edge.active, now_us_);
+    } else {
+      next_frame_us_ += frame_period_us_;
+      if (trigger_pulse_us_ != 0) trigger_pulses_.push_back({now_us_, trigger_pulse_us_});
+      if (listener_) listener_->on_frame_tick(now_us_);
+    }
+  }
+  now_us_ = std::max(now_us_, time_us);
+}
+
+PortStatus SimPort::read_config_page(std::span<std::uint8_t> out) {
+  if (out.size() > flash_.size()) return PortStatus::kError;
+  std::copy_n(flash_.begin(), out.size(), out.begin());
+  return PortStatus::kOk;
+}
+
+PortStatus SimPort::erase_config_page() {
+  if (flash_fails_) return PortStatus::kError;
+  std::fill(flash_.begin(), flash_.end(), std::uint8_t{0xFF});
+  ++flash_erases_;
+  return PortStatus::kOk;
+}
+
+PortStatus SimPort::write_config_page(std::span<const std::uint8_t> data) {
+  if (flash_fails_ || data.size() > flash_.size()) return PortStatus::kError;
+  // NOR flash programming only clears bits: writing over unerased bytes ANDs.
+  for (std::size_t i = 0; i < data.size(); ++i)
+    flash_[i] = static_cast<std::uint8_t>(flash_[i] & data[i]);
+  return PortStatus::kOk;
+}
+
+}  // namespace flutterscan::firmware::sim

@@ -1,0 +1,112 @@
+#include "flutterscan/firmware/sim/sim_port.hpp"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <vector>
+
+namespace flutterscan::firmware::sim {
+namespace {
+
+const LedPinMap kPins{3, {0, 1, 2, 0}};
+
+/// Records callbacks with their times.
+struct RecordingListener final : PortListener {
+  std::vector<std::pair<std::uint64_t, bool>> strobes;
+  std::vector<std::uint64_t> table_done;
+  std::vector<std::uint64_t> frames;
+  void on_strobe_edge(bool active, std::uint64_t t) override { strobes.push_back({t, active}); }
+  void on_slot_table_done(std::uint64_t t) override { table_done.push_back(t); }
+  void on_frame_tick(std::uint64_t t) override { frames.push_back(t); }
+};
+
+TEST(SimPort, PlaysATableExactlyOnTheVirtualClock) {
+  SimPort port(kPins);
+  RecordingListener listener;
+  port.set_listener(&listener);
+  port.run_until(1000);
+  const std::array<std::uint32_t, 3> words = {0x00060001, 0x00050002, 0x00070000};
+  ASSERT_EQ(port.start_slot_table(words, 40), PortStatus::kOk);
+  port.run_until(1079);
+  ASSERT_EQ(port.led_transitions().size(), 2u);
+  EXPECT_TRUE(listener.table_done.empty());
+  port.run_until(2000);
+  const auto& t = port.led_transitions();
+  ASSERT_EQ(t.size(), 3u);
+  EXPECT_EQ(t[0].time_us, 1000u);
+  EXPECT_EQ(t[0].led_mask, 1);
+  EXPECT_EQ(t[1].time_us, 1040u);
+  EXPECT_EQ(t[1].led_mask, 2);
+  EXPECT_EQ(t[2].time_us, 1080u);
+  EXPECT_EQ(t[2].led_mask, 0);
+  EXPECT_EQ(listener.table_done, std::vector<std::uint64_t>{1080});
+  EXPECT_FALSE(port.slot_table_running());
+  EXPECT_EQ(port.now_us(), 2000u);
+}
+
+TEST(SimPort, SetBitWinsOverResetBit) {
+  SimPort port(kPins);
+  port.write_led_bank(0x00010001);
+  EXPECT_EQ(port.pin_levels(), 1);
+  port.write_led_bank(0x00010000);
+  EXPECT_EQ(port.pin_levels(), 0);
+}
+
+TEST(SimPort, StrobesArriveInTimeOrder) {
+  SimPort port(kPins);
+  RecordingListener listener;
+  port.set_listener(&listener);
+  port.inject_strobe(500, 100);
+  port.inject_strobe(200, 50);
+  port.run_until(1000);
+  const std::vector<std::pair<std::uint64_t, bool>> expected = {
+      {200, true}, {250, false}, {500, true}, {600, false}};
+  EXPECT_EQ(listener.strobes, expected);
+}
+
+TEST(SimPort, EncoderCountsAtTheSetVelocity) {
+  SimPort port(kPins);
+  port.set_encoder_velocity(10'000);
+  port.run_until(5'200);
+  EXPECT_EQ(port.encoder_count(), 52);
+  port.set_encoder_velocity(-1'000'000);
+  port.run_for(10);
+  EXPECT_EQ(port.encoder_count(), 42);
+  port.add_encoder_counts(8);
+  EXPECT_EQ(port.encoder_count(), 50);
+}
+
+TEST(SimPort, FrameTimerTicksAndDrivesTheTrigger) {
+  SimPort port(kPins);
+  RecordingListener listener;
+  port.set_listener(&listener);
+  port.run_until(100);
+  ASSERT_EQ(port.start_frame_timer(1000, 300), PortStatus::kOk);
+  port.run_until(2100);
+  EXPECT_EQ(listener.frames, (std::vector<std::uint64_t>{100, 1100, 2100}));
+  ASSERT_EQ(port.trigger_pulses().size(), 3u);
+  EXPECT_EQ(port.trigger_pulses()[1].start_us, 1100u);
+  EXPECT_EQ(port.trigger_pulses()[1].width_us, 300u);
+  port.stop_frame_timer();
+  port.run_until(5000);
+  EXPECT_EQ(listener.frames.size(), 3u);
+}
+
+TEST(SimPort, FlashProgrammingOnlyClearsBits) {
+  SimPort port(kPins, 64);
+  const std::array<std::uint8_t, 2> first = {0xF0, 0x0F};
+  const std::array<std::uint8_t, 2> second = {0x3C, 0xFF};
+  ASSERT_EQ(port.write_config_page(first), PortStatus::kOk);
+  ASSERT_EQ(port.write_config_page(second), PortStatus::kOk);
+  std::array<std::uint8_t, 3> out{};
+  ASSERT_EQ(port.read_config_page(out), PortStatus::kOk);
+  EXPECT_EQ(out, (std::array<std::uint8_t, 3>{0x30, 0x0F, 0xFF}));
+  ASSERT_EQ(port.erase_config_page(), PortStatus::kOk);
+  ASSERT_EQ(port.read_config_page(out), PortStatus::kOk);
+  EXPECT_EQ(out, (std::array<std::uint8_t, 3>{0xFF, 0xFF, 0xFF}));
+  std::array<std::uint8_t, 65> too_much{};
+  EXPECT_EQ(port.read_config_page(too_much), PortStatus::kError);
+}
+
+}  // namespace
+}  // namespace flutterscan::firmware::sim
