@@ -38,18 +38,6 @@ struct SpeedOptions {
   std::string scaling;
 };
 
-/// Median wall time in ms of `repeats` runs after one warm-up run.
-double median_ms(int repeats, const std::function<void()>& run) {
-  run();
-  std::vector<double> times;
-  for (int i = 0; i < repeats; ++i) {
-    const auto start = std::chrono::steady_clock::now();
-    run();
-    times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-  }
-  std::nth_element(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(times.size() / 2), times.end());
-  return times[times.size() / 2];
-}
 
 double joint_wiener_ms(const bench::SpeedFrame& frame, int threads, int repeats) {
   imaging::JointWiener wiener(frame.psfs, frame.rgb8.cols, 1.0 / imaging::kLabelGradientVariance,
@@ -57,7 +45,7 @@ double joint_wiener_ms(const bench::SpeedFrame& frame, int threads, int repeats)
   imaging::RowPool pool(threads);
   imaging::Plane latent(frame.rgb8.cols, frame.rgb8.rows);
   const auto load = bench::rgb8_row_loader(frame);
-  return median_ms(repeats, [&] { wiener.deconvolve(load, frame.rgb8.rows, latent, pool); });
+  return bench::median_ms(repeats, [&] { wiener.deconvolve(load, frame.rgb8.rows, latent, pool); });
 }
 
 double richardson_lucy_ms(const bench::SpeedFrame& frame, int threads, int repeats) {
@@ -70,7 +58,7 @@ double richardson_lucy_ms(const bench::SpeedFrame& frame, int threads, int repea
   imaging::RichardsonLucy rl(frame.psfs, frame.rgb8.cols, 16.0, {20, true, 0}, imaging::PlanEffort::kMeasure);
   imaging::RowPool pool(threads);
   imaging::Plane latent(frame.rgb8.cols, frame.rgb8.rows);
-  return median_ms(repeats, [&] { rl.deconvolve(planes, latent, pool); });
+  return bench::median_ms(repeats, [&] { rl.deconvolve(planes, latent, pool); });
 }
 
 double total_variation_ms(const bench::SpeedFrame& frame, int threads, int repeats) {
@@ -82,7 +70,7 @@ double total_variation_ms(const bench::SpeedFrame& frame, int threads, int repea
   imaging::Plane latent(frame.rgb8.cols, frame.rgb8.rows);
   const auto load = bench::rgb8_row_loader(frame);
   const imaging::Plane warm_start;
-  return median_ms(repeats, [&] { tv.deconvolve(load, frame.rgb8.rows, warm_start, latent, pool); });
+  return bench::median_ms(repeats, [&] { tv.deconvolve(load, frame.rgb8.rows, warm_start, latent, pool); });
 }
 
 /// A balanced one-of-3 code of `slots` slots (fixed seed): the cost depends on its length only.
@@ -147,7 +135,7 @@ void run_speed(const SpeedOptions& options) {
   medians["tv-40/2-threads"] = total_variation_ms(frame, 2, std::max(3, options.repeats / 5));
   cv::setNumThreads(2);
   bench::OpenCvWiener baseline(frame);
-  medians["opencv-dft-wiener/2-threads"] = median_ms(options.repeats, [&] { baseline.run(frame.rgb8); });
+  medians["opencv-dft-wiener/2-threads"] = bench::median_ms(options.repeats, [&] { baseline.run(frame.rgb8); });
   const double ratio = medians["opencv-dft-wiener/2-threads"].get<double>() /
                        medians["joint-wiener/2-threads"].get<double>();
   if (options.json) {

@@ -44,17 +44,6 @@ struct SceneClass {
   std::vector<std::string> scenes;
 };
 
-double median_ms(int repeats, const std::function<void()>& run) {
-  run();
-  std::vector<double> times;
-  for (int i = 0; i < repeats; ++i) {
-    const auto start = std::chrono::steady_clock::now();
-    run();
-    times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
-  }
-  std::nth_element(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(times.size() / 2), times.end());
-  return times[times.size() / 2];
-}
 
 /// Steady-state ms per 1080p frame on 2 threads: plans and buffers made before timing.
 double frame_ms(const bench::SpeedFrame& frame, const Setting& s, int repeats) {
@@ -66,7 +55,7 @@ double frame_ms(const bench::SpeedFrame& frame, const Setting& s, int repeats) {
   switch (s.method) {
     case imaging::Method::kJointWiener: {
       imaging::JointWiener wiener(frame.psfs, width, lambda, imaging::PlanEffort::kMeasure);
-      return median_ms(repeats, [&] { wiener.deconvolve(load, height, latent, pool); });
+      return bench::median_ms(repeats, [&] { wiener.deconvolve(load, height, latent, pool); });
     }
     case imaging::Method::kWienerAverage: {
       std::vector<std::unique_ptr<imaging::JointWiener>> filters;
@@ -74,7 +63,7 @@ double frame_ms(const bench::SpeedFrame& frame, const Setting& s, int repeats) {
         filters.push_back(std::make_unique<imaging::JointWiener>(std::span(&psf, 1), width, lambda,
                                                                  imaging::PlanEffort::kMeasure));
       std::vector<Plane> planes(3, Plane(width, height)), parts(3, Plane(width, height));
-      return median_ms(repeats, [&] {
+      return bench::median_ms(repeats, [&] {
         // The frame deinterleaved once, then one Wiener filter per channel, then the average.
         for (int y = 0; y < height; ++y) {
           const std::span<float> rows[3] = {planes[0].row(y), planes[1].row(y), planes[2].row(y)};
@@ -98,7 +87,7 @@ double frame_ms(const bench::SpeedFrame& frame, const Setting& s, int repeats) {
         load(y, rows);
       }
       imaging::RichardsonLucy rl(frame.psfs, width, 16.0, {s.iterations, true, 0}, imaging::PlanEffort::kMeasure);
-      return median_ms(std::max(1, repeats / 2), [&] { rl.deconvolve(planes, latent, pool); });
+      return bench::median_ms(std::max(1, repeats / 2), [&] { rl.deconvolve(planes, latent, pool); });
     }
     case imaging::Method::kTotalVariation: {
       imaging::TotalVariationSettings settings;
@@ -106,7 +95,7 @@ double frame_ms(const bench::SpeedFrame& frame, const Setting& s, int repeats) {
       settings.wiener_lambda = lambda;
       imaging::TotalVariation tv(frame.psfs, width, settings, imaging::PlanEffort::kMeasure);
       const Plane warm_start;
-      return median_ms(std::max(1, repeats / 2), [&] { tv.deconvolve(load, height, warm_start, latent, pool); });
+      return bench::median_ms(std::max(1, repeats / 2), [&] { tv.deconvolve(load, height, warm_start, latent, pool); });
     }
   }
   return 0;

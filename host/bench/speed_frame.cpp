@@ -1,5 +1,7 @@
 #include "bench/speed_frame.hpp"
 
+#include <algorithm>
+#include <chrono>
 #include <random>
 
 #include "sim/forward_model.hpp"
@@ -31,6 +33,18 @@ SpeedFrame make_speed_frame(int width, int height, const LedCode& code, double b
   for (int c = 0; c < 3; ++c)
     f.psfs.push_back({imaging::channel_psf(f.model, c), imaging::channel_noise_variance(f.model, 1000)});
   return f;
+}
+
+double median_ms(int repeats, const std::function<void()>& run) {
+  run();
+  std::vector<double> times;
+  for (int i = 0; i < repeats; ++i) {
+    const auto start = std::chrono::steady_clock::now();
+    run();
+    times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+  }
+  std::nth_element(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(times.size() / 2), times.end());
+  return times[times.size() / 2];
 }
 
 imaging::JointWiener::RowLoader rgb8_row_loader(const SpeedFrame& frame) {

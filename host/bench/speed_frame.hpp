@@ -5,6 +5,7 @@
 
 #include <opencv2/core.hpp>
 
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -25,6 +26,9 @@ SpeedFrame make_speed_frame(int width, int height, const LedCode& code, double b
 
 /// \brief The row loader for `frame`: one pass over the interleaved row, DN to electrons.
 imaging::JointWiener::RowLoader rgb8_row_loader(const SpeedFrame& frame);
+
+/// \brief Median wall time in ms of `repeats` runs of `run`, after one warm-up run.
+double median_ms(int repeats, const std::function<void()>& run);
 
 /// \brief The OpenCV way: per channel a 2-D cv::dft Wiener filter on a
 /// cv::getOptimalDFTSize padding (filter spectra made once), channels averaged.

@@ -5,10 +5,7 @@
 #include <cmath>
 #include <vector>
 
-#include "imaging/joint_wiener.hpp"
 #include "imaging/motion_frame.hpp"
-#include "imaging/richardson_lucy.hpp"
-#include "imaging/total_variation.hpp"
 
 namespace flutterscan::imaging {
 namespace {
@@ -130,44 +127,9 @@ Result<DeblurResult, std::string> deblur_raw_planes(const Plane& mosaic, const C
   }
   if (white <= 0) return Out::failure("the capture model lights no channel: every PSF is zero");
 
-  const int width = rows[0].width;
   // Half as many samples along the motion carry the same edges: twice the gradient variance.
-  const double lambda = 1.0 / (2.0 * options.gradient_variance);
-  Plane latent;
-  switch (options.method) {
-    case Method::kJointWiener:
-      latent = JointWiener(psfs, width, lambda).deconvolve(rows, options.threads);
-      break;
-    case Method::kWienerAverage: {
-      int used = 0;
-      for (std::size_t c = 0; c < psfs.size(); ++c) {
-        double gain = 0;
-        for (double tap : psfs[c].taps) gain += tap;
-        if (gain <= 0) continue;
-        const Plane one = JointWiener({&psfs[c], 1}, width, lambda).deconvolve({&rows[c], 1}, options.threads);
-        if (latent.empty()) latent = Plane(one.width, one.height);
-        for (std::size_t i = 0; i < one.pixels.size(); ++i) latent.pixels[i] += one.pixels[i];
-        ++used;
-      }
-      for (float& v : latent.pixels) v /= static_cast<float>(used);
-      break;
-    }
-    case Method::kRichardsonLucy: {
-      const RichardsonLucySettings settings{options.iterations.value_or(kRichardsonLucyIterations),
-                                            options.accelerate, options.damping};
-      latent = RichardsonLucy(psfs, width, model.read_noise * model.read_noise, settings)
-                   .deconvolve(rows, options.threads);
-      break;
-    }
-    case Method::kTotalVariation: {
-      TotalVariationSettings settings =
-          options.edge_prior == EdgePrior::kL0Gradient ? l0_settings() : TotalVariationSettings{};
-      settings.iterations = options.iterations.value_or(kTotalVariationIterations);
-      settings.wiener_lambda = lambda;
-      latent = TotalVariation(psfs, width, settings).deconvolve(rows, Plane(), options.threads);
-      break;
-    }
-  }
+  const Plane latent = deconvolve_motion_rows(psfs, rows, 1.0 / (2.0 * options.gradient_variance),
+                                              model.read_noise * model.read_noise, options);
   const Plane full = from_motion_frame(upsample_pairs(latent, along), model.direction);
   result.latent = pad_to(full, mosaic.width, mosaic.height);
   return Out::success(std::move(result));

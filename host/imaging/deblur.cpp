@@ -33,6 +33,50 @@ std::optional<Method> method_from_name(const std::string& name) {
   return std::nullopt;
 }
 
+Plane deconvolve_motion_rows(std::span<const ChannelPsf> psfs, std::span<const Plane> rows,
+                             double lambda, double read_variance, const DeblurOptions& options) {
+  const int width = rows[0].width;
+  Plane latent;
+  switch (options.method) {
+    case Method::kJointWiener:
+      latent = JointWiener(psfs, width, lambda).deconvolve(rows, options.threads);
+      break;
+    case Method::kWienerAverage: {
+      int used = 0;
+      for (std::size_t c = 0; c < psfs.size(); ++c) {
+        double gain = 0;
+        for (double tap : psfs[c].taps) gain += tap;
+        if (gain <= 0) continue;  // a channel no LED reaches carries no image
+        const Plane one = JointWiener({&psfs[c], 1}, width, lambda)
+                              .deconvolve({&rows[c], 1}, options.threads);
+        if (latent.empty()) latent = Plane(one.width, one.height);
+        for (std::size_t i = 0; i < one.pixels.size(); ++i) latent.pixels[i] += one.pixels[i];
+        ++used;
+      }
+      for (float& v : latent.pixels) v /= static_cast<float>(used);
+      break;
+    }
+    case Method::kRichardsonLucy: {
+      const RichardsonLucySettings settings{options.iterations.value_or(kRichardsonLucyIterations),
+                                            options.accelerate, options.damping};
+      latent = RichardsonLucy(psfs, width, read_variance, settings)
+                   .deconvolve(rows, options.threads);
+      break;
+    }
+    case Method::kTotalVariation: {
+      // Warm start: the joint Wiener solution with the same prior, made inside
+      // the solver from the data spectra it needs anyway (an empty start plane).
+      TotalVariationSettings settings =
+          options.edge_prior == EdgePrior::kL0Gradient ? l0_settings() : TotalVariationSettings{};
+      settings.iterations = options.iterations.value_or(kTotalVariationIterations);
+      settings.wiener_lambda = lambda;
+      latent = TotalVariation(psfs, width, settings).deconvolve(rows, Plane(), options.threads);
+      break;
+    }
+  }
+  return latent;
+}
+
 Result<DeblurResult, std::string> deblur(const Image& electrons, const CaptureModel& model,
                                          const DeblurOptions& options) {
   using Out = Result<DeblurResult, std::string>;
@@ -64,46 +108,8 @@ Result<DeblurResult, std::string> deblur(const Image& electrons, const CaptureMo
     for (double tap : p.taps) white += tap;
   if (white <= 0) return Out::failure("the capture model lights no channel: every PSF is zero");
 
-  const int width = rows[0].width;
-  const double lambda = 1.0 / options.gradient_variance;
-  Plane latent;
-  switch (options.method) {
-    case Method::kJointWiener:
-      latent = JointWiener(psfs, width, lambda).deconvolve(rows, options.threads);
-      break;
-    case Method::kWienerAverage: {
-      int used = 0;
-      for (std::size_t c = 0; c < psfs.size(); ++c) {
-        double gain = 0;
-        for (double tap : psfs[c].taps) gain += tap;
-        if (gain <= 0) continue;  // a channel no LED reaches carries no image
-        const Plane one = JointWiener({&psfs[c], 1}, width, lambda)
-                              .deconvolve({&rows[c], 1}, options.threads);
-        if (latent.empty()) latent = Plane(one.width, one.height);
-        for (std::size_t i = 0; i < one.pixels.size(); ++i) latent.pixels[i] += one.pixels[i];
-        ++used;
-      }
-      for (float& v : latent.pixels) v /= static_cast<float>(used);
-      break;
-    }
-    case Method::kRichardsonLucy: {
-      const RichardsonLucySettings settings{options.iterations.value_or(kRichardsonLucyIterations),
-                                            options.accelerate, options.damping};
-      latent = RichardsonLucy(psfs, width, model.read_noise * model.read_noise, settings)
-                   .deconvolve(rows, options.threads);
-      break;
-    }
-    case Method::kTotalVariation: {
-      // Warm start: the joint Wiener solution with the same prior, made inside
-      // the solver from the data spectra it needs anyway (an empty start plane).
-      TotalVariationSettings settings =
-          options.edge_prior == EdgePrior::kL0Gradient ? l0_settings() : TotalVariationSettings{};
-      settings.iterations = options.iterations.value_or(kTotalVariationIterations);
-      settings.wiener_lambda = lambda;
-      latent = TotalVariation(psfs, width, settings).deconvolve(rows, Plane(), options.threads);
-      break;
-    }
-  }
+  const Plane latent = deconvolve_motion_rows(psfs, rows, 1.0 / options.gradient_variance,
+                                              model.read_noise * model.read_noise, options);
   result.latent = from_motion_frame(latent, model.direction);
   return Out::success(std::move(result));
 }

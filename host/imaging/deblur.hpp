@@ -4,12 +4,14 @@
 // (reflectance, white = 1), by the method asked for.
 
 #include <optional>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "flutterscan/common/result.hpp"
 #include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
+#include "imaging/joint_wiener.hpp"
 #include "imaging/total_variation.hpp"
 
 namespace flutterscan::imaging {
@@ -48,6 +50,12 @@ struct DeblurResult {
   Plane latent;                        ///< reflectance, same size and orientation as the input
   std::vector<double> noise_variance;  ///< per channel, e-^2, at the frame's mean signal
 };
+
+/// \brief The method dispatch on rows already in the motion frame: `rows[c]`
+/// observed through `psfs[c]`, Wiener prior weight `lambda`. deblur() and the
+/// Bayer path call it.
+Plane deconvolve_motion_rows(std::span<const ChannelPsf> psfs, std::span<const Plane> rows,
+                             double lambda, double read_variance, const DeblurOptions& options);
 
 /// \brief Deblurs and fuses `electrons` (one plane per camera channel).
 Result<DeblurResult, std::string> deblur(const Image& electrons, const CaptureModel& model,
