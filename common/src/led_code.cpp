@@ -68,10 +68,14 @@ class TextSink {
 
 std::string_view led_count_word(int n) {
   switch (n) {
-    case 0: return "no LED";
-    case 2: return "two LEDs";
-    case 3: return "three LEDs";
-    default: return "four LEDs";
+    case 0:
+      return "no LED";
+    case 2:
+      return "two LEDs";
+    case 3:
+      return "three LEDs";
+    default:
+      return "four LEDs";
   }
 }
 
@@ -120,8 +124,8 @@ Result<LedCode, CodeIssue> LedCode::from_masks(std::span<const std::uint8_t> mas
   code.length_ = static_cast<std::uint16_t>(masks.size());
   for (std::size_t i = 0; i < masks.size(); ++i) {
     if ((masks[i] & ~code.all_leds_mask()) != 0)
-      return Result<LedCode, CodeIssue>::failure(issue_at(
-          CodeError::kNoSuchLed, static_cast<int>(i), kDigits[masks[i] & 0xF], leds));
+      return Result<LedCode, CodeIssue>::failure(
+          issue_at(CodeError::kNoSuchLed, static_cast<int>(i), kDigits[masks[i] & 0xF], leds));
     code.masks_[i] = masks[i];
   }
   if (rule == CodeRule::kOneOfN) {
@@ -179,7 +183,8 @@ std::size_t describe(const CodeIssue& issue, std::span<char> out) {
       sink.text("the code has ").number(issue.count).text(" slots; at most 256 are allowed");
       break;
     case CodeError::kNotADigit:
-      sink.text("'").character(issue.character)
+      sink.text("'")
+          .character(issue.character)
           .text("' is not a digit of the code notation (0-9, a-f)");
       break;
     case CodeError::kNoSuchLed: {
@@ -187,16 +192,24 @@ std::size_t describe(const CodeIssue& issue, std::span<char> out) {
       int highest = 0;
       for (int bit = 0; bit < 4; ++bit)
         if ((value >> bit) & 1) highest = bit;
-      sink.text("digit ").character(issue.character).text(" lights LED ").number(highest)
-          .text(", but the code has ").number(issue.leds)
+      sink.text("digit ")
+          .character(issue.character)
+          .text(" lights LED ")
+          .number(highest)
+          .text(", but the code has ")
+          .number(issue.leds)
           .text(issue.leds == 1 ? " LED (LED 0)" : " LEDs (LED 0 to ");
       if (issue.leds > 1) sink.number(issue.leds - 1).text(")");
       break;
     }
     case CodeError::kNotOneOfN:
-      sink.text("digit ").character(issue.character).text(" lights ")
+      sink.text("digit ")
+          .character(issue.character)
+          .text(" lights ")
           .text(led_count_word(popcount(static_cast<unsigned>(digit_value(issue.character)))))
-          .text(" in a one-of-").number(issue.leds).text(" code");
+          .text(" in a one-of-")
+          .number(issue.leds)
+          .text(" code");
       break;
   }
   return sink.finish();

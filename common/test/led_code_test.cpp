@@ -85,8 +85,7 @@ TEST(LedCode, RejectsCharacterThatIsNotADigit) {
   const auto code = LedCode::parse("1212x4", 3);
   ASSERT_FALSE(code.ok());
   EXPECT_EQ(code.error().error, CodeError::kNotADigit);
-  EXPECT_EQ(message(code.error()),
-            "slot 4: 'x' is not a digit of the code notation (0-9, a-f)");
+  EXPECT_EQ(message(code.error()), "slot 4: 'x' is not a digit of the code notation (0-9, a-f)");
 }
 
 TEST(LedCode, RejectsDigitNamingAMissingLed) {

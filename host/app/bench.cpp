@@ -38,7 +38,6 @@ struct SpeedOptions {
   std::string scaling;
 };
 
-
 double joint_wiener_ms(const bench::SpeedFrame& frame, int threads, int repeats) {
   imaging::JointWiener wiener(frame.psfs, frame.rgb8.cols, 1.0 / imaging::kLabelGradientVariance,
                               imaging::PlanEffort::kMeasure);
@@ -55,7 +54,8 @@ double richardson_lucy_ms(const bench::SpeedFrame& frame, int threads, int repea
     const std::span<float> rows[3] = {planes[0].row(y), planes[1].row(y), planes[2].row(y)};
     load(y, rows);
   }
-  imaging::RichardsonLucy rl(frame.psfs, frame.rgb8.cols, 16.0, {20, true, 0}, imaging::PlanEffort::kMeasure);
+  imaging::RichardsonLucy rl(frame.psfs, frame.rgb8.cols, 16.0, {20, true, 0},
+                             imaging::PlanEffort::kMeasure);
   imaging::RowPool pool(threads);
   imaging::Plane latent(frame.rgb8.cols, frame.rgb8.rows);
   return bench::median_ms(repeats, [&] { rl.deconvolve(planes, latent, pool); });
@@ -70,7 +70,8 @@ double total_variation_ms(const bench::SpeedFrame& frame, int threads, int repea
   imaging::Plane latent(frame.rgb8.cols, frame.rgb8.rows);
   const auto load = bench::rgb8_row_loader(frame);
   const imaging::Plane warm_start;
-  return bench::median_ms(repeats, [&] { tv.deconvolve(load, frame.rgb8.rows, warm_start, latent, pool); });
+  return bench::median_ms(repeats,
+                          [&] { tv.deconvolve(load, frame.rgb8.rows, warm_start, latent, pool); });
 }
 
 /// A balanced one-of-3 code of `slots` slots (fixed seed): the cost depends on its length only.
@@ -99,7 +100,8 @@ void write_scaling_chart(const std::string& path, int repeats) {
     one.y.push_back(joint_wiener_ms(frame, 1, repeats));
     two.x.push_back(megapixels);
     two.y.push_back(joint_wiener_ms(frame, 2, repeats));
-    std::fprintf(stderr, "  %.2f Mpx: %.2f ms (1 thread), %.2f ms (2 threads)\n", megapixels, one.y.back(), two.y.back());
+    std::fprintf(stderr, "  %.2f Mpx: %.2f ms (1 thread), %.2f ms (2 threads)\n", megapixels,
+                 one.y.back(), two.y.back());
   }
   chart.series = {one, two};
   if (auto error = plot::write_png(chart, path); !error.empty()) throw RuntimeFailure(error);
@@ -117,7 +119,8 @@ void write_scaling_chart(const std::string& path, int repeats) {
     wiener.y.push_back(joint_wiener_ms(frame, 2, repeats));
     rl.x.push_back(slots);
     rl.y.push_back(richardson_lucy_ms(frame, 2, std::max(1, repeats / 5)));
-    std::fprintf(stderr, "  blur %d: %.2f ms (joint Wiener), %.1f ms (RL)\n", slots, wiener.y.back(), rl.y.back());
+    std::fprintf(stderr, "  blur %d: %.2f ms (joint Wiener), %.1f ms (RL)\n", slots,
+                 wiener.y.back(), rl.y.back());
   }
   blur.series = {wiener, rl};
   const std::string blur_path = path.substr(0, path.rfind('.')) + "-blur.png";
@@ -135,7 +138,8 @@ void run_speed(const SpeedOptions& options) {
   medians["tv-40/2-threads"] = total_variation_ms(frame, 2, std::max(3, options.repeats / 5));
   cv::setNumThreads(2);
   bench::OpenCvWiener baseline(frame);
-  medians["opencv-dft-wiener/2-threads"] = bench::median_ms(options.repeats, [&] { baseline.run(frame.rgb8); });
+  medians["opencv-dft-wiener/2-threads"] =
+      bench::median_ms(options.repeats, [&] { baseline.run(frame.rgb8); });
   const double ratio = medians["opencv-dft-wiener/2-threads"].get<double>() /
                        medians["joint-wiener/2-threads"].get<double>();
   if (options.json) {
@@ -147,10 +151,12 @@ void run_speed(const SpeedOptions& options) {
               << "\n";
   } else {
     std::printf("1920x1080 RGB8 frame to fused grey, medians of %d runs:\n", options.repeats);
-    for (const auto& [name, ms] : medians.items()) std::printf("  %-28s %8.2f ms\n", name.c_str(), ms.get<double>());
+    for (const auto& [name, ms] : medians.items())
+      std::printf("  %-28s %8.2f ms\n", name.c_str(), ms.get<double>());
     std::printf("  OpenCV baseline / joint Wiener (2 threads): %.1fx\n", ratio);
   }
-  if (!options.scaling.empty()) write_scaling_chart(options.scaling, std::max(3, options.repeats / 3));
+  if (!options.scaling.empty())
+    write_scaling_chart(options.scaling, std::max(3, options.repeats / 3));
 }
 
 struct SeedOptions {
@@ -160,9 +166,11 @@ struct SeedOptions {
 
 void run_seed(const SeedOptions& options) {
   // As the seed's script reads it: im2double of the stored 8-bit values, per channel.
-  if (!std::filesystem::exists(options.image)) throw UsageError("--image '" + options.image + "' does not exist");
+  if (!std::filesystem::exists(options.image))
+    throw UsageError("--image '" + options.image + "' does not exist");
   const cv::Mat image = cv::imread(options.image, cv::IMREAD_COLOR);
-  if (image.empty()) throw UsageError("--image '" + options.image + "': cannot read it as an image");
+  if (image.empty())
+    throw UsageError("--image '" + options.image + "': cannot read it as an image");
   std::vector<imaging::Plane> photo;
   for (int c = 2; c >= 0; --c) {
     imaging::Plane plane(image.cols, image.rows);
@@ -170,12 +178,15 @@ void run_seed(const SeedOptions& options) {
       for (int x = 0; x < image.cols; ++x) plane.at(x, y) = image.at<cv::Vec3b>(y, x)[c] / 255.0f;
     photo.push_back(std::move(plane));
   }
-  if (image.cols <= 3 * 52) throw UsageError("--image must be wider than 156 pixels for a 52-pixel blur");
-  std::printf("| row | photo, seed noise | photo, EMVA 3000 e- | label, seed noise | label, EMVA 3000 e- |\n");
+  if (image.cols <= 3 * 52)
+    throw UsageError("--image must be wider than 156 pixels for a 52-pixel blur");
+  std::printf(
+      "| row | photo, seed noise | photo, EMVA 3000 e- | label, seed noise | label, EMVA 3000 e- "
+      "|\n");
   std::printf("|---|---|---|---|---|\n");
   for (const auto& row : bench::run_seed_experiment(photo, options.seed))
-    std::printf("| %s | %.2f | %.2f | %.2f | %.2f |\n", row.name.c_str(), row.photo_seed_noise, row.photo_emva,
-                row.label_seed_noise, row.label_emva);
+    std::printf("| %s | %.2f | %.2f | %.2f | %.2f |\n", row.name.c_str(), row.photo_seed_noise,
+                row.photo_emva, row.label_seed_noise, row.label_emva);
 }
 
 }  // namespace
@@ -184,15 +195,20 @@ void add_bench(CLI::App& app) {
   CLI::App* bench = app.add_subcommand("bench", "Measure speed (more in make bench)");
   bench->require_subcommand(1);
   auto options = std::make_shared<SpeedOptions>();
-  CLI::App* speed = bench->add_subcommand("speed", "Median ms per 1080p frame per method, and the OpenCV ratio");
+  CLI::App* speed =
+      bench->add_subcommand("speed", "Median ms per 1080p frame per method, and the OpenCV ratio");
   speed->add_flag("--json", options->json, "print one JSON object");
   speed->add_option("--repeats", options->repeats, "timed runs per method")->capture_default_str();
-  speed->add_option("--scaling", options->scaling, "also chart cost against frame size and blur (PNG)");
+  speed->add_option("--scaling", options->scaling,
+                    "also chart cost against frame size and blur (PNG)");
   speed->callback([options] { run_speed(*options); });
   auto seed = std::make_shared<SeedOptions>();
   CLI::App* seed_command = bench->add_subcommand(
-      "seed", "Rerun the seed's Section 6 experiment: PSNR per row under its noise model and EMVA's");
-  seed_command->add_option("--image", seed->image, "natural photograph (tools/fetch-seed-photo gets one)")->required();
+      "seed",
+      "Rerun the seed's Section 6 experiment: PSNR per row under its noise model and EMVA's");
+  seed_command
+      ->add_option("--image", seed->image, "natural photograph (tools/fetch-seed-photo gets one)")
+      ->required();
   seed_command->add_option("--seed", seed->seed, "noise seed")->capture_default_str();
   seed_command->callback([seed] { run_seed(*seed); });
 }

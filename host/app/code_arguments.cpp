@@ -37,8 +37,9 @@ void require_finite(double value, const char* flag, bool allow_zero) {
 }  // namespace
 
 void add_merit_flags(CLI::App& command, MeritFlags& flags) {
-  command.add_option("--electrons", flags.electrons,
-                     "joint/mse: light level E, e- per channel under rect-white")
+  command
+      .add_option("--electrons", flags.electrons,
+                  "joint/mse: light level E, e- per channel under rect-white")
       ->capture_default_str();
   command.add_option("--cap", flags.cap, "joint/mse: overdrive cap c (peak <= c E / L per slot)")
       ->capture_default_str();
@@ -73,9 +74,8 @@ codes::Crosstalk parse_crosstalk(const std::string& text) {
       }
       const bool trailing_space_only = cells[c].find_first_not_of(" \t", used) == std::string::npos;
       if (used == 0 || !trailing_space_only || !std::isfinite(value) || value < 0)
-        throw UsageError("--crosstalk: row " + std::to_string(r) + ", column " +
-                         std::to_string(c) + ": '" + cells[c] +
-                         "' is not a finite non-negative number");
+        throw UsageError("--crosstalk: row " + std::to_string(r) + ", column " + std::to_string(c) +
+                         ": '" + cells[c] + "' is not a finite non-negative number");
       matrix.gain.push_back(value);
     }
   }
@@ -112,8 +112,8 @@ LedCode parse_code_argument(const std::string& argument, int leds, bool require_
     // 0s and 1s only: a single flutter code; otherwise the product's three LEDs.
     leds = digits.find_first_not_of("01") == std::string::npos ? 1 : 3;
   }
-  const auto code = LedCode::parse(
-      digits, leds, require_one_of_n ? CodeRule::kOneOfN : CodeRule::kAnyMask);
+  const auto code =
+      LedCode::parse(digits, leds, require_one_of_n ? CodeRule::kOneOfN : CodeRule::kAnyMask);
   if (!code.ok()) {
     char message[160];
     describe(code.error(), message);
@@ -131,10 +131,8 @@ std::vector<codes::Merit> parse_merits(const std::vector<std::string>& names) {
   for (const auto& list : names)
     for (const auto& name : split(list, ',')) {
       const auto merit = codes::merit_from_name(name);
-      if (!merit)
-        throw UsageError("unknown merit '" + name + "': the merits are " + merit_names());
-      if (std::find(merits.begin(), merits.end(), *merit) == merits.end())
-        merits.push_back(*merit);
+      if (!merit) throw UsageError("unknown merit '" + name + "': the merits are " + merit_names());
+      if (std::find(merits.begin(), merits.end(), *merit) == merits.end()) merits.push_back(*merit);
     }
   if (merits.empty()) merits.assign(codes::kAllMerits.begin(), codes::kAllMerits.end());
   return merits;

@@ -26,8 +26,8 @@ struct PlotOptions {
   MeritFlags merit_flags;
 };
 
-constexpr plot::Rgb kLedColours[] = {{0.85, 0.1, 0.1}, {0.1, 0.6, 0.15}, {0.1, 0.25, 0.85},
-                                     {0.4, 0.4, 0.4}};
+constexpr plot::Rgb kLedColours[] = {
+    {0.85, 0.1, 0.1}, {0.1, 0.6, 0.15}, {0.1, 0.25, 0.85}, {0.4, 0.4, 0.4}};
 constexpr plot::Rgb kCodeColours[] = {{0.1, 0.1, 0.1},  {0.85, 0.1, 0.1}, {0.1, 0.25, 0.85},
                                       {0.1, 0.6, 0.15}, {0.8, 0.45, 0.0}, {0.55, 0.2, 0.7}};
 
@@ -58,8 +58,8 @@ void run(const PlotOptions& options) {
     chart.title = "Noise-weighted joint information J(f)";
     chart.y_label = "10 log10 J  (dB of e-)";
     const auto& light = settings.light;
-    chart.notes.push_back("E " + std::to_string(static_cast<int>(light.electrons)) +
-                          " e-, cap " + std::to_string(light.cap).substr(0, 4) + ", read noise " +
+    chart.notes.push_back("E " + std::to_string(static_cast<int>(light.electrons)) + " e-, cap " +
+                          std::to_string(light.cap).substr(0, 4) + ", read noise " +
                           std::to_string(light.read_noise).substr(0, 4) +
                           " e-; higher is better, the minimum is the joint merit");
   } else {
@@ -80,8 +80,8 @@ void run(const PlotOptions& options) {
       for (int j = 0; j < options.points; ++j) {
         const double f = 0.5 * j / (options.points - 1);
         series.x.push_back(f);
-        series.y.push_back(10.0 * std::log10(std::max(
-                                      1e-12, codes::joint_information(code, settings.light, f))));
+        series.y.push_back(
+            10.0 * std::log10(std::max(1e-12, codes::joint_information(code, settings.light, f))));
       }
       chart.series.push_back(std::move(series));
       continue;
@@ -121,8 +121,7 @@ void add_codes_plot(CLI::App& codes) {
   auto options = std::make_shared<PlotOptions>();
   CLI::App* command =
       codes.add_subcommand("plot", "Chart the codes' power spectra (or J(f)) into a PNG");
-  command->add_option("code", options->codes, "codes: digit strings or library names")
-      ->required();
+  command->add_option("code", options->codes, "codes: digit strings or library names")->required();
   command->add_option("-o,--output", options->output, "PNG file to write")->required();
   command->add_option("--leds", options->leds, "LEDs in the code (default: inferred)")
       ->check(CLI::Range(1, 4));

@@ -51,10 +51,10 @@ void add_codes_score(CLI::App& codes) {
   auto options = std::make_shared<ScoreOptions>();
   CLI::App* command = codes.add_subcommand(
       "score", "Print every merit of each code (digits such as 2212441414..., or a library name)");
-  command->add_option("code", options->codes, "codes: digit strings or library names")
-      ->required();
-  command->add_option("--merit", options->merits,
-                      "merits to compute (maxmin, avgmin, pairs, single, joint, mse); all by default");
+  command->add_option("code", options->codes, "codes: digit strings or library names")->required();
+  command->add_option(
+      "--merit", options->merits,
+      "merits to compute (maxmin, avgmin, pairs, single, joint, mse); all by default");
   command->add_option("--leds", options->leds, "LEDs in the code (default: inferred)")
       ->check(CLI::Range(1, 4));
   command->add_flag("--one-of-n", options->one_of_n, "require exactly one LED per slot");

@@ -75,8 +75,8 @@ void run(const SearchFlags& flags) {
     options.genetic.crossover = 0.9;
     options.genetic.mutation = 0.01;
   }
-  const auto algorithm =
-      flags.algorithm == "genetic" ? codes::SearchAlgorithm::kGenetic : codes::SearchAlgorithm::kAnneal;
+  const auto algorithm = flags.algorithm == "genetic" ? codes::SearchAlgorithm::kGenetic
+                                                      : codes::SearchAlgorithm::kAnneal;
   const bool terminal = isatty(STDERR_FILENO) != 0;
   if (terminal)
     options.on_progress = [&](const codes::SearchProgress& p) { show_progress(p, options.merit); };
@@ -89,20 +89,16 @@ void run(const SearchFlags& flags) {
   const auto report = codes::make_code_report(found.best, all, options.settings);
   if (flags.json) {
     auto object = codes::to_json(report, options.settings);
-    object["search"] = {{"merit", flags.merit},
-                        {"algorithm", flags.algorithm},
-                        {"seed", flags.seed},
-                        {"evaluations", found.evaluations},
-                        {"seconds", found.seconds},
-                        {"threads", flags.threads}};
+    object["search"] = {{"merit", flags.merit},     {"algorithm", flags.algorithm},
+                        {"seed", flags.seed},       {"evaluations", found.evaluations},
+                        {"seconds", found.seconds}, {"threads", flags.threads}};
     if (algorithm == codes::SearchAlgorithm::kGenetic)
       object["search"]["mean_selection_pressure"] = found.mean_selection_pressure;
     std::cout << object.dump() << "\n";
     return;
   }
   std::printf("best code after %lld evaluations in %.1f s (%s, seed %llu):\n", found.evaluations,
-              found.seconds, flags.algorithm.c_str(),
-              static_cast<unsigned long long>(flags.seed));
+              found.seconds, flags.algorithm.c_str(), static_cast<unsigned long long>(flags.seed));
   if (algorithm == codes::SearchAlgorithm::kGenetic)
     std::printf("mean selection pressure (best's expected copies / average's): %.4f\n",
                 found.mean_selection_pressure);
@@ -123,8 +119,9 @@ void add_codes_search(CLI::App& codes) {
       ->capture_default_str();
   command->add_option("--merit", flags->merit, "joint, maxmin, avgmin, pairs, single or mse")
       ->capture_default_str();
-  command->add_option("--algorithm", flags->algorithm,
-                      "anneal (incremental annealing) or genetic (the seed's GA, fixed)")
+  command
+      ->add_option("--algorithm", flags->algorithm,
+                   "anneal (incremental annealing) or genetic (the seed's GA, fixed)")
       ->check(CLI::IsMember({"anneal", "genetic"}))
       ->capture_default_str();
   auto* seconds = command->add_option("--seconds", flags->seconds, "time budget, seconds");
@@ -138,9 +135,11 @@ void add_codes_search(CLI::App& codes) {
       ->capture_default_str();
   command->add_option("--ones", flags->ones, "one-LED codes: exactly K on-slots");
   command->add_option("--min-on", flags->min_on, "every LED on in at least K slots");
-  command->add_flag("--balanced", flags->balanced, "on-slot counts differ by at most one (17/18/17)");
-  command->add_option("--ga-rates", flags->ga_rates,
-                      "genetic: 'code' (crossover 0.95, mutation 0.015) or 'prose' (0.9, 0.01)")
+  command->add_flag("--balanced", flags->balanced,
+                    "on-slot counts differ by at most one (17/18/17)");
+  command
+      ->add_option("--ga-rates", flags->ga_rates,
+                   "genetic: 'code' (crossover 0.95, mutation 0.015) or 'prose' (0.9, 0.01)")
       ->check(CLI::IsMember({"code", "prose"}))
       ->capture_default_str();
   command->add_option("--population", flags->population, "genetic: population size")

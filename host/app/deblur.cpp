@@ -45,7 +45,8 @@ struct DeblurFlags {
 };
 
 double elapsed_ms(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since).count();
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - since)
+      .count();
 }
 
 /// The white level of each channel (e-): the 99.5th percentile, taken as reflectance 1.
@@ -53,7 +54,8 @@ std::vector<double> white_levels(const imaging::Image& electrons) {
   std::vector<double> levels;
   for (const auto& plane : electrons.channels) {
     std::vector<float> values = plane.pixels;
-    const auto at = values.begin() + static_cast<std::ptrdiff_t>(0.995 * static_cast<double>(values.size() - 1));
+    const auto at = values.begin() +
+                    static_cast<std::ptrdiff_t>(0.995 * static_cast<double>(values.size() - 1));
     std::nth_element(values.begin(), at, values.end());
     levels.push_back(std::max(1.0, static_cast<double>(*at)));
   }
@@ -63,7 +65,8 @@ std::vector<double> white_levels(const imaging::Image& electrons) {
 /// Solves the 3x3 system m * x = b by Cramer's rule; false if m is singular.
 bool solve3(const std::vector<double>& m, const std::vector<double>& b, std::vector<double>& x) {
   auto det = [](const double* a) {
-    return a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6]) + a[2] * (a[3] * a[7] - a[4] * a[6]);
+    return a[0] * (a[4] * a[8] - a[5] * a[7]) - a[1] * (a[3] * a[8] - a[5] * a[6]) +
+           a[2] * (a[3] * a[7] - a[4] * a[6]);
   };
   const double d = det(m.data());
   double scale = 0;
@@ -72,7 +75,8 @@ bool solve3(const std::vector<double>& m, const std::vector<double>& b, std::vec
   x.assign(3, 0.0);
   for (int col = 0; col < 3; ++col) {
     std::vector<double> a = m;
-    for (int row = 0; row < 3; ++row) a[static_cast<std::size_t>(row * 3 + col)] = b[static_cast<std::size_t>(row)];
+    for (int row = 0; row < 3; ++row)
+      a[static_cast<std::size_t>(row * 3 + col)] = b[static_cast<std::size_t>(row)];
     x[static_cast<std::size_t>(col)] = det(a.data()) / d;
   }
   return true;
@@ -85,20 +89,25 @@ imaging::CaptureModel model_from_flags(const DeblurFlags& f, const LoadedFrame& 
   m.code = parse_code_argument(f.code, 0, false);
   const int channels = frame.dn.channel_count();
   if (m.code.leds() == 1 && channels != 1)
-    throw UsageError("a one-LED code (plain flutter shutter) needs a grey frame; '" + f.input + "' is RGB");
+    throw UsageError("a one-LED code (plain flutter shutter) needs a grey frame; '" + f.input +
+                     "' is RGB");
   if (m.code.leds() > 1 && channels != 3)
-    throw UsageError("a code of " + std::to_string(m.code.leds()) + " LEDs needs an RGB frame; '" + f.input + "' is grey");
+    throw UsageError("a code of " + std::to_string(m.code.leds()) + " LEDs needs an RGB frame; '" +
+                     f.input + "' is grey");
   m.channels = channels;
   m.leds = channels;
-  m.crosstalk = channels == 1 ? std::vector<double>{1.0} : std::vector<double>{1, 0, 0, 0, 1, 0, 0, 0, 1};
+  m.crosstalk =
+      channels == 1 ? std::vector<double>{1.0} : std::vector<double>{1, 0, 0, 0, 1, 0, 0, 0, 1};
   if (!f.crosstalk.empty()) {
     const auto matrix = parse_crosstalk(f.crosstalk);
     if (matrix.channels != channels || matrix.leds != channels)
-      throw UsageError("--crosstalk must be " + std::to_string(channels) + "x" + std::to_string(channels));
+      throw UsageError("--crosstalk must be " + std::to_string(channels) + "x" +
+                       std::to_string(channels));
     m.crosstalk = matrix.gain;
   }
   m.blur_px = f.blur;
-  if (!imaging::parse_direction(f.direction, m.direction)) throw UsageError("--direction must be +x, -x, +y or -y");
+  if (!imaging::parse_direction(f.direction, m.direction))
+    throw UsageError("--direction must be +x, -x, +y or -y");
   m.black_level = f.black_level;
   m.gain = f.gain;
   m.read_noise = f.read_noise;
@@ -114,7 +123,8 @@ imaging::CaptureModel model_from_flags(const DeblurFlags& f, const LoadedFrame& 
     throw UsageError("the crosstalk matrix is singular: the channels cannot be separated");
   for (int k = 0; k < m.code.leds(); ++k) {
     const int n = m.code.on_slots(k);
-    m.led_electrons[static_cast<std::size_t>(k)] = n > 0 ? std::max(0.0, light[static_cast<std::size_t>(k)]) / n : 0.0;
+    m.led_electrons[static_cast<std::size_t>(k)] =
+        n > 0 ? std::max(0.0, light[static_cast<std::size_t>(k)]) / n : 0.0;
   }
   return m;
 }
@@ -128,8 +138,8 @@ imaging::CaptureModel model_from_descriptor(const DeblurFlags& f, const LoadedFr
   if (!f.code.empty()) {
     const LedCode given = parse_code_argument(f.code, m.code.leds(), false);
     if (!(given == m.code))
-      throw UsageError("--code " + codes::format_code(given) + " disagrees with the descriptor's code " +
-                       codes::format_code(m.code));
+      throw UsageError("--code " + codes::format_code(given) +
+                       " disagrees with the descriptor's code " + codes::format_code(m.code));
   }
   if (m.bayer_rggb && frame.dn.channel_count() != 1)
     throw UsageError("'" + f.input + "' has " + std::to_string(frame.dn.channel_count()) +
@@ -142,17 +152,22 @@ imaging::CaptureModel model_from_descriptor(const DeblurFlags& f, const LoadedFr
 
 void run(const DeblurFlags& f) {
   const auto method = imaging::method_from_name(f.method);
-  if (!method) throw UsageError("unknown method '" + f.method + "': the methods are joint-wiener, wiener-avg, rl or tv");
+  if (!method)
+    throw UsageError("unknown method '" + f.method +
+                     "': the methods are joint-wiener, wiener-avg, rl or tv");
   if (f.edge_prior != "tv" && f.edge_prior != "l0")
     throw UsageError("--edge-prior must be tv or l0, not '" + f.edge_prior + "'");
   const auto bayer_mode = imaging::bayer_mode_from_name(f.bayer_mode);
-  if (!bayer_mode) throw UsageError("--bayer-mode must be raw or demosaic, not '" + f.bayer_mode + "'");
-  if (!f.descriptor.empty() && f.blur >= 0) throw UsageError("give either --descriptor or --blur, not both");
+  if (!bayer_mode)
+    throw UsageError("--bayer-mode must be raw or demosaic, not '" + f.bayer_mode + "'");
+  if (!f.descriptor.empty() && f.blur >= 0)
+    throw UsageError("give either --descriptor or --blur, not both");
   auto start = std::chrono::steady_clock::now();
   const auto frame = read_frame(f.input);
   if (!frame.ok()) throw UsageError(frame.error());
-  const imaging::CaptureModel model =
-      f.descriptor.empty() ? model_from_flags(f, frame.value()) : model_from_descriptor(f, frame.value());
+  const imaging::CaptureModel model = f.descriptor.empty()
+                                          ? model_from_flags(f, frame.value())
+                                          : model_from_descriptor(f, frame.value());
   const double read_ms = elapsed_ms(start);
 
   start = std::chrono::steady_clock::now();
@@ -162,9 +177,9 @@ void run(const DeblurFlags& f) {
   if (f.edge_prior == "l0") options.edge_prior = imaging::EdgePrior::kL0Gradient;
   options.threads = f.threads;
   const imaging::Image electrons = imaging::dn_to_electrons(frame.value().dn, model);
-  const auto result = model.bayer_rggb
-                          ? imaging::deblur_bayer(electrons.channels[0], model, options, *bayer_mode)
-                          : imaging::deblur(electrons, model, options);
+  const auto result =
+      model.bayer_rggb ? imaging::deblur_bayer(electrons.channels[0], model, options, *bayer_mode)
+                       : imaging::deblur(electrons, model, options);
   if (!result.ok()) throw UsageError("'" + f.input + "': " + result.error());
   const double deblur_ms = elapsed_ms(start);
 
@@ -183,11 +198,12 @@ void run(const DeblurFlags& f) {
     decode_ms = elapsed_ms(start);
   }
   if (f.json) {
-    nlohmann::json report = {{"input", f.input},
-                             {"output", f.output},
-                             {"method", f.method},
-                             {"timings_ms", {{"read", read_ms}, {"deblur", deblur_ms}, {"write", write_ms}}},
-                             {"noise_variance_e2", result.value().noise_variance}};
+    nlohmann::json report = {
+        {"input", f.input},
+        {"output", f.output},
+        {"method", f.method},
+        {"timings_ms", {{"read", read_ms}, {"deblur", deblur_ms}, {"write", write_ms}}},
+        {"noise_variance_e2", result.value().noise_variance}};
     if (f.decode) {
       report["timings_ms"]["decode"] = decode_ms;
       report["decoded"] = decoded;
@@ -195,7 +211,8 @@ void run(const DeblurFlags& f) {
     std::cout << report.dump() << "\n";
     return;
   }
-  std::cout << "wrote " << f.output << " (" << f.method << ", " << static_cast<int>(deblur_ms) << " ms)\n";
+  std::cout << "wrote " << f.output << " (" << f.method << ", " << static_cast<int>(deblur_ms)
+            << " ms)\n";
   if (f.decode) {
     if (decoded.empty()) std::cout << "no barcode decoded\n";
     for (const auto& text : decoded) std::cout << "decoded: " << text << "\n";
@@ -206,30 +223,43 @@ void run(const DeblurFlags& f) {
 
 void add_deblur(CLI::App& app) {
   auto f = std::make_shared<DeblurFlags>();
-  CLI::App* command = app.add_subcommand("deblur", "Deblur a coded-light frame into one sharp grey image");
-  command->add_option("input", f->input, "8- or 16-bit RGB (or grey: one-LED code, or a raw Bayer mosaic with its descriptor) PNG or TIFF")->required();
+  CLI::App* command =
+      app.add_subcommand("deblur", "Deblur a coded-light frame into one sharp grey image");
+  command
+      ->add_option("input", f->input,
+                   "8- or 16-bit RGB (or grey: one-LED code, or a raw Bayer mosaic with its "
+                   "descriptor) PNG or TIFF")
+      ->required();
   command->add_option("--descriptor", f->descriptor, "the frame's capture descriptor (JSON)");
   command->add_option("--code", f->code, "LED code (without a descriptor)");
-  command->add_option("--blur", f->blur, "motion during the exposure, pixels (without a descriptor)");
+  command->add_option("--blur", f->blur,
+                      "motion during the exposure, pixels (without a descriptor)");
   command->add_option("--direction", f->direction, "+x, -x, +y or -y")->capture_default_str();
   command->add_option("--crosstalk", f->crosstalk, "LED-to-channel matrix \"m00,m01,m02;m10,...\"");
   command->add_option("--black-level", f->black_level, "DN")->capture_default_str();
   command->add_option("--gain", f->gain, "e- per DN")->capture_default_str();
   command->add_option("--read-noise", f->read_noise, "e- rms")->capture_default_str();
-  command->add_option("--method", f->method, "joint-wiener, wiener-avg, rl or tv")->capture_default_str();
-  command->add_option("--iterations", f->iterations, "rl iterations (default " + std::to_string(imaging::kRichardsonLucyIterations) +
-                                                     "), tv iterations (default " +
-                                                     std::to_string(imaging::kTotalVariationIterations) + ")")
+  command->add_option("--method", f->method, "joint-wiener, wiener-avg, rl or tv")
+      ->capture_default_str();
+  command
+      ->add_option("--iterations", f->iterations,
+                   "rl iterations (default " + std::to_string(imaging::kRichardsonLucyIterations) +
+                       "), tv iterations (default " +
+                       std::to_string(imaging::kTotalVariationIterations) + ")")
       ->check(CLI::Range(1, 10000));
-  command->add_option("--edge-prior", f->edge_prior,
-                      "tv method's prior: tv (|gradient|) or l0 (count of edges: sharper on "
-                      "axis-aligned two-tone print, worse on rotated labels)")
+  command
+      ->add_option("--edge-prior", f->edge_prior,
+                   "tv method's prior: tv (|gradient|) or l0 (count of edges: sharper on "
+                   "axis-aligned two-tone print, worse on rotated labels)")
       ->capture_default_str();
-  command->add_option("--bayer-mode", f->bayer_mode,
-                      "raw Bayer frames: raw (deblur the four colour planes) or demosaic (bilinear "
-                      "demosaic, then deblur as RGB)")
+  command
+      ->add_option("--bayer-mode", f->bayer_mode,
+                   "raw Bayer frames: raw (deblur the four colour planes) or demosaic (bilinear "
+                   "demosaic, then deblur as RGB)")
       ->capture_default_str();
-  command->add_option("--threads", f->threads, "threads")->check(CLI::Range(1, 64))->capture_default_str();
+  command->add_option("--threads", f->threads, "threads")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
   command->add_option("-o,--output", f->output, "16-bit grey PNG to write")->required();
   command->add_flag("--decode", f->decode, "also decode the barcodes on the result");
   command->add_flag("--json", f->json, "print one JSON object (method, timings, decoded values)");

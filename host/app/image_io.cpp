@@ -53,12 +53,15 @@ Result<LoadedFrame, std::string> read_frame(const std::string& path) {
   } catch (const cv::Exception& e) {
     return Out::failure("cannot read '" + path + "': " + e.what());
   }
-  if (mat.empty()) return Out::failure("cannot read '" + path + "': not a PNG or TIFF image OpenCV can decode");
+  if (mat.empty())
+    return Out::failure("cannot read '" + path + "': not a PNG or TIFF image OpenCV can decode");
   if (mat.depth() != CV_8U && mat.depth() != CV_16U)
     return Out::failure("'" + path + "' is not an 8- or 16-bit image");
-  if (mat.channels() == 4) return Out::failure("'" + path + "' has an alpha channel: give RGB or grey");
+  if (mat.channels() == 4)
+    return Out::failure("'" + path + "' has an alpha channel: give RGB or grey");
   if (mat.channels() != 1 && mat.channels() != 3)
-    return Out::failure("'" + path + "' has " + std::to_string(mat.channels()) + " channels: give RGB or grey");
+    return Out::failure("'" + path + "' has " + std::to_string(mat.channels()) +
+                        " channels: give RGB or grey");
   LoadedFrame frame;
   frame.container_bits = mat.depth() == CV_8U ? 8 : 16;
   cv::Mat as_float;
@@ -68,7 +71,8 @@ Result<LoadedFrame, std::string> read_frame(const std::string& path) {
   if (planes.size() == 3) std::swap(planes[0], planes[2]);  // OpenCV stores BGR
   for (const cv::Mat& p : planes) {
     imaging::Plane plane(p.cols, p.rows);
-    for (int y = 0; y < p.rows; ++y) std::copy(p.ptr<float>(y), p.ptr<float>(y) + p.cols, plane.row(y).begin());
+    for (int y = 0; y < p.rows; ++y)
+      std::copy(p.ptr<float>(y), p.ptr<float>(y) + p.cols, plane.row(y).begin());
     frame.dn.channels.push_back(std::move(plane));
   }
   return Out::success(std::move(frame));
@@ -83,7 +87,8 @@ std::string write_png16(const std::string& path, const imaging::Image& image) {
       auto* dst = m.ptr<std::uint16_t>(y);
       const auto src = plane.row(y);
       for (int x = 0; x < plane.width; ++x)
-        dst[x] = static_cast<std::uint16_t>(std::clamp(std::lround(src[static_cast<std::size_t>(x)]), 0L, 65535L));
+        dst[x] = static_cast<std::uint16_t>(
+            std::clamp(std::lround(src[static_cast<std::size_t>(x)]), 0L, 65535L));
     }
     planes.push_back(m);
   }
@@ -131,7 +136,8 @@ std::string write_text(const std::string& path, const std::string& text) {
   return commit(temporary, path);
 }
 
-std::string sibling_path(const std::string& path, const std::string& suffix, const std::string& extension) {
+std::string sibling_path(const std::string& path, const std::string& suffix,
+                         const std::string& extension) {
   fs::path p(path);
   return (p.parent_path() / (p.stem().string() + suffix + extension)).string();
 }

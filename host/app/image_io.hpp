@@ -13,7 +13,7 @@
 namespace flutterscan::app {
 
 struct LoadedFrame {
-  imaging::Image dn;  ///< planar, RGB order for colour files, values as stored
+  imaging::Image dn;       ///< planar, RGB order for colour files, values as stored
   int container_bits = 8;  ///< 8 or 16
 };
 
@@ -30,6 +30,7 @@ Result<nlohmann::json, std::string> read_json(const std::string& path);
 std::string write_text(const std::string& path, const std::string& text);
 
 /// \brief `frame.png` -> `frame.json` (or `frame` + suffix + extension).
-std::string sibling_path(const std::string& path, const std::string& suffix, const std::string& extension);
+std::string sibling_path(const std::string& path, const std::string& suffix,
+                         const std::string& extension);
 
 }  // namespace flutterscan::app

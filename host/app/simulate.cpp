@@ -54,7 +54,8 @@ imaging::CaptureModel capture_model(const SimulateOptions& o) {
   m.leds = code.leds() == 1 ? 1 : 3;
   m.channels = code.leds() == 1 ? 1 : 3;
   m.blur_px = o.blur;
-  require(imaging::parse_direction(o.direction, m.direction), "--direction must be +x, -x, +y or -y");
+  require(imaging::parse_direction(o.direction, m.direction),
+          "--direction must be +x, -x, +y or -y");
   if (m.channels == 1) {
     m.crosstalk = {1.0};
   } else if (!o.crosstalk.empty()) {
@@ -65,7 +66,8 @@ imaging::CaptureModel capture_model(const SimulateOptions& o) {
   const auto per_bit = imaging::budgeted_led_electrons(code, o.electrons, o.cap);
   m.led_electrons.assign(static_cast<std::size_t>(m.leds), 0.0);
   for (int k = 0; k < code.leds(); ++k)
-    m.led_electrons[static_cast<std::size_t>(m.led_of_bit[static_cast<std::size_t>(k)])] = per_bit[static_cast<std::size_t>(k)];
+    m.led_electrons[static_cast<std::size_t>(m.led_of_bit[static_cast<std::size_t>(k)])] =
+        per_bit[static_cast<std::size_t>(k)];
   m.ambient_electrons.assign(static_cast<std::size_t>(m.channels), o.ambient);
   m.read_noise = o.read_noise;
   m.full_well = o.full_well;
@@ -86,22 +88,29 @@ void run(const SimulateOptions& o) {
   spec.value().width = o.width;
   spec.value().height = o.height;
   spec.value().module_px = o.module;
-  const bool along_x = model.direction == imaging::Direction::kPlusX || model.direction == imaging::Direction::kMinusX;
-  require(model.blur_px < (along_x ? o.width : o.height), "--blur must be shorter than the image along the motion");
+  const bool along_x = model.direction == imaging::Direction::kPlusX ||
+                       model.direction == imaging::Direction::kMinusX;
+  require(model.blur_px < (along_x ? o.width : o.height),
+          "--blur must be shorter than the image along the motion");
   const auto truth = sim::render_scene(spec.value());
   if (!truth.ok()) throw UsageError("--scene: " + truth.error());
 
-  const auto frame = sim::record_frame(sim::expected_electrons(truth.value(), model), model, o.seed);
+  const auto frame =
+      sim::record_frame(sim::expected_electrons(truth.value(), model), model, o.seed);
   const std::string descriptor_path = sibling_path(o.output, "", ".json");
   const std::string truth_path = sibling_path(o.output, ".truth", ".png");
   imaging::Image truth_image;
   truth_image.channels.push_back(truth.value());
   for (float& v : truth_image.channels[0].pixels) v *= 65535.0f;
   nlohmann::json descriptor = imaging::to_descriptor(model);
-  descriptor["simulation"] = {{"scene", o.scene}, {"seed", o.seed}, {"electrons", o.electrons},
-                              {"cap", o.cap}, {"truth", truth_path}};
-  for (const auto& error : {write_png16(o.output, frame), write_text(descriptor_path, descriptor.dump(2) + "\n"),
-                            write_png16(truth_path, truth_image)})
+  descriptor["simulation"] = {{"scene", o.scene},
+                              {"seed", o.seed},
+                              {"electrons", o.electrons},
+                              {"cap", o.cap},
+                              {"truth", truth_path}};
+  for (const auto& error :
+       {write_png16(o.output, frame), write_text(descriptor_path, descriptor.dump(2) + "\n"),
+        write_png16(truth_path, truth_image)})
     if (!error.empty()) throw RuntimeFailure(error);
   std::cout << "wrote " << o.output << ", " << descriptor_path << ", " << truth_path << "\n";
 }
@@ -110,25 +119,45 @@ void run(const SimulateOptions& o) {
 
 void add_simulate(CLI::App& app) {
   auto o = std::make_shared<SimulateOptions>();
-  CLI::App* command = app.add_subcommand("simulate", "Render a coded-light frame of a label on a moving belt");
-  command->add_option("--scene", o->scene, "code128:TEXT, ean13:DIGITS, qr:TEXT, datamatrix:TEXT, text:WORDS or image:PATH")->required();
+  CLI::App* command =
+      app.add_subcommand("simulate", "Render a coded-light frame of a label on a moving belt");
+  command
+      ->add_option("--scene", o->scene,
+                   "code128:TEXT, ean13:DIGITS, qr:TEXT, datamatrix:TEXT, text:WORDS or image:PATH")
+      ->required();
   command->add_option("--code", o->code, "LED code: digits or a library name")->required();
-  command->add_option("--blur", o->blur, "motion during the exposure, pixels")->capture_default_str();
+  command->add_option("--blur", o->blur, "motion during the exposure, pixels")
+      ->capture_default_str();
   command->add_option("--direction", o->direction, "+x, -x, +y or -y")->capture_default_str();
-  command->add_option("--electrons", o->electrons, "light level E: e- per channel of white under rect-white")->capture_default_str();
+  command
+      ->add_option("--electrons", o->electrons,
+                   "light level E: e- per channel of white under rect-white")
+      ->capture_default_str();
   command->add_option("--cap", o->cap, "overdrive cap c")->capture_default_str();
-  command->add_option("--crosstalk", o->crosstalk, "3x3 LED-to-channel matrix \"m00,m01,m02;m10,...\"");
-  command->add_option("--ambient", o->ambient, "ambient light, e- per channel per exposure")->capture_default_str();
+  command->add_option("--crosstalk", o->crosstalk,
+                      "3x3 LED-to-channel matrix \"m00,m01,m02;m10,...\"");
+  command->add_option("--ambient", o->ambient, "ambient light, e- per channel per exposure")
+      ->capture_default_str();
   command->add_option("--read-noise", o->read_noise, "e- rms")->capture_default_str();
   command->add_option("--full-well", o->full_well, "e-")->capture_default_str();
-  command->add_option("--bit-depth", o->bit_depth, "bits per sample")->check(CLI::Range(8, 16))->capture_default_str();
+  command->add_option("--bit-depth", o->bit_depth, "bits per sample")
+      ->check(CLI::Range(8, 16))
+      ->capture_default_str();
   command->add_option("--black-level", o->black_level, "DN")->capture_default_str();
   command->add_option("--gain", o->gain, "e- per DN (default: full well at full scale)");
   command->add_flag("--bayer", o->bayer, "write a raw RGGB mosaic instead of RGB");
-  command->add_option("--encoding", o->encoding, "linear or srgb")->check(CLI::IsMember({"linear", "srgb"}))->capture_default_str();
-  command->add_option("--width", o->width, "frame width")->check(CLI::Range(16, 16384))->capture_default_str();
-  command->add_option("--height", o->height, "frame height")->check(CLI::Range(16, 16384))->capture_default_str();
-  command->add_option("--module", o->module, "barcode module width, pixels")->check(CLI::Range(0.5, 100.0))->capture_default_str();
+  command->add_option("--encoding", o->encoding, "linear or srgb")
+      ->check(CLI::IsMember({"linear", "srgb"}))
+      ->capture_default_str();
+  command->add_option("--width", o->width, "frame width")
+      ->check(CLI::Range(16, 16384))
+      ->capture_default_str();
+  command->add_option("--height", o->height, "frame height")
+      ->check(CLI::Range(16, 16384))
+      ->capture_default_str();
+  command->add_option("--module", o->module, "barcode module width, pixels")
+      ->check(CLI::Range(0.5, 100.0))
+      ->capture_default_str();
   command->add_option("--seed", o->seed, "noise seed")->capture_default_str();
   command->add_option("-o,--output", o->output, "frame PNG to write")->required();
   command->callback([o] { run(*o); });

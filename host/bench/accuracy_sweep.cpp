@@ -111,8 +111,10 @@ int main(int argc, char** argv) {
   std::vector<std::string> method_names = {"joint-wiener", "rl", "tv"};
   std::string csv_path, chart_path;
   for (int i = 1; i < argc; ++i)
-    if (std::string(argv[i]) == "--quiet") quiet = true;
-    else if (std::string(argv[i]) == "--psnr-only") psnr_only = true;
+    if (std::string(argv[i]) == "--quiet")
+      quiet = true;
+    else if (std::string(argv[i]) == "--psnr-only")
+      psnr_only = true;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
     if (flag == "--quiet" || flag == "--psnr-only") {
@@ -120,14 +122,22 @@ int main(int argc, char** argv) {
       continue;
     }
     const std::string value = argv[i + 1];
-    if (flag == "--electrons") light = numbers(value);
-    else if (flag == "--caps") caps = numbers(value);
-    else if (flag == "--read-noise") read_noises = numbers(value);
-    else if (flag == "--regime") regime_prefix = value;
-    else if (flag == "--seeds") seeds = std::stoi(value);
-    else if (flag == "--methods") method_names = words(value);
-    else if (flag == "--csv") csv_path = value;
-    else if (flag == "--chart") chart_path = value;
+    if (flag == "--electrons")
+      light = numbers(value);
+    else if (flag == "--caps")
+      caps = numbers(value);
+    else if (flag == "--read-noise")
+      read_noises = numbers(value);
+    else if (flag == "--regime")
+      regime_prefix = value;
+    else if (flag == "--seeds")
+      seeds = std::stoi(value);
+    else if (flag == "--methods")
+      method_names = words(value);
+    else if (flag == "--csv")
+      csv_path = value;
+    else if (flag == "--chart")
+      chart_path = value;
   }
   std::vector<imaging::Method> methods;
   std::vector<std::string> used_names;
@@ -155,14 +165,15 @@ int main(int argc, char** argv) {
   auto worker = [&] {
     for (std::size_t i; (i = next++) < cases.size();) {
       const Case& k = cases[i];
-      const auto model = bench::bench_camera(schemes[k.scheme], k.electrons, k.cap, k.read_noise, kBlur);
+      const auto model =
+          bench::bench_camera(schemes[k.scheme], k.electrons, k.cap, k.read_noise, kBlur);
       const Scene& scene = scene_set[k.scene];
       const auto frame = imaging::dn_to_electrons(
           sim::record_frame(sim::expected_electrons(scene.reflectance, model), model,
                             static_cast<std::uint64_t>(k.seed) * 7919 + k.scene),
           model);
-      const auto region = imaging::scored_region(scene.reflectance.width, scene.reflectance.height, kBlur,
-                                                 model.direction);
+      const auto region = imaging::scored_region(scene.reflectance.width, scene.reflectance.height,
+                                                 kBlur, model.direction);
       for (std::size_t m = 0; m < methods.size(); ++m) {
         imaging::DeblurOptions options;
         options.method = methods[m];
@@ -209,15 +220,19 @@ int main(int argc, char** argv) {
       }
     }
   FILE* csv = csv_path.empty() ? nullptr : std::fopen(csv_path.c_str(), "w");
-  if (csv) std::fprintf(csv, "cap,electrons,read_noise,scheme,method,psnr,ssim,barcode_psnr,decode_rate\n");
+  if (csv)
+    std::fprintf(csv,
+                 "cap,electrons,read_noise,scheme,method,psnr,ssim,barcode_psnr,decode_rate\n");
   for (double c : caps)
     for (double r : read_noises)
       for (double e : light) {
         if (!quiet) {
-          std::printf("\n### E = %g e-, c = %g, read noise %g e-, blur %g px (%zu scenes x %d seeds)\n\n", e, c,
-                      r, kBlur, scene_set.size(), seeds);
+          std::printf(
+              "\n### E = %g e-, c = %g, read noise %g e-, blur %g px (%zu scenes x %d seeds)\n\n",
+              e, c, r, kBlur, scene_set.size(), seeds);
           std::printf("| scheme |");
-          for (const auto& name : used_names) std::printf(" %s PSNR / SSIM / decode |", name.c_str());
+          for (const auto& name : used_names)
+            std::printf(" %s PSNR / SSIM / decode |", name.c_str());
           std::printf("\n|---|");
           for (std::size_t m = 0; m < methods.size(); ++m) std::printf("---|");
           std::printf("\n");
@@ -226,12 +241,16 @@ int main(int argc, char** argv) {
           if (!quiet) std::printf("| %s |", schemes[s].name.c_str());
           for (std::size_t m = 0; m < methods.size(); ++m) {
             const Sum& sum = sums[{c, r, e, s, m}];
-            const double rate = sum.barcodes ? static_cast<double>(sum.decoded) / sum.barcodes : 0.0;
-            if (!quiet) std::printf(" %.2f / %.3f / %.0f%% |", sum.psnr / sum.n, sum.ssim / sum.n, 100 * rate);
+            const double rate =
+                sum.barcodes ? static_cast<double>(sum.decoded) / sum.barcodes : 0.0;
+            if (!quiet)
+              std::printf(" %.2f / %.3f / %.0f%% |", sum.psnr / sum.n, sum.ssim / sum.n,
+                          100 * rate);
             if (csv)
-              std::fprintf(csv, "%g,%g,%g,%s,%s,%.4f,%.4f,%.4f,%.4f\n", c, e, r, schemes[s].name.c_str(),
-                           used_names[m].c_str(), sum.psnr / sum.n, sum.ssim / sum.n,
-                           sum.barcodes ? sum.barcode_psnr / sum.barcodes : 0.0, rate);
+              std::fprintf(csv, "%g,%g,%g,%s,%s,%.4f,%.4f,%.4f,%.4f\n", c, e, r,
+                           schemes[s].name.c_str(), used_names[m].c_str(), sum.psnr / sum.n,
+                           sum.ssim / sum.n, sum.barcodes ? sum.barcode_psnr / sum.barcodes : 0.0,
+                           rate);
           }
           if (!quiet) std::printf("\n");
         }
@@ -245,11 +264,13 @@ int main(int argc, char** argv) {
     chart.y_label = "PSNR (dB)";
     chart.log_x = true;
     char note[160];
-    std::snprintf(note, sizeof note, "cap c = %g, read noise %g e-, 52 px blur, crosstalk, %zu scenes x %d seeds",
+    std::snprintf(note, sizeof note,
+                  "cap c = %g, read noise %g e-, 52 px blur, crosstalk, %zu scenes x %d seeds",
                   caps.front(), read_noises.front(), scene_set.size(), seeds);
     chart.notes.push_back(note);
-    const plot::Rgb palette[] = {{0.1, 0.1, 0.1}, {0.85, 0.1, 0.1}, {0.1, 0.25, 0.85}, {0.1, 0.6, 0.15},
-                                 {0.8, 0.45, 0.0}, {0.55, 0.2, 0.7}, {0.0, 0.6, 0.6}, {0.6, 0.4, 0.2}};
+    const plot::Rgb palette[] = {{0.1, 0.1, 0.1},  {0.85, 0.1, 0.1}, {0.1, 0.25, 0.85},
+                                 {0.1, 0.6, 0.15}, {0.8, 0.45, 0.0}, {0.55, 0.2, 0.7},
+                                 {0.0, 0.6, 0.6},  {0.6, 0.4, 0.2}};
     for (std::size_t s = 0; s < schemes.size(); ++s) {
       plot::Series series;
       series.label = schemes[s].name;
@@ -283,10 +304,12 @@ int main(int argc, char** argv) {
     };
     for (double c : caps) {
       plot::HeatMap map;
-      map.title = "Which capture scheme wins (best method each), overdrive cap " + std::to_string(static_cast<int>(c));
+      map.title = "Which capture scheme wins (best method each), overdrive cap " +
+                  std::to_string(static_cast<int>(c));
       map.x_label = "light level E (e- per channel, rect-white)";
       map.y_label = "read noise (e- rms)";
-      map.notes.push_back("cell: the winner's colour; text: best coded scheme minus best white snapshot (dB)");
+      map.notes.push_back(
+          "cell: the winner's colour; text: best coded scheme minus best white snapshot (dB)");
       for (double e : light) map.columns.push_back(std::to_string(static_cast<int>(e)));
       for (double r : read_noises) map.rows.push_back(std::to_string(static_cast<int>(r)));
       std::map<std::size_t, int> category_of;
@@ -298,7 +321,8 @@ int main(int argc, char** argv) {
             const double p = best_psnr(c, r, e, s);
             if (p > best_psnr(c, r, e, winner)) winner = s;
             const bool snapshot = schemes[s].name.rfind("snapshot", 0) == 0;
-            (snapshot ? best_snapshot : best_coded) = std::max(snapshot ? best_snapshot : best_coded, p);
+            (snapshot ? best_snapshot : best_coded) =
+                std::max(snapshot ? best_snapshot : best_coded, p);
           }
           if (!category_of.count(winner)) {
             category_of[winner] = static_cast<int>(map.categories.size());
@@ -308,8 +332,8 @@ int main(int argc, char** argv) {
           char label[32];
           std::snprintf(label, sizeof label, "%+.1f", best_coded - best_snapshot);
           map.cell_text.push_back(label);
-          std::printf("regime c=%g read_noise=%g E=%g winner=%s coded_minus_snapshot=%.2f\n", c, r, e,
-                      schemes[winner].name.c_str(), best_coded - best_snapshot);
+          std::printf("regime c=%g read_noise=%g E=%g winner=%s coded_minus_snapshot=%.2f\n", c, r,
+                      e, schemes[winner].name.c_str(), best_coded - best_snapshot);
         }
       const std::string path = regime_prefix + "-c" + std::to_string(static_cast<int>(c)) + ".png";
       if (const auto error = plot::write_png(map, path); !error.empty()) {

@@ -14,8 +14,8 @@ namespace flutterscan::bench {
 
 struct CaptureScheme {
   std::string name;
-  LedCode code;        ///< three LEDs; digit 7 lights all three (white)
-  bool one_of_three;   ///< a one-of-3 code (every slot one LED)
+  LedCode code;       ///< three LEDs; digit 7 lights all three (white)
+  bool one_of_three;  ///< a one-of-3 code (every slot one LED)
 };
 
 /// \brief rect-white, raskar-white, complement-pair (Raskar on red, its

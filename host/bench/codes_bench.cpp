@@ -99,9 +99,9 @@ void register_all() {
   };
   for (const Case& c : cases) {
     const std::string prefix = "BM_Merit/" + std::string(merit_name(c.merit));
-    for (auto* bench : {benchmark::RegisterBenchmark((prefix + "/full").c_str(), bm_full, c),
-                        benchmark::RegisterBenchmark((prefix + "/incremental").c_str(),
-                                                     bm_incremental, c)})
+    for (auto* bench :
+         {benchmark::RegisterBenchmark((prefix + "/full").c_str(), bm_full, c),
+          benchmark::RegisterBenchmark((prefix + "/incremental").c_str(), bm_incremental, c)})
       bench->Repetitions(5)->ReportAggregatesOnly(true);
   }
 }

@@ -10,8 +10,8 @@
 #include <thread>
 #include <vector>
 
-#include "codes/library.hpp"
 #include "codes/code_report.hpp"
+#include "codes/library.hpp"
 #include "codes/search.hpp"
 
 namespace {
@@ -39,19 +39,24 @@ struct Reference {
 /// (joint, mse), or Raskar's code (single).
 Reference reference_for(Merit merit, const MeritSettings& settings) {
   switch (merit) {
-    case Merit::kMaxMin: return {"seed 5.1", -21.4382};
-    case Merit::kAvgMin: return {"seed 5.1 avg", -25.6353};
-    case Merit::kPairs: return {"seed 5.1 pairs", -21.6372};
+    case Merit::kMaxMin:
+      return {"seed 5.1", -21.4382};
+    case Merit::kAvgMin:
+      return {"seed 5.1 avg", -25.6353};
+    case Merit::kPairs:
+      return {"seed 5.1 pairs", -21.6372};
     case Merit::kSingle:
-      return {"raskar (26 ones)", evaluate_merit(merit, to_code(*find_library_code("raskar")), settings).value()};
-    default: break;
+      return {"raskar (26 ones)",
+              evaluate_merit(merit, to_code(*find_library_code("raskar")), settings).value()};
+    default:
+      break;
   }
   Reference best{"", 0};
   for (const auto& entry : code_library()) {
     if (!entry.seed_triplet) continue;
     const double value = evaluate_merit(merit, to_code(entry), settings).value();
-    const bool better = best.name.empty() ||
-                        (higher_is_better(merit) ? value > best.value : value < best.value);
+    const bool better =
+        best.name.empty() || (higher_is_better(merit) ? value > best.value : value < best.value);
     if (better) best = {std::string(entry.name), value};
   }
   return best;
@@ -75,9 +80,12 @@ int main(int argc, char** argv) {
   std::string only;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
-    if (flag == "--budgets") budgets = parse_budgets(argv[i + 1]);
-    else if (flag == "--csv") csv_path = argv[i + 1];
-    else if (flag == "--only") only = argv[i + 1];
+    if (flag == "--budgets")
+      budgets = parse_budgets(argv[i + 1]);
+    else if (flag == "--csv")
+      csv_path = argv[i + 1];
+    else if (flag == "--only")
+      only = argv[i + 1];
   }
   const MeritSettings settings;
   const int threads = static_cast<int>(std::max(1U, std::thread::hardware_concurrency()));
@@ -88,13 +96,15 @@ int main(int argc, char** argv) {
     SearchAlgorithm algorithm;
   };
   const std::vector<Plan> plans = {
-      {Merit::kMaxMin, 3, SearchAlgorithm::kAnneal},  {Merit::kMaxMin, 3, SearchAlgorithm::kGenetic},
-      {Merit::kAvgMin, 3, SearchAlgorithm::kAnneal},  {Merit::kAvgMin, 3, SearchAlgorithm::kGenetic},
-      {Merit::kPairs, 3, SearchAlgorithm::kAnneal},   {Merit::kPairs, 3, SearchAlgorithm::kGenetic},
-      {Merit::kJoint, 3, SearchAlgorithm::kAnneal},   {Merit::kJoint, 3, SearchAlgorithm::kGenetic},
-      {Merit::kMse, 3, SearchAlgorithm::kAnneal},     {Merit::kSingle, 1, SearchAlgorithm::kAnneal},
+      {Merit::kMaxMin, 3, SearchAlgorithm::kAnneal}, {Merit::kMaxMin, 3, SearchAlgorithm::kGenetic},
+      {Merit::kAvgMin, 3, SearchAlgorithm::kAnneal}, {Merit::kAvgMin, 3, SearchAlgorithm::kGenetic},
+      {Merit::kPairs, 3, SearchAlgorithm::kAnneal},  {Merit::kPairs, 3, SearchAlgorithm::kGenetic},
+      {Merit::kJoint, 3, SearchAlgorithm::kAnneal},  {Merit::kJoint, 3, SearchAlgorithm::kGenetic},
+      {Merit::kMse, 3, SearchAlgorithm::kAnneal},    {Merit::kSingle, 1, SearchAlgorithm::kAnneal},
   };
-  std::printf("| merit | search | budget (s) | evaluations | best found | reference | reference value | ratio or margin | code |\n");
+  std::printf(
+      "| merit | search | budget (s) | evaluations | best found | reference | reference value | "
+      "ratio or margin | code |\n");
   std::printf("|---|---|---|---|---|---|---|---|---|\n");
   for (const auto& plan : plans) {
     if (!only.empty() && merit_name(plan.merit) != only) continue;
@@ -122,13 +132,14 @@ int main(int argc, char** argv) {
               reference.name,
               reference.value,
               format_code(result.value().best)};
-      const bool ratio = plan.merit == Merit::kJoint || plan.merit == Merit::kSingle ||
-                         plan.merit == Merit::kMse;
+      const bool ratio =
+          plan.merit == Merit::kJoint || plan.merit == Merit::kSingle || plan.merit == Merit::kMse;
       const double comparison = ratio ? found / reference.value : found - reference.value;
-      std::printf("| %s | %s | %g | %lld | %.4f | %s | %.4f | %s%.3f%s | `%s` |\n", row.merit.c_str(),
-                  row.algorithm.c_str(), seconds, row.evaluations, found, reference.name.c_str(),
-                  reference.value, ratio ? "" : (comparison >= 0 ? "+" : ""), comparison,
-                  ratio ? "x" : " dB", row.code.c_str());
+      std::printf("| %s | %s | %g | %lld | %.4f | %s | %.4f | %s%.3f%s | `%s` |\n",
+                  row.merit.c_str(), row.algorithm.c_str(), seconds, row.evaluations, found,
+                  reference.name.c_str(), reference.value,
+                  ratio ? "" : (comparison >= 0 ? "+" : ""), comparison, ratio ? "x" : " dB",
+                  row.code.c_str());
       std::fflush(stdout);
       rows.push_back(row);
     }

@@ -18,8 +18,8 @@ namespace {
 using imaging::Plane;
 
 constexpr int kSlots = 52;
-constexpr double kSeedNoise = 0.01;      // the seed's nf
-constexpr double kElectrons = 3000;      // EMVA: white object, whole exposure
+constexpr double kSeedNoise = 0.01;  // the seed's nf
+constexpr double kElectrons = 3000;  // EMVA: white object, whole exposure
 constexpr double kReadNoise = 4;
 
 /// One exposure of the experiment: a 0/1 window and the seed's duty factor dc.
@@ -33,7 +33,9 @@ struct Row {
   std::vector<Exposure> exposures;  ///< deblurred separately, results averaged
 };
 
-std::vector<double> ones(int n) { return std::vector<double>(static_cast<std::size_t>(n), 1.0); }
+std::vector<double> ones(int n) {
+  return std::vector<double>(static_cast<std::size_t>(n), 1.0);
+}
 
 std::vector<double> bits(const LedCode& code, int led) {
   std::vector<double> out;
@@ -47,12 +49,14 @@ std::vector<Row> seed_rows() {
   const LedCode triplet = codes::to_code(*codes::find_library_code("seed-avgmin"));
   Row triplet_row{"triplet (avg-min code), averaged", {}};
   for (int led = 0; led < 3; ++led)
-    triplet_row.exposures.push_back({bits(triplet, led), triplet.on_slots(led) / static_cast<double>(kSlots)});
+    triplet_row.exposures.push_back(
+        {bits(triplet, led), triplet.on_slots(led) / static_cast<double>(kSlots)});
   // The seed's Raskar exposures: 50% duty cycle and a 50% shutter: dc 0.25.
   return {
       {"flat 52", {{ones(kSlots), 1.0}}},
       {"Raskar", {{bits(raskar, 0), 0.25}}},
-      {"Raskar + inverted, averaged", {{bits(raskar, 0), 0.25}, {bits(raskar.complement(), 0), 0.25}}},
+      {"Raskar + inverted, averaged",
+       {{bits(raskar, 0), 0.25}, {bits(raskar.complement(), 0), 0.25}}},
       triplet_row,
       {"three flat 17, averaged", {{ones(17), 1.0 / 3}, {ones(17), 1.0 / 3}, {ones(17), 1.0 / 3}}},
   };
@@ -75,7 +79,8 @@ Plane blur_full(const Plane& image, const std::vector<double>& psf) {
 }
 
 /// One exposure recorded and deblurred; returns the latent estimate (image size).
-Plane expose_and_deblur(const Plane& image, const Exposure& exposure, bool emva, std::mt19937_64& rng) {
+Plane expose_and_deblur(const Plane& image, const Exposure& exposure, bool emva,
+                        std::mt19937_64& rng) {
   double sum = 0;
   for (double w : exposure.window) sum += w;
   // The PSF normalised to sum 1 (psf / sum(psf)), as the seed's script does.
@@ -88,7 +93,8 @@ Plane expose_and_deblur(const Plane& image, const Exposure& exposure, bool emva,
   for (float& v : observed.pixels) {
     const double signal = v * scale;
     if (emva) {
-      const double shot = signal > 0 ? static_cast<double>(std::poisson_distribution<long long>(signal)(rng)) : 0.0;
+      const double shot =
+          signal > 0 ? static_cast<double>(std::poisson_distribution<long long>(signal)(rng)) : 0.0;
       v = static_cast<float>(shot + kReadNoise * gauss(rng));
     } else {
       const double a = kSeedNoise * exposure.dc;
@@ -99,7 +105,7 @@ Plane expose_and_deblur(const Plane& image, const Exposure& exposure, bool emva,
   for (double p : psf) taps.push_back(p * scale);
   const imaging::ChannelPsf channel{taps, 1.0};
   imaging::RichardsonLucy rl({&channel, 1}, observed.width, emva ? kReadNoise * kReadNoise : 0.0,
-                                   {20, true, 0});
+                             {20, true, 0});
   const Plane full = rl.deconvolve({&observed, 1}, 2);
   Plane latent(image.width, image.height);
   for (int y = 0; y < image.height; ++y)
@@ -117,7 +123,8 @@ double row_psnr(const std::vector<Plane>& channels, const Row& row, bool emva, s
       for (std::size_t i = 0; i < mean.pixels.size(); ++i)
         mean.pixels[i] += one.pixels[i] / static_cast<float>(row.exposures.size());
     }
-    const auto region = imaging::scored_region(channel.width, channel.height, kSlots, imaging::Direction::kPlusX);
+    const auto region =
+        imaging::scored_region(channel.width, channel.height, kSlots, imaging::Direction::kPlusX);
     total += imaging::psnr(channel, mean, region);
   }
   return total / static_cast<double>(channels.size());
@@ -125,7 +132,8 @@ double row_psnr(const std::vector<Plane>& channels, const Row& row, bool emva, s
 
 }  // namespace
 
-std::vector<SeedExperimentRow> run_seed_experiment(const std::vector<imaging::Plane>& photo, std::uint64_t seed) {
+std::vector<SeedExperimentRow> run_seed_experiment(const std::vector<imaging::Plane>& photo,
+                                                   std::uint64_t seed) {
   auto spec = sim::parse_scene("code128:FS-0042").value();
   spec.width = 640;
   spec.height = 360;

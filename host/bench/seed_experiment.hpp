@@ -26,6 +26,7 @@ struct SeedExperimentRow {
 
 /// \brief Runs every row on `photo` (planes with values in [0, 1], the stored
 /// values as MATLAB's im2double reads them) and on a rendered label.
-std::vector<SeedExperimentRow> run_seed_experiment(const std::vector<imaging::Plane>& photo, std::uint64_t seed);
+std::vector<SeedExperimentRow> run_seed_experiment(const std::vector<imaging::Plane>& photo,
+                                                   std::uint64_t seed);
 
 }  // namespace flutterscan::bench

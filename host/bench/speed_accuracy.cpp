@@ -44,7 +44,6 @@ struct SceneClass {
   std::vector<std::string> scenes;
 };
 
-
 /// Steady-state ms per 1080p frame on 2 threads: plans and buffers made before timing.
 double frame_ms(const bench::SpeedFrame& frame, const Setting& s, int repeats) {
   const int width = frame.rgb8.cols, height = frame.rgb8.rows;
@@ -86,8 +85,10 @@ double frame_ms(const bench::SpeedFrame& frame, const Setting& s, int repeats) {
         const std::span<float> rows[3] = {planes[0].row(y), planes[1].row(y), planes[2].row(y)};
         load(y, rows);
       }
-      imaging::RichardsonLucy rl(frame.psfs, width, 16.0, {s.iterations, true, 0}, imaging::PlanEffort::kMeasure);
-      return bench::median_ms(std::max(1, repeats / 2), [&] { rl.deconvolve(planes, latent, pool); });
+      imaging::RichardsonLucy rl(frame.psfs, width, 16.0, {s.iterations, true, 0},
+                                 imaging::PlanEffort::kMeasure);
+      return bench::median_ms(std::max(1, repeats / 2),
+                              [&] { rl.deconvolve(planes, latent, pool); });
     }
     case imaging::Method::kTotalVariation: {
       imaging::TotalVariationSettings settings;
@@ -95,7 +96,8 @@ double frame_ms(const bench::SpeedFrame& frame, const Setting& s, int repeats) {
       settings.wiener_lambda = lambda;
       imaging::TotalVariation tv(frame.psfs, width, settings, imaging::PlanEffort::kMeasure);
       const Plane warm_start;
-      return bench::median_ms(std::max(1, repeats / 2), [&] { tv.deconvolve(load, height, warm_start, latent, pool); });
+      return bench::median_ms(std::max(1, repeats / 2),
+                              [&] { tv.deconvolve(load, height, warm_start, latent, pool); });
     }
   }
   return 0;
@@ -108,23 +110,32 @@ int main(int argc, char** argv) {
   int seeds = 2, repeats = 5;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i];
-    if (flag == "--out") prefix = argv[i + 1];
-    else if (flag == "--seeds") seeds = std::stoi(argv[i + 1]);
-    else if (flag == "--repeats") repeats = std::stoi(argv[i + 1]);
+    if (flag == "--out")
+      prefix = argv[i + 1];
+    else if (flag == "--seeds")
+      seeds = std::stoi(argv[i + 1]);
+    else if (flag == "--repeats")
+      repeats = std::stoi(argv[i + 1]);
   }
   const std::vector<Setting> settings = {
-      {"joint-wiener", imaging::Method::kJointWiener, 0},  {"wiener-avg", imaging::Method::kWienerAverage, 0},
-      {"rl 5", imaging::Method::kRichardsonLucy, 5},       {"rl 10", imaging::Method::kRichardsonLucy, 10},
-      {"rl 20", imaging::Method::kRichardsonLucy, 20},     {"rl 40", imaging::Method::kRichardsonLucy, 40},
-      {"tv 10", imaging::Method::kTotalVariation, 10},     {"tv 20", imaging::Method::kTotalVariation, 20},
-      {"tv 40", imaging::Method::kTotalVariation, 40},     {"tv 80", imaging::Method::kTotalVariation, 80},
+      {"joint-wiener", imaging::Method::kJointWiener, 0},
+      {"wiener-avg", imaging::Method::kWienerAverage, 0},
+      {"rl 5", imaging::Method::kRichardsonLucy, 5},
+      {"rl 10", imaging::Method::kRichardsonLucy, 10},
+      {"rl 20", imaging::Method::kRichardsonLucy, 20},
+      {"rl 40", imaging::Method::kRichardsonLucy, 40},
+      {"tv 10", imaging::Method::kTotalVariation, 10},
+      {"tv 20", imaging::Method::kTotalVariation, 20},
+      {"tv 40", imaging::Method::kTotalVariation, 40},
+      {"tv 80", imaging::Method::kTotalVariation, 80},
   };
   const std::vector<SceneClass> classes = {
       {"1-D barcodes", {"code128:FS-0042", "ean13:4006381333931"}},
       {"2-D codes", {"qr:FLUTTERSCAN", "datamatrix:LOT-2611"}},
       {"text", {"text:LOT 42"}},
   };
-  const bench::CaptureScheme scheme{"found-joint", codes::to_code(*codes::find_library_code("found-joint")), true};
+  const bench::CaptureScheme scheme{"found-joint",
+                                    codes::to_code(*codes::find_library_code("found-joint")), true};
   const auto model = bench::bench_camera(scheme, 3000, 3, 4, 52);
   const auto frame = bench::make_speed_frame(1920, 1080, scheme.code, 52);
 
@@ -145,12 +156,14 @@ int main(int argc, char** argv) {
       const auto expected = sim::expected_electrons(truth, model);
       const auto region = imaging::scored_region(truth.width, truth.height, 52, model.direction);
       for (int seed = 1; seed <= seeds; ++seed, ++count) {
-        const auto electrons = imaging::dn_to_electrons(sim::record_frame(expected, model, static_cast<std::uint64_t>(seed)), model);
+        const auto electrons = imaging::dn_to_electrons(
+            sim::record_frame(expected, model, static_cast<std::uint64_t>(seed)), model);
         for (std::size_t s = 0; s < settings.size(); ++s) {
           imaging::DeblurOptions options;
           options.method = settings[s].method;
           if (settings[s].iterations > 0) options.iterations = settings[s].iterations;
-          psnr[k][s] += imaging::psnr(truth, imaging::deblur(electrons, model, options).value().latent, region);
+          psnr[k][s] += imaging::psnr(
+              truth, imaging::deblur(electrons, model, options).value().latent, region);
         }
       }
     }
@@ -168,23 +181,28 @@ int main(int argc, char** argv) {
     std::printf("| %s | %.1f |", settings[s].label.c_str(), ms[s]);
     for (std::size_t k = 0; k < classes.size(); ++k) {
       std::printf(" %.2f |", psnr[k][s]);
-      if (csv) std::fprintf(csv, "%s,%s,%.3f,%.4f\n", classes[k].name.c_str(), settings[s].label.c_str(), ms[s], psnr[k][s]);
+      if (csv)
+        std::fprintf(csv, "%s,%s,%.3f,%.4f\n", classes[k].name.c_str(), settings[s].label.c_str(),
+                     ms[s], psnr[k][s]);
     }
     std::printf("\n");
   }
   if (csv) std::fclose(csv);
 
-  const std::map<imaging::Method, plot::Rgb> colours = {{imaging::Method::kJointWiener, {0.1, 0.25, 0.85}},
-                                                        {imaging::Method::kWienerAverage, {0.5, 0.5, 0.5}},
-                                                        {imaging::Method::kRichardsonLucy, {0.85, 0.1, 0.1}},
-                                                        {imaging::Method::kTotalVariation, {0.1, 0.6, 0.15}}};
+  const std::map<imaging::Method, plot::Rgb> colours = {
+      {imaging::Method::kJointWiener, {0.1, 0.25, 0.85}},
+      {imaging::Method::kWienerAverage, {0.5, 0.5, 0.5}},
+      {imaging::Method::kRichardsonLucy, {0.85, 0.1, 0.1}},
+      {imaging::Method::kTotalVariation, {0.1, 0.6, 0.15}}};
   for (std::size_t k = 0; k < classes.size(); ++k) {
     plot::LineChart chart;
     chart.title = "Speed against accuracy: " + classes[k].name;
     chart.x_label = "ms per 1920x1080 RGB8 frame, 2 threads (log)";
     chart.y_label = "PSNR (dB)";
     chart.log_x = true;
-    chart.notes.push_back("3000 e-, cap 3, read noise 4 e-, 52 px blur, crosstalk, found-joint code; black line: Pareto front");
+    chart.notes.push_back(
+        "3000 e-, cap 3, read noise 4 e-, 52 px blur, crosstalk, found-joint code; black line: "
+        "Pareto front");
     for (const auto& [method, colour] : colours) {
       plot::Series points;
       points.label = imaging::method_name(method);
@@ -201,7 +219,8 @@ int main(int argc, char** argv) {
     // Pareto front: no other setting is both faster and more accurate.
     std::vector<std::size_t> order(settings.size());
     for (std::size_t s = 0; s < order.size(); ++s) order[s] = s;
-    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return ms[a] < ms[b]; });
+    std::sort(order.begin(), order.end(),
+              [&](std::size_t a, std::size_t b) { return ms[a] < ms[b]; });
     plot::Series front;
     front.label = "Pareto front";
     front.colour = {0, 0, 0};

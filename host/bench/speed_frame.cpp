@@ -29,9 +29,11 @@ SpeedFrame make_speed_frame(int width, int height, const LedCode& code, double b
   for (int y = 0; y < height; ++y)
     for (int x = 0; x < width; ++x)
       for (int c = 0; c < 3; ++c)
-        f.rgb8.at<cv::Vec3b>(y, x)[c] = static_cast<std::uint8_t>(dn.channels[static_cast<std::size_t>(c)].at(x, y));
+        f.rgb8.at<cv::Vec3b>(y, x)[c] =
+            static_cast<std::uint8_t>(dn.channels[static_cast<std::size_t>(c)].at(x, y));
   for (int c = 0; c < 3; ++c)
-    f.psfs.push_back({imaging::channel_psf(f.model, c), imaging::channel_noise_variance(f.model, 1000)});
+    f.psfs.push_back(
+        {imaging::channel_psf(f.model, c), imaging::channel_noise_variance(f.model, 1000)});
   return f;
 }
 
@@ -41,9 +43,12 @@ double median_ms(int repeats, const std::function<void()>& run) {
   for (int i = 0; i < repeats; ++i) {
     const auto start = std::chrono::steady_clock::now();
     run();
-    times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count());
+    times.push_back(
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start)
+            .count());
   }
-  std::nth_element(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(times.size() / 2), times.end());
+  std::nth_element(times.begin(), times.begin() + static_cast<std::ptrdiff_t>(times.size() / 2),
+                   times.end());
   return times[times.size() / 2];
 }
 
@@ -96,7 +101,8 @@ cv::Mat OpenCvWiener::run(const cv::Mat& rgb8) {
   for (int c = 0; c < 3; ++c) {
     cv::Mat as_float;
     channels_[c].convertTo(as_float, CV_32F, 1.0 / 255.0);
-    cv::copyMakeBorder(as_float, padded_, 0, rows_ - rgb8.rows, 0, cols_ - rgb8.cols, cv::BORDER_REPLICATE);
+    cv::copyMakeBorder(as_float, padded_, 0, rows_ - rgb8.rows, 0, cols_ - rgb8.cols,
+                       cv::BORDER_REPLICATE);
     cv::dft(padded_, spectrum_, cv::DFT_COMPLEX_OUTPUT);
     cv::mulSpectrums(spectrum_, filters_[static_cast<std::size_t>(c)], spectrum_, 0);
     cv::idft(spectrum_, restored_, cv::DFT_REAL_OUTPUT | cv::DFT_SCALE);

@@ -24,9 +24,13 @@ constexpr long long kRefreshEvery = 1 << 16;
 /// Budget checks and monitor updates happen every this many evaluations.
 constexpr long long kCheckEvery = 256;
 
-int uniform(Rng& rng, int n) { return std::uniform_int_distribution<int>(0, n - 1)(rng); }
+int uniform(Rng& rng, int n) {
+  return std::uniform_int_distribution<int>(0, n - 1)(rng);
+}
 
-std::uint8_t led_mask(int led) { return static_cast<std::uint8_t>(1U << led); }
+std::uint8_t led_mask(int led) {
+  return static_cast<std::uint8_t>(1U << led);
+}
 
 /// On-slot targets of a balanced code: counts differ by at most one; the
 /// extra slots go to LED 1 first (green: 52 slots become 17/18/17).
@@ -122,10 +126,9 @@ ChainResult run_chain(const SearchOptions& options, int chain, long long budget,
                       SearchMonitor& monitor) {
   Rng rng(derive_seed(options.seed, static_cast<std::uint64_t>(chain)));
   const MoveMaker moves(options);
-  IncrementalSpectra state(
-      initial_code(options, rng),
-      merit_grid(options.merit, options.length, options.settings,
-                 search_grid_points(options.length)));
+  IncrementalSpectra state(initial_code(options, rng),
+                           merit_grid(options.merit, options.length, options.settings,
+                                      search_grid_points(options.length)));
   const auto objective = [&] {
     return merit_objective(options.merit,
                            merit_on_grid(options.merit, state.spectra(), options.settings));

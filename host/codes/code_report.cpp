@@ -37,10 +37,14 @@ std::string merit_value_text(Merit merit, double value) {
   switch (merit) {
     case Merit::kMaxMin:
     case Merit::kAvgMin:
-    case Merit::kPairs: return printf_string("%.4f dB", value);
-    case Merit::kSingle: return printf_string("%.5f", value);
-    case Merit::kJoint: return printf_string("%.2f e-", value);
-    case Merit::kMse: return printf_string("%.6f", value);
+    case Merit::kPairs:
+      return printf_string("%.4f dB", value);
+    case Merit::kSingle:
+      return printf_string("%.5f", value);
+    case Merit::kJoint:
+      return printf_string("%.2f e-", value);
+    case Merit::kMse:
+      return printf_string("%.6f", value);
   }
   return "";
 }
@@ -128,9 +132,12 @@ nlohmann::json to_json(const CodeReport& report, const MeritSettings& settings) 
     out["best_seed_triplet"] = report.best_seed_triplet;
   }
   const auto& light = settings.light;
-  out["settings"] = {{"electrons", light.electrons},     {"cap", light.cap},
-                     {"read_noise", light.read_noise},   {"mse_eps", settings.mse_eps},
-                     {"single_pad", settings.single_pad}, {"dense_points", settings.dense_points},
+  out["settings"] = {{"electrons", light.electrons},
+                     {"cap", light.cap},
+                     {"read_noise", light.read_noise},
+                     {"mse_eps", settings.mse_eps},
+                     {"single_pad", settings.single_pad},
+                     {"dense_points", settings.dense_points},
                      {"crosstalk", light.crosstalk ? nlohmann::json(light.crosstalk->gain)
                                                    : nlohmann::json(nullptr)}};
   return out;
@@ -140,19 +147,18 @@ std::string to_text(const CodeReport& report, const MeritSettings& settings) {
   const LedCode& code = report.code;
   std::string out = format_code(code);
   if (!report.name.empty()) out += "  (" + report.name + ")";
-  out += printf_string("\n  %d LED%s, %d slots%s\n", code.leds(), code.leds() == 1 ? "" : "s",
-                       code.length(),
-                       code.leds() > 1 && code.is_one_of_n()
-                           ? printf_string(", one-of-%d", code.leds()).c_str()
-                           : "");
+  out += printf_string(
+      "\n  %d LED%s, %d slots%s\n", code.leds(), code.leds() == 1 ? "" : "s", code.length(),
+      code.leds() > 1 && code.is_one_of_n() ? printf_string(", one-of-%d", code.leds()).c_str()
+                                            : "");
   out += "  LED  on  duty   seed-grid min   linear-blur min (grid / refined @ f)   circular min\n";
   for (const auto& led : report.leds) {
-    out += printf_string("  %-3d  %-3d %5.1f%%  %s     %s / %s @ %.4f     %s\n", led.led,
-                         led.on_slots, 100.0 * led.duty_cycle,
-                         db_text(led.seed_grid_min_db).c_str(),
-                         db_text(led.dense_min_db.grid_value).c_str(),
-                         db_text(led.dense_min_db.refined_value).c_str(),
-                         led.dense_min_db.refined_frequency, db_text(led.circular_min_db).c_str());
+    out +=
+        printf_string("  %-3d  %-3d %5.1f%%  %s     %s / %s @ %.4f     %s\n", led.led, led.on_slots,
+                      100.0 * led.duty_cycle, db_text(led.seed_grid_min_db).c_str(),
+                      db_text(led.dense_min_db.grid_value).c_str(),
+                      db_text(led.dense_min_db.refined_value).c_str(),
+                      led.dense_min_db.refined_frequency, db_text(led.circular_min_db).c_str());
   }
   for (const auto& merit : report.merits) {
     out += printf_string("  %-7s ", std::string(merit_name(merit.merit)).c_str());

@@ -18,20 +18,20 @@ struct LedReport {
   int led = 0;
   int on_slots = 0;
   double duty_cycle = 0;
-  double seed_grid_min_db = 0;   ///< 64-point grid (seed)
-  Minimum dense_min_db;          ///< linear blur: dense grid and refined
-  double circular_min_db = 0;    ///< L-point circular DFT
+  double seed_grid_min_db = 0;  ///< 64-point grid (seed)
+  Minimum dense_min_db;         ///< linear blur: dense grid and refined
+  double circular_min_db = 0;   ///< L-point circular DFT
 };
 
 struct MeritReport {
   Merit merit;
-  std::optional<double> value;   ///< empty where the merit does not apply
-  std::string inapplicable;      ///< why not
+  std::optional<double> value;  ///< empty where the merit does not apply
+  std::string inapplicable;     ///< why not
 };
 
 struct CodeReport {
   LedCode code;
-  std::string name;              ///< library name, if the code came from the library
+  std::string name;  ///< library name, if the code came from the library
   std::vector<LedReport> leds;
   std::vector<MeritReport> merits;
   std::optional<double> joint_ratio_to_best_seed;

@@ -62,8 +62,7 @@ SearchResult run_genetic_search(const SearchOptions& options, SearchMonitor& mon
     for (auto& gene : genes) gene = random_gene(options.leds, rng);
     individual.code = LedCode::from_masks(genes, options.leds).value();
   }
-  const auto grid = merit_grid(options.merit, length, options.settings,
-                               search_grid_points(length));
+  const auto grid = merit_grid(options.merit, length, options.settings, search_grid_points(length));
   std::vector<IncrementalSpectra> evaluators(static_cast<std::size_t>(options.threads),
                                              IncrementalSpectra(population[0].code, grid));
   std::vector<Individual> next(size);
@@ -79,10 +78,9 @@ SearchResult run_genetic_search(const SearchOptions& options, SearchMonitor& mon
     score(population, options, evaluators);
     result.evaluations += g.population;
     monitor.add_evaluations(g.population);
-    std::stable_sort(population.begin(), population.end(),
-                     [](const Individual& a, const Individual& b) {
-                       return a.objective > b.objective;
-                     });
+    std::stable_sort(
+        population.begin(), population.end(),
+        [](const Individual& a, const Individual& b) { return a.objective > b.objective; });
     result.best = population[0].code;
     result.objective = population[0].objective;
     monitor.offer_best(result.objective);
@@ -128,7 +126,8 @@ SearchResult run_genetic_search(const SearchOptions& options, SearchMonitor& mon
     // Mutation: every gene of every non-elite.
     for (std::size_t i = elites; i < size; ++i)
       for (int slot = 0; slot < length; ++slot)
-        if (unit(rng) < g.mutation) population[i].code.set_mask(slot, random_gene(options.leds, rng));
+        if (unit(rng) < g.mutation)
+          population[i].code.set_mask(slot, random_gene(options.leds, rng));
   }
   result.mean_selection_pressure = generation > 0 ? pressure_sum / generation : 0.0;
   return result;

@@ -32,8 +32,7 @@ constexpr std::array<LibraryCode, 18> kLibrary = {{
      "seed third section 5.1, pairs merit -21.6372 dB (printed with a stray '1' at index 48)",
      true},
     {"found-joint", "4144414111414444112422141121412124421244141221422122", 3,
-     "flutterscan annealing, 60 s, joint merit (E 3000 e-, c 3, read noise 4 e-): 204.1 e-",
-     false},
+     "flutterscan annealing, 60 s, joint merit (E 3000 e-, c 3, read noise 4 e-): 204.1 e-", false},
     {"found-maxmin", "4114141211221111241144112141141124421111422222121211", 3,
      "flutterscan annealing, 60 s, max-min merit: -20.7890 dB", false},
     {"found-avgmin", "4111424412221114412411244211214144114242111421414212", 3,
@@ -48,7 +47,9 @@ constexpr std::array<LibraryCode, 18> kLibrary = {{
 
 }  // namespace
 
-std::span<const LibraryCode> code_library() { return kLibrary; }
+std::span<const LibraryCode> code_library() {
+  return kLibrary;
+}
 
 std::optional<LibraryCode> find_library_code(std::string_view name) {
   for (const auto& entry : kLibrary)
@@ -56,6 +57,8 @@ std::optional<LibraryCode> find_library_code(std::string_view name) {
   return std::nullopt;
 }
 
-LedCode to_code(const LibraryCode& entry) { return LedCode::parse(entry.digits, entry.leds).value(); }
+LedCode to_code(const LibraryCode& entry) {
+  return LedCode::parse(entry.digits, entry.leds).value();
+}
 
 }  // namespace flutterscan::codes

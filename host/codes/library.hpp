@@ -14,8 +14,8 @@ struct LibraryCode {
   std::string_view name;
   std::string_view digits;
   int leds;
-  std::string_view origin;   ///< one line: where the code comes from
-  bool seed_triplet;         ///< one of the seed's optimised one-of-3 codes
+  std::string_view origin;  ///< one line: where the code comes from
+  bool seed_triplet;        ///< one of the seed's optimised one-of-3 codes
 };
 
 /// \brief Every code of the library, reference codes first.

@@ -88,8 +88,7 @@ std::string merit_inapplicable(Merit merit, const LedCode& code, const MeritSett
     case Merit::kMse: {
       const auto& light = settings.light;
       if (!(light.electrons > 0) || !(light.cap > 0) || !(light.read_noise >= 0))
-        return std::string(merit_name(merit)) +
-               " needs electrons > 0, cap > 0 and read noise >= 0";
+        return std::string(merit_name(merit)) + " needs electrons > 0, cap > 0 and read noise >= 0";
       if (light.crosstalk && light.crosstalk->leds != code.leds())
         return "the crosstalk matrix has " + std::to_string(light.crosstalk->leds) +
                " columns (LEDs) but the code has " + std::to_string(code.leds()) + " LEDs";
@@ -204,13 +203,16 @@ JointWeights::JointWeights(std::span<const int> on_slots, int length, const Ligh
   for (int c = 0; c < channels_; ++c) {
     double variance = read_variance;
     for (int k = 0; k < leds_; ++k) {
-      const double m = light.crosstalk ? light.crosstalk->gain[static_cast<std::size_t>(c * leds_ + k)]
-                                       : (c == k ? 1.0 : 0.0);
-      variance += m * intensity_[static_cast<std::size_t>(k)] * on_slots[static_cast<std::size_t>(k)];
+      const double m = light.crosstalk
+                           ? light.crosstalk->gain[static_cast<std::size_t>(c * leds_ + k)]
+                           : (c == k ? 1.0 : 0.0);
+      variance +=
+          m * intensity_[static_cast<std::size_t>(k)] * on_slots[static_cast<std::size_t>(k)];
     }
     for (int k = 0; k < leds_; ++k) {
-      const double m = light.crosstalk ? light.crosstalk->gain[static_cast<std::size_t>(c * leds_ + k)]
-                                       : (c == k ? 1.0 : 0.0);
+      const double m = light.crosstalk
+                           ? light.crosstalk->gain[static_cast<std::size_t>(c * leds_ + k)]
+                           : (c == k ? 1.0 : 0.0);
       amplitude_[static_cast<std::size_t>(c * leds_ + k)] =
           variance > 0 ? m * intensity_[static_cast<std::size_t>(k)] / std::sqrt(variance) : 0.0;
     }
@@ -239,19 +241,27 @@ double JointWeights::value(std::span<const std::complex<double>> h_at_frequency)
 double merit_objective(Merit merit, double value) {
   constexpr double kFloor = 1e-30;
   switch (merit) {
-    case Merit::kSingle: return 20.0 * std::log10(std::max(value, kFloor));
-    case Merit::kJoint: return 10.0 * std::log10(std::max(value, kFloor));
-    case Merit::kMse: return -10.0 * std::log10(std::max(value, kFloor));
-    default: return value;
+    case Merit::kSingle:
+      return 20.0 * std::log10(std::max(value, kFloor));
+    case Merit::kJoint:
+      return 10.0 * std::log10(std::max(value, kFloor));
+    case Merit::kMse:
+      return -10.0 * std::log10(std::max(value, kFloor));
+    default:
+      return value;
   }
 }
 
 double merit_from_objective(Merit merit, double objective) {
   switch (merit) {
-    case Merit::kSingle: return std::pow(10.0, objective / 20.0);
-    case Merit::kJoint: return std::pow(10.0, objective / 10.0);
-    case Merit::kMse: return std::pow(10.0, -objective / 10.0);
-    default: return objective;
+    case Merit::kSingle:
+      return std::pow(10.0, objective / 20.0);
+    case Merit::kJoint:
+      return std::pow(10.0, objective / 10.0);
+    case Merit::kMse:
+      return std::pow(10.0, -objective / 10.0);
+    default:
+      return objective;
   }
 }
 

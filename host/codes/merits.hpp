@@ -27,7 +27,9 @@ std::optional<Merit> merit_from_name(std::string_view name);
 /// \brief Unit of the merit's value, for display.
 std::string_view merit_unit(Merit merit);
 /// \brief False only for mse, where lower is better.
-constexpr bool higher_is_better(Merit merit) { return merit != Merit::kMse; }
+constexpr bool higher_is_better(Merit merit) {
+  return merit != Merit::kMse;
+}
 
 /// \brief LED-to-channel crosstalk: gain[c * leds + k] is LED k's light in camera channel c.
 /// At most kMaxLeds channels.
@@ -47,9 +49,9 @@ struct LightModel {
 
 struct MeritSettings {
   LightModel light;
-  double mse_eps = 10;     ///< regulariser of mse: inverse signal power per frequency
-  int single_pad = 256;    ///< T: zero-padded DFT length of the single merit (>= L)
-  int dense_points = 4096; ///< dense-grid samples over 0..0.5 for joint and mse
+  double mse_eps = 10;      ///< regulariser of mse: inverse signal power per frequency
+  int single_pad = 256;     ///< T: zero-padded DFT length of the single merit (>= L)
+  int dense_points = 4096;  ///< dense-grid samples over 0..0.5 for joint and mse
 };
 
 /// \brief Why `merit` cannot score `code` under `settings`; empty when it can.
@@ -58,9 +60,9 @@ std::string merit_inapplicable(Merit merit, const LedCode& code, const MeritSett
 /// \brief Per-LED spectra sampled at the frequencies of a grid.
 struct GridSpectra {
   int leds = 0;
-  int length = 0;                      ///< slots of the code
-  std::vector<double> frequency;       ///< cycles per slot
-  std::vector<std::complex<double>> h; ///< h[k * frequency.size() + j]
+  int length = 0;                       ///< slots of the code
+  std::vector<double> frequency;        ///< cycles per slot
+  std::vector<std::complex<double>> h;  ///< h[k * frequency.size() + j]
   std::array<int, kMaxLeds> on_slots{};
   std::span<const std::complex<double>> led(int k) const {
     return {h.data() + static_cast<std::size_t>(k) * frequency.size(), frequency.size()};

@@ -8,7 +8,9 @@
 
 namespace flutterscan::codes {
 
-int search_grid_points(int length) { return 4 * length + 1; }
+int search_grid_points(int length) {
+  return 4 * length + 1;
+}
 
 std::string search_options_problem(SearchAlgorithm algorithm, const SearchOptions& options) {
   if (options.leds < 1 || options.leds > kMaxLeds) return "--leds must be 1 to 4";
@@ -20,9 +22,9 @@ std::string search_options_problem(SearchAlgorithm algorithm, const SearchOption
   {
     std::array<std::uint8_t, kMaxSlots> masks{};
     masks.fill(1);
-    probe = LedCode::from_masks({masks.data(), static_cast<std::size_t>(options.length)},
-                                options.leds)
-                .value();
+    probe =
+        LedCode::from_masks({masks.data(), static_cast<std::size_t>(options.length)}, options.leds)
+            .value();
   }
   if (auto why = merit_inapplicable(options.merit, probe, options.settings); !why.empty())
     return why;
@@ -38,9 +40,8 @@ std::string search_options_problem(SearchAlgorithm algorithm, const SearchOption
   } else {
     if (c.ones >= 0) return "--ones is for one-LED codes (--leds 1)";
     if (c.min_on_slots * options.leds > options.length)
-      return "--min-on " + std::to_string(c.min_on_slots) + " for " +
-             std::to_string(options.leds) + " LEDs needs more than " +
-             std::to_string(options.length) + " slots";
+      return "--min-on " + std::to_string(c.min_on_slots) + " for " + std::to_string(options.leds) +
+             " LEDs needs more than " + std::to_string(options.length) + " slots";
   }
   if (algorithm == SearchAlgorithm::kGenetic) {
     if (c.balanced || c.min_on_slots > 0 || c.ones >= 0)
@@ -49,8 +50,8 @@ std::string search_options_problem(SearchAlgorithm algorithm, const SearchOption
     if (g.population < 2 || g.elites < 0 || g.elites >= g.population)
       return "the genetic population must exceed its elites";
     if (options.evaluations > 0 && options.evaluations < g.population)
-      return "--evaluations must cover at least one generation (" +
-             std::to_string(g.population) + " evaluations)";
+      return "--evaluations must cover at least one generation (" + std::to_string(g.population) +
+             " evaluations)";
     if (g.crossover < 0 || g.crossover > 1 || g.mutation < 0 || g.mutation > 1)
       return "crossover and mutation rates must lie in 0..1";
   }

@@ -16,9 +16,9 @@ enum class SearchAlgorithm { kAnneal, kGenetic };
 
 /// \brief Constraints on the codes a search may return (annealing only).
 struct SearchConstraints {
-  int min_on_slots = 0;  ///< every LED on in at least this many slots
-  bool balanced = false; ///< on-slot counts differ by at most one (17/18/17 for 52 slots)
-  int ones = -1;         ///< one-LED codes: exactly this many on-slots (-1: free)
+  int min_on_slots = 0;   ///< every LED on in at least this many slots
+  bool balanced = false;  ///< on-slot counts differ by at most one (17/18/17 for 52 slots)
+  int ones = -1;          ///< one-LED codes: exactly this many on-slots (-1: free)
 };
 
 /// \brief The seed's GA settings. Defaults are its Appendix B code; its prose
@@ -26,7 +26,7 @@ struct SearchConstraints {
 struct GeneticSettings {
   int population = 1000;
   double crossover = 0.95;
-  double mutation = 0.015;   ///< per gene
+  double mutation = 0.015;  ///< per gene
   int elites = 3;
   double fitness_offset = 1000;  ///< roulette weight is offset + objective
 };
@@ -35,8 +35,8 @@ struct SearchProgress {
   long long evaluations = 0;
   double seconds = 0;
   double best_objective = 0;
-  int generation = -1;           ///< genetic only
-  double selection_pressure = 0; ///< genetic only: best / mean roulette weight
+  int generation = -1;            ///< genetic only
+  double selection_pressure = 0;  ///< genetic only: best / mean roulette weight
 };
 
 struct SearchOptions {
@@ -45,8 +45,8 @@ struct SearchOptions {
   int length = 52;
   MeritSettings settings;
   SearchConstraints constraints;
-  double seconds = 0;            ///< time budget (> 0), or
-  long long evaluations = 0;     ///< evaluation budget (> 0): deterministic
+  double seconds = 0;         ///< time budget (> 0), or
+  long long evaluations = 0;  ///< evaluation budget (> 0): deterministic
   std::uint64_t seed = 1;
   int threads = 2;
   GeneticSettings genetic;
@@ -56,7 +56,7 @@ struct SearchOptions {
 
 struct SearchResult {
   LedCode best;
-  double objective = 0;          ///< on the search grid
+  double objective = 0;  ///< on the search grid
   long long evaluations = 0;
   double seconds = 0;
   double mean_selection_pressure = 0;  ///< genetic only

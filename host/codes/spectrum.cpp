@@ -54,8 +54,7 @@ const RealDftPlan& plan_for(int size) {
   return *plan;
 }
 
-SampledSpectrum to_db(const std::vector<std::complex<double>>& bins, int padded_size,
-                      int length) {
+SampledSpectrum to_db(const std::vector<std::complex<double>>& bins, int padded_size, int length) {
   SampledSpectrum out;
   out.frequency.resize(bins.size());
   out.db.resize(bins.size());

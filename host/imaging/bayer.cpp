@@ -19,7 +19,9 @@ struct BayerColour {
 constexpr std::array<BayerColour, 4> kColours{{{0, 0, 0}, {1, 0, 1}, {0, 1, 1}, {1, 1, 2}}};
 
 /// The camera channel sampled at mosaic site (x, y).
-int channel_at(int x, int y) { return kColours[static_cast<std::size_t>((y % 2) * 2 + (x % 2))].channel; }
+int channel_at(int x, int y) {
+  return kColours[static_cast<std::size_t>((y % 2) * 2 + (x % 2))].channel;
+}
 
 double mean_of(const Plane& plane) {
   double sum = 0;
@@ -27,8 +29,12 @@ double mean_of(const Plane& plane) {
   return plane.pixels.empty() ? 0.0 : sum / static_cast<double>(plane.pixels.size());
 }
 
-bool moves_along_x(Direction d) { return d == Direction::kPlusX || d == Direction::kMinusX; }
-bool moves_forward(Direction d) { return d == Direction::kPlusX || d == Direction::kPlusY; }
+bool moves_along_x(Direction d) {
+  return d == Direction::kPlusX || d == Direction::kMinusX;
+}
+bool moves_forward(Direction d) {
+  return d == Direction::kPlusX || d == Direction::kPlusY;
+}
 
 /// A full-resolution PSF delayed by `delay` pixels and summed over pixel pairs:
 /// tap k of the result is the light over delayed full-resolution pixels 2k and 2k+1.
@@ -86,7 +92,8 @@ Plane upsample_pairs(const Plane& half, int width) {
     const int i0 = static_cast<int>(std::floor(u));
     const int i1 = std::min(i0 + 1, last);
     const auto t = static_cast<float>(u - i0);
-    for (int y = 0; y < half.height; ++y) out.at(x, y) = (1 - t) * half.at(i0, y) + t * half.at(i1, y);
+    for (int y = 0; y < half.height; ++y)
+      out.at(x, y) = (1 - t) * half.at(i0, y) + t * half.at(i1, y);
   }
   return out;
 }
@@ -96,7 +103,8 @@ Plane pad_to(const Plane& plane, int width, int height) {
   if (plane.width == width && plane.height == height) return plane;
   Plane out(width, height);
   for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x) out.at(x, y) = plane.at(std::min(x, plane.width - 1), std::min(y, plane.height - 1));
+    for (int x = 0; x < width; ++x)
+      out.at(x, y) = plane.at(std::min(x, plane.width - 1), std::min(y, plane.height - 1));
   return out;
 }
 
@@ -107,15 +115,16 @@ Result<DeblurResult, std::string> deblur_raw_planes(const Plane& mosaic, const C
   const int along = (along_x ? mosaic.width : mosaic.height) & ~1;  // even part along the motion
   if (model.blur_px / 2 >= along / 2.0)
     return Out::failure("the blur (" + std::to_string(model.blur_px) +
-                        " px) is not shorter than the image along the motion (" + std::to_string(along) +
-                        " px)");
+                        " px) is not shorter than the image along the motion (" +
+                        std::to_string(along) + " px)");
 
   DeblurResult result;
   std::vector<Plane> rows;
   std::vector<ChannelPsf> psfs;
   double white = 0;
   for (const BayerColour& colour : kColours) {
-    rows.push_back(to_motion_frame(row_aligned_plane(mosaic, colour, along_x, along), model.direction));
+    rows.push_back(
+        to_motion_frame(row_aligned_plane(mosaic, colour, along_x, along), model.direction));
     const int parity = along_x ? colour.x_parity : colour.y_parity;
     // Motion-frame column of this colour within each pair: parity when moving
     // forward; reversing the rows (even length) swaps it.
@@ -139,8 +148,10 @@ Result<DeblurResult, std::string> deblur_raw_planes(const Plane& mosaic, const C
 
 std::string bayer_mode_name(BayerMode mode) {
   switch (mode) {
-    case BayerMode::kRawPlanes: return "raw";
-    case BayerMode::kDemosaicFirst: return "demosaic";
+    case BayerMode::kRawPlanes:
+      return "raw";
+    case BayerMode::kDemosaicFirst:
+      return "demosaic";
   }
   return "?";
 }
@@ -157,7 +168,8 @@ Image split_bayer_planes(const Plane& mosaic) {
   for (const BayerColour& colour : kColours) {
     Plane plane(width, height);
     for (int j = 0; j < height; ++j)
-      for (int i = 0; i < width; ++i) plane.at(i, j) = mosaic.at(2 * i + colour.x_parity, 2 * j + colour.y_parity);
+      for (int i = 0; i < width; ++i)
+        plane.at(i, j) = mosaic.at(2 * i + colour.x_parity, 2 * j + colour.y_parity);
     out.channels.push_back(std::move(plane));
   }
   return out;
@@ -179,7 +191,8 @@ Image demosaic_bilinear(const Plane& mosaic) {
       for (int dy = -1; dy <= 1; ++dy)
         for (int dx = -1; dx <= 1; ++dx) {
           const int nx = x + dx, ny = y + dy;
-          if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= mosaic.width || ny >= mosaic.height) continue;
+          if ((dx == 0 && dy == 0) || nx < 0 || ny < 0 || nx >= mosaic.width || ny >= mosaic.height)
+            continue;
           const auto c = static_cast<std::size_t>(channel_at(nx, ny));
           const int distance = dx * dx + dy * dy;
           if (distance < nearest[c]) {
@@ -194,23 +207,28 @@ Image demosaic_bilinear(const Plane& mosaic) {
         }
       for (int c = 0; c < 3; ++c) {
         const auto k = static_cast<std::size_t>(c);
-        if (c != own && count[k] > 0) out.channels[k].at(x, y) = static_cast<float>(sum[k] / count[k]);
+        if (c != own && count[k] > 0)
+          out.channels[k].at(x, y) = static_cast<float>(sum[k] / count[k]);
       }
     }
   return out;
 }
 
-Result<DeblurResult, std::string> deblur_bayer(const Plane& mosaic_electrons, const CaptureModel& model,
+Result<DeblurResult, std::string> deblur_bayer(const Plane& mosaic_electrons,
+                                               const CaptureModel& model,
                                                const DeblurOptions& options, BayerMode mode) {
   using Out = Result<DeblurResult, std::string>;
   if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
-  if (model.channels != 3) return Out::failure("a Bayer mosaic needs a 3-channel (RGB) capture model");
+  if (model.channels != 3)
+    return Out::failure("a Bayer mosaic needs a 3-channel (RGB) capture model");
   if (mosaic_electrons.width < 2 || mosaic_electrons.height < 2)
     return Out::failure("a Bayer mosaic must be at least 2x2 pixels");
-  if (mode == BayerMode::kDemosaicFirst) return deblur(demosaic_bilinear(mosaic_electrons), model, options);
+  if (mode == BayerMode::kDemosaicFirst)
+    return deblur(demosaic_bilinear(mosaic_electrons), model, options);
   if (!(options.gradient_variance > 0) || !std::isfinite(options.gradient_variance))
     return Out::failure("the prior gradient variance must be a finite number > 0");
-  if (options.iterations && *options.iterations < 1) return Out::failure("iterations must be at least 1");
+  if (options.iterations && *options.iterations < 1)
+    return Out::failure("iterations must be at least 1");
   return deblur_raw_planes(mosaic_electrons, model, options);
 }
 

@@ -75,7 +75,8 @@ Image demosaic_bilinear(const Plane& mosaic);
 /// `model` is the frame's 3-channel RGB model (full-resolution blur). The
 /// result's noise_variance has one entry per plane deblurred: R, G1, G2, B for
 /// kRawPlanes, R, G, B for kDemosaicFirst.
-Result<DeblurResult, std::string> deblur_bayer(const Plane& mosaic_electrons, const CaptureModel& model,
+Result<DeblurResult, std::string> deblur_bayer(const Plane& mosaic_electrons,
+                                               const CaptureModel& model,
                                                const DeblurOptions& options, BayerMode mode);
 
 }  // namespace flutterscan::imaging

@@ -33,9 +33,12 @@ std::vector<double> numbers(const nlohmann::json& value, const std::string& name
 
 const char* encoding_name(Encoding encoding) {
   switch (encoding) {
-    case Encoding::kLinear: return "linear";
-    case Encoding::kSrgb: return "srgb";
-    case Encoding::kGamma: return "gamma";
+    case Encoding::kLinear:
+      return "linear";
+    case Encoding::kSrgb:
+      return "srgb";
+    case Encoding::kGamma:
+      return "gamma";
   }
   return "linear";
 }
@@ -44,10 +47,14 @@ const char* encoding_name(Encoding encoding) {
 
 std::string direction_name(Direction direction) {
   switch (direction) {
-    case Direction::kPlusX: return "+x";
-    case Direction::kMinusX: return "-x";
-    case Direction::kPlusY: return "+y";
-    case Direction::kMinusY: return "-y";
+    case Direction::kPlusX:
+      return "+x";
+    case Direction::kMinusX:
+      return "-x";
+    case Direction::kPlusY:
+      return "+y";
+    case Direction::kMinusY:
+      return "-y";
   }
   return "+x";
 }
@@ -67,7 +74,8 @@ nlohmann::json to_descriptor(const CaptureModel& m) {
   nlohmann::json crosstalk = nlohmann::json::array();
   for (int c = 0; c < m.channels; ++c) {
     nlohmann::json row = nlohmann::json::array();
-    for (int k = 0; k < m.leds; ++k) row.push_back(m.crosstalk[static_cast<std::size_t>(c * m.leds + k)]);
+    for (int k = 0; k < m.leds; ++k)
+      row.push_back(m.crosstalk[static_cast<std::size_t>(c * m.leds + k)]);
     crosstalk.push_back(row);
   }
   return {
@@ -121,7 +129,8 @@ Result<CaptureModel, std::string> from_descriptor(const nlohmann::json& d) {
     if (static_cast<int>(led_of_bit.size()) != code_leds)
       throw FieldError("field 'led_of_bit' needs one entry per code bit (" +
                        std::to_string(code_leds) + ")");
-    for (std::size_t k = 0; k < led_of_bit.size(); ++k) m.led_of_bit[k] = static_cast<int>(led_of_bit[k]);
+    for (std::size_t k = 0; k < led_of_bit.size(); ++k)
+      m.led_of_bit[k] = static_cast<int>(led_of_bit[k]);
     m.blur_px = number(d, "blur_px");
     const auto& direction = field(d, "direction");
     if (!direction.is_string() || !parse_direction(direction.get<std::string>(), m.direction))
@@ -147,10 +156,14 @@ Result<CaptureModel, std::string> from_descriptor(const nlohmann::json& d) {
     m.bit_depth = static_cast<int>(number(d, "bit_depth"));
     const auto& encoding = field(d, "encoding");
     const std::string encoding_text = encoding.is_string() ? encoding.get<std::string>() : "";
-    if (encoding_text == "linear") m.encoding = Encoding::kLinear;
-    else if (encoding_text == "srgb") m.encoding = Encoding::kSrgb;
-    else if (encoding_text == "gamma") m.encoding = Encoding::kGamma;
-    else throw FieldError("field 'encoding' must be \"linear\", \"srgb\" or \"gamma\"");
+    if (encoding_text == "linear")
+      m.encoding = Encoding::kLinear;
+    else if (encoding_text == "srgb")
+      m.encoding = Encoding::kSrgb;
+    else if (encoding_text == "gamma")
+      m.encoding = Encoding::kGamma;
+    else
+      throw FieldError("field 'encoding' must be \"linear\", \"srgb\" or \"gamma\"");
     if (d.contains("gamma")) m.gamma = number(d, "gamma");
     if (d.contains("bayer") && !d.at("bayer").is_null()) {
       if (d.at("bayer") != "RGGB") throw FieldError("field 'bayer' must be \"RGGB\" or null");

@@ -6,7 +6,9 @@
 namespace flutterscan::imaging {
 namespace {
 
-bool finite_non_negative(double v) { return std::isfinite(v) && v >= 0; }
+bool finite_non_negative(double v) {
+  return std::isfinite(v) && v >= 0;
+}
 
 /// Adds `weight` spread evenly over [start, start + width) to the taps it overlaps.
 void deposit_box(std::vector<double>& taps, double start, double width, double weight) {

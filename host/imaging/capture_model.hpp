@@ -20,24 +20,24 @@ enum class Direction { kPlusX, kMinusX, kPlusY, kMinusY };
 enum class Encoding { kLinear, kSrgb, kGamma };
 
 struct CaptureModel {
-  LedCode code;                        ///< the exposure's LED pattern
+  LedCode code;                                      ///< the exposure's LED pattern
   std::array<int, kMaxLeds> led_of_bit{0, 1, 2, 3};  ///< code bit k drives LED led_of_bit[k]
-  double blur_px = 52;                 ///< total motion during the exposure, pixels
+  double blur_px = 52;                               ///< total motion during the exposure, pixels
   Direction direction = Direction::kPlusX;
-  int channels = 3;                    ///< camera channels: 3 (RGB) or 1 (mono)
+  int channels = 3;  ///< camera channels: 3 (RGB) or 1 (mono)
   /// crosstalk[c * leds + led]: share of LED `led`'s light in channel c (rows = channels).
   std::vector<double> crosstalk = {1, 0, 0, 0, 1, 0, 0, 0, 1};
-  int leds = 3;                        ///< physical LEDs (columns of crosstalk)
+  int leds = 3;                                   ///< physical LEDs (columns of crosstalk)
   std::vector<double> led_electrons = {0, 0, 0};  ///< I_k: e- per slot, white object, own channel
   std::vector<double> ambient_electrons = {0, 0, 0};  ///< e- per exposure per channel, white
-  double black_level = 0;              ///< DN
-  double gain = 1;                     ///< conversion gain, e- per DN
-  double read_noise = 4;               ///< e- rms
-  double full_well = 12000;            ///< e-
+  double black_level = 0;                             ///< DN
+  double gain = 1;                                    ///< conversion gain, e- per DN
+  double read_noise = 4;                              ///< e- rms
+  double full_well = 12000;                           ///< e-
   int bit_depth = 12;
   Encoding encoding = Encoding::kLinear;
-  double gamma = 2.2;                  ///< for Encoding::kGamma
-  bool bayer_rggb = false;             ///< raw Bayer RGGB mosaic rather than RGB
+  double gamma = 2.2;       ///< for Encoding::kGamma
+  bool bayer_rggb = false;  ///< raw Bayer RGGB mosaic rather than RGB
 };
 
 /// \brief The first problem with `model` (empty if none): non-finite or negative

@@ -19,16 +19,21 @@ double mean_of(const Plane& plane) {
 
 std::string method_name(Method method) {
   switch (method) {
-    case Method::kJointWiener: return "joint-wiener";
-    case Method::kWienerAverage: return "wiener-avg";
-    case Method::kRichardsonLucy: return "rl";
-    case Method::kTotalVariation: return "tv";
+    case Method::kJointWiener:
+      return "joint-wiener";
+    case Method::kWienerAverage:
+      return "wiener-avg";
+    case Method::kRichardsonLucy:
+      return "rl";
+    case Method::kTotalVariation:
+      return "tv";
   }
   return "?";
 }
 
 std::optional<Method> method_from_name(const std::string& name) {
-  for (Method m : {Method::kJointWiener, Method::kWienerAverage, Method::kRichardsonLucy, Method::kTotalVariation})
+  for (Method m : {Method::kJointWiener, Method::kWienerAverage, Method::kRichardsonLucy,
+                   Method::kTotalVariation})
     if (method_name(m) == name) return m;
   return std::nullopt;
 }
@@ -47,8 +52,8 @@ Plane deconvolve_motion_rows(std::span<const ChannelPsf> psfs, std::span<const P
         double gain = 0;
         for (double tap : psfs[c].taps) gain += tap;
         if (gain <= 0) continue;  // a channel no LED reaches carries no image
-        const Plane one = JointWiener({&psfs[c], 1}, width, lambda)
-                              .deconvolve({&rows[c], 1}, options.threads);
+        const Plane one =
+            JointWiener({&psfs[c], 1}, width, lambda).deconvolve({&rows[c], 1}, options.threads);
         if (latent.empty()) latent = Plane(one.width, one.height);
         for (std::size_t i = 0; i < one.pixels.size(); ++i) latent.pixels[i] += one.pixels[i];
         ++used;
@@ -59,8 +64,8 @@ Plane deconvolve_motion_rows(std::span<const ChannelPsf> psfs, std::span<const P
     case Method::kRichardsonLucy: {
       const RichardsonLucySettings settings{options.iterations.value_or(kRichardsonLucyIterations),
                                             options.accelerate, options.damping};
-      latent = RichardsonLucy(psfs, width, read_variance, settings)
-                   .deconvolve(rows, options.threads);
+      latent =
+          RichardsonLucy(psfs, width, read_variance, settings).deconvolve(rows, options.threads);
       break;
     }
     case Method::kTotalVariation: {
@@ -84,7 +89,8 @@ Result<DeblurResult, std::string> deblur(const Image& electrons, const CaptureMo
   if (electrons.channel_count() != model.channels)
     return Out::failure("the frame has " + std::to_string(electrons.channel_count()) +
                         " channels but the capture model " + std::to_string(model.channels));
-  const bool along_x = model.direction == Direction::kPlusX || model.direction == Direction::kMinusX;
+  const bool along_x =
+      model.direction == Direction::kPlusX || model.direction == Direction::kMinusX;
   const int along = along_x ? electrons.width() : electrons.height();
   if (model.blur_px >= along)
     return Out::failure("the blur (" + std::to_string(model.blur_px) +
@@ -92,13 +98,15 @@ Result<DeblurResult, std::string> deblur(const Image& electrons, const CaptureMo
                         std::to_string(along) + " px)");
   if (!(options.gradient_variance > 0) || !std::isfinite(options.gradient_variance))
     return Out::failure("the prior gradient variance must be a finite number > 0");
-  if (options.iterations && *options.iterations < 1) return Out::failure("iterations must be at least 1");
+  if (options.iterations && *options.iterations < 1)
+    return Out::failure("iterations must be at least 1");
 
   DeblurResult result;
   std::vector<Plane> rows;
   std::vector<ChannelPsf> psfs;
   for (int c = 0; c < model.channels; ++c) {
-    rows.push_back(to_motion_frame(electrons.channels[static_cast<std::size_t>(c)], model.direction));
+    rows.push_back(
+        to_motion_frame(electrons.channels[static_cast<std::size_t>(c)], model.direction));
     const double variance = channel_noise_variance(model, mean_of(rows.back()));
     result.noise_variance.push_back(variance);
     psfs.push_back({channel_psf(model, c), variance});

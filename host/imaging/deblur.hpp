@@ -39,8 +39,8 @@ struct DeblurOptions {
   /// rl and tv; unset = the method's own default (kRichardsonLucyIterations,
   /// kTotalVariationIterations).
   std::optional<int> iterations;
-  bool accelerate = true;         ///< rl: Biggs-Andrews
-  double damping = 0;             ///< rl: deconvlucy's DAMPAR, in noise sigmas
+  bool accelerate = true;                             ///< rl: Biggs-Andrews
+  double damping = 0;                                 ///< rl: deconvlucy's DAMPAR, in noise sigmas
   double gradient_variance = kLabelGradientVariance;  ///< Wiener prior (also tv's warm start)
   EdgePrior edge_prior = EdgePrior::kTotalVariation;  ///< tv: |gradient| or L0 (two-tone)
   int threads = 2;

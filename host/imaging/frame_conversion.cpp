@@ -19,8 +19,8 @@ Image dn_to_electrons(const Image& dn, const CaptureModel& m) {
       double value = plane.pixels[i];
       if (m.encoding != Encoding::kLinear) {
         const double unit = std::clamp(value / full_scale, 0.0, 1.0);
-        value = full_scale * (m.encoding == Encoding::kSrgb ? srgb_to_linear(unit)
-                                                             : std::pow(unit, m.gamma));
+        value = full_scale *
+                (m.encoding == Encoding::kSrgb ? srgb_to_linear(unit) : std::pow(unit, m.gamma));
       }
       e.pixels[i] = static_cast<float>((value - m.black_level) * m.gain);
     }

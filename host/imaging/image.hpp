@@ -15,11 +15,15 @@ struct Plane {
 
   Plane() = default;
   Plane(int w, int h, float value = 0.0f)
-      : width(w), height(h), pixels(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), value) {}
+      : width(w),
+        height(h),
+        pixels(static_cast<std::size_t>(w) * static_cast<std::size_t>(h), value) {}
 
   float& at(int x, int y) { return pixels[static_cast<std::size_t>(y) * width + x]; }
   float at(int x, int y) const { return pixels[static_cast<std::size_t>(y) * width + x]; }
-  std::span<float> row(int y) { return {pixels.data() + static_cast<std::size_t>(y) * width, static_cast<std::size_t>(width)}; }
+  std::span<float> row(int y) {
+    return {pixels.data() + static_cast<std::size_t>(y) * width, static_cast<std::size_t>(width)};
+  }
   std::span<const float> row(int y) const {
     return {pixels.data() + static_cast<std::size_t>(y) * width, static_cast<std::size_t>(width)};
   }

@@ -10,7 +10,8 @@ std::vector<float> periodic_blend(int width, int padded) {
   std::vector<float> blend(static_cast<std::size_t>(std::max(0, gap)));
   for (int i = 0; i < gap; ++i) {
     const double t = (i + 1.0) / (gap + 1.0);
-    blend[static_cast<std::size_t>(i)] = static_cast<float>(0.5 - 0.5 * std::cos(std::numbers::pi * t));
+    blend[static_cast<std::size_t>(i)] =
+        static_cast<float>(0.5 - 0.5 * std::cos(std::numbers::pi * t));
   }
   return blend;
 }
@@ -50,7 +51,8 @@ JointWiener::JointWiener(std::span<const ChannelPsf> channels, int width, double
   std::vector<double> denominator(bins, 0.0);
   for (const auto& c : channels) {
     spectra.push_back(psf_spectrum(c.taps, n));
-    for (std::size_t j = 0; j < bins; ++j) denominator[j] += std::norm(spectra.back()[j]) / c.noise_variance;
+    for (std::size_t j = 0; j < bins; ++j)
+      denominator[j] += std::norm(spectra.back()[j]) / c.noise_variance;
   }
   for (std::size_t j = 0; j < bins; ++j) {
     const double w = 2.0 * std::numbers::pi * static_cast<double>(j) / n;

@@ -52,8 +52,8 @@ class JointWiener {
   /// width() samples); the latent row (reflectance) goes to `out`. `scratch` must
   /// come from make_scratch() and not be shared between threads.
   struct Scratch {
-    std::vector<AlignedFloats> padded;  ///< one per channel
-    std::vector<std::span<float>> rows; ///< the first width() samples of each
+    std::vector<AlignedFloats> padded;   ///< one per channel
+    std::vector<std::span<float>> rows;  ///< the first width() samples of each
     AlignedFloats spectrum;
     AlignedFloats sum;
   };

@@ -7,7 +7,9 @@
 namespace flutterscan::imaging {
 namespace {
 
-float clip01(float v) { return std::clamp(v, 0.0f, 1.0f); }
+float clip01(float v) {
+  return std::clamp(v, 0.0f, 1.0f);
+}
 
 /// Separable Gaussian blur (sigma 1.5, radius 5), edges clamped.
 Plane gaussian(const Plane& in) {
@@ -15,7 +17,8 @@ Plane gaussian(const Plane& in) {
   constexpr double kSigma = 1.5;
   double weights[2 * kRadius + 1];
   double total = 0;
-  for (int i = -kRadius; i <= kRadius; ++i) total += weights[i + kRadius] = std::exp(-i * i / (2 * kSigma * kSigma));
+  for (int i = -kRadius; i <= kRadius; ++i)
+    total += weights[i + kRadius] = std::exp(-i * i / (2 * kSigma * kSigma));
   for (double& w : weights) w /= total;
   Plane across(in.width, in.height);
   for (int y = 0; y < in.height; ++y)

@@ -27,20 +27,28 @@ Plane rows_reversed(Plane plane) {
 
 Plane to_motion_frame(const Plane& plane, Direction direction) {
   switch (direction) {
-    case Direction::kPlusX: return plane;
-    case Direction::kMinusX: return rows_reversed(plane);
-    case Direction::kPlusY: return transposed(plane);
-    case Direction::kMinusY: return rows_reversed(transposed(plane));
+    case Direction::kPlusX:
+      return plane;
+    case Direction::kMinusX:
+      return rows_reversed(plane);
+    case Direction::kPlusY:
+      return transposed(plane);
+    case Direction::kMinusY:
+      return rows_reversed(transposed(plane));
   }
   return plane;
 }
 
 Plane from_motion_frame(const Plane& plane, Direction direction) {
   switch (direction) {
-    case Direction::kPlusX: return plane;
-    case Direction::kMinusX: return rows_reversed(plane);
-    case Direction::kPlusY: return transposed(plane);
-    case Direction::kMinusY: return transposed(rows_reversed(plane));
+    case Direction::kPlusX:
+      return plane;
+    case Direction::kMinusX:
+      return rows_reversed(plane);
+    case Direction::kPlusY:
+      return transposed(plane);
+    case Direction::kMinusY:
+      return transposed(rows_reversed(plane));
   }
   return plane;
 }

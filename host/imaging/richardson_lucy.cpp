@@ -24,7 +24,8 @@ RichardsonLucy::RichardsonLucy(std::span<const ChannelPsf> channels, int width,
   for (const auto& c : channels) {
     const auto spectrum = psf_spectrum(c.taps, n);
     std::vector<std::complex<float>> scaled(bins);
-    for (std::size_t j = 0; j < bins; ++j) scaled[j] = std::complex<float>(spectrum[j] / static_cast<double>(n));
+    for (std::size_t j = 0; j < bins; ++j)
+      scaled[j] = std::complex<float>(spectrum[j] / static_cast<double>(n));
     spectra_.push_back(std::move(scaled));
   }
   // Normaliser: latent pixel i (extended index) reaches observed n = i - (K-1) + j.
@@ -63,7 +64,8 @@ void RichardsonLucy::deconvolve_row(std::span<const std::span<const float>> rows
   }
 
   for (std::size_t c = 0; c < rows.size(); ++c)
-    for (int m = 0; m < width_; ++m) s.observed[c][static_cast<std::size_t>(m)] = rows[c][static_cast<std::size_t>(m)] + offset;
+    for (int m = 0; m < width_; ++m)
+      s.observed[c][static_cast<std::size_t>(m)] = rows[c][static_cast<std::size_t>(m)] + offset;
 
   float* real = s.real.data();
   float* spectrum = s.spectrum.data();
@@ -82,7 +84,8 @@ void RichardsonLucy::deconvolve_row(std::span<const std::span<const float>> rows
         denominator += step_before[i] * step_before[i];
       }
       const float alpha = denominator > 0 ? std::clamp(numerator / denominator, 0.0f, 1.0f) : 0.0f;
-      for (std::size_t i = 0; i < ext; ++i) s.ahead[i] = std::max(0.0f, x[i] + alpha * (x[i] - s.x_previous[i]));
+      for (std::size_t i = 0; i < ext; ++i)
+        s.ahead[i] = std::max(0.0f, x[i] + alpha * (x[i] - s.x_previous[i]));
       base = s.ahead.data();
     }
     std::copy(base, base + ext, real);
@@ -97,13 +100,16 @@ void RichardsonLucy::deconvolve_row(std::span<const std::span<const float>> rows
       const float* observed = s.observed[c].data();
       if (settings_.damping > 0) {
         for (int m = 0; m < width_; ++m) {
-          const float predicted = std::max(real[static_cast<std::size_t>(m) + lead] + offset, 1e-6f);
+          const float predicted =
+              std::max(real[static_cast<std::size_t>(m) + lead] + offset, 1e-6f);
           const double z = (observed[m] - predicted) / (settings_.damping * std::sqrt(predicted));
-          real[m] = static_cast<float>(1.0 + std::min(1.0, z * z) * (observed[m] / predicted - 1.0));
+          real[m] =
+              static_cast<float>(1.0 + std::min(1.0, z * z) * (observed[m] / predicted - 1.0));
         }
       } else {
         for (int m = 0; m < width_; ++m)
-          real[m] = observed[m] / std::max(real[static_cast<std::size_t>(m) + lead] + offset, 1e-6f);
+          real[m] =
+              observed[m] / std::max(real[static_cast<std::size_t>(m) + lead] + offset, 1e-6f);
       }
       std::fill(real + width_, real + n, 0.0f);
       fft_.forward(real, s.work.complex());
@@ -119,7 +125,8 @@ void RichardsonLucy::deconvolve_row(std::span<const std::span<const float>> rows
     const float* inverse_norm = inverse_normaliser_.data();
     for (std::size_t i = 0; i < ext; ++i) {
       const float back = i < lead ? correlation_head[i] : correlation_tail[i];
-      const float updated = inverse_norm[i] > 0 ? std::max(0.0f, base[i] * back * inverse_norm[i]) : base[i];
+      const float updated =
+          inverse_norm[i] > 0 ? std::max(0.0f, base[i] * back * inverse_norm[i]) : base[i];
       s.step[i] = updated - base[i];
       x[i] = updated;
     }
@@ -141,12 +148,14 @@ RichardsonLucy::Scratch RichardsonLucy::make_scratch(std::size_t channels) const
                   AlignedFloats(complex_floats),
                   AlignedFloats(complex_floats),
                   AlignedFloats(complex_floats)};
-  for (std::size_t c = 0; c < channels; ++c) scratch.observed.emplace_back(static_cast<std::size_t>(width_));
+  for (std::size_t c = 0; c < channels; ++c)
+    scratch.observed.emplace_back(static_cast<std::size_t>(width_));
   return scratch;
 }
 
 void RichardsonLucy::deconvolve(std::span<const Plane> channels, Plane& out, RowPool& pool) {
-  while (static_cast<int>(workers_.size()) < pool.threads()) workers_.push_back(make_scratch(spectra_.size()));
+  while (static_cast<int>(workers_.size()) < pool.threads())
+    workers_.push_back(make_scratch(spectra_.size()));
   pool.run(channels[0].height, [&](int first, int last, int worker) {
     Scratch& scratch = workers_[static_cast<std::size_t>(worker)];
     for (int y = first; y < last; ++y) {

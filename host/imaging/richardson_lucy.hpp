@@ -35,8 +35,7 @@ struct RichardsonLucySettings {
 class RichardsonLucy {
  public:
   RichardsonLucy(std::span<const ChannelPsf> channels, int width, double read_variance,
-                 const RichardsonLucySettings& settings,
-                 PlanEffort effort = PlanEffort::kEstimate);
+                 const RichardsonLucySettings& settings, PlanEffort effort = PlanEffort::kEstimate);
 
   /// \brief Deconvolves whole planes (electrons, motion frame) on `threads` threads.
   Plane deconvolve(std::span<const Plane> channels, int threads);
@@ -48,26 +47,26 @@ class RichardsonLucy {
 
  private:
   struct Scratch {
-    std::vector<AlignedFloats> observed;  ///< per channel: the row plus the offset
+    std::vector<AlignedFloats> observed;       ///< per channel: the row plus the offset
     std::vector<std::span<const float>> rows;  ///< per channel: the row being solved
-    AlignedFloats x, x_previous, ahead;   ///< latent rows (extended length)
-    AlignedFloats step, step_before;      ///< the last two RL steps, for acceleration
-    AlignedFloats real;                   ///< padded real buffer
-    AlignedFloats spectrum, work, sum;    ///< half-complex buffers
+    AlignedFloats x, x_previous, ahead;        ///< latent rows (extended length)
+    AlignedFloats step, step_before;           ///< the last two RL steps, for acceleration
+    AlignedFloats real;                        ///< padded real buffer
+    AlignedFloats spectrum, work, sum;         ///< half-complex buffers
   };
   Scratch make_scratch(std::size_t channels) const;
   void deconvolve_row(std::span<const std::span<const float>> rows, std::span<float> out,
                       Scratch& scratch) const;
 
   int width_;
-  int taps_;       ///< K: longest PSF
-  int extended_;   ///< latent row length W + K - 1
+  int taps_;      ///< K: longest PSF
+  int extended_;  ///< latent row length W + K - 1
   RowFft fft_;
   double offset_;
   RichardsonLucySettings settings_;
   std::vector<std::vector<std::complex<float>>> spectra_;  ///< G_c / N
   std::vector<float> inverse_normaliser_;  ///< 1 / sum_c G_c^T 1 per latent pixel (0 where unseen)
-  double white_gain_ = 1;                                    ///< sum over channels and taps
+  double white_gain_ = 1;                  ///< sum over channels and taps
   std::vector<Scratch> workers_;
 };
 

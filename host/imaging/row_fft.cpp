@@ -35,10 +35,10 @@ RowFft::RowFft(int n, PlanEffort effort) : n_(n) {
   const std::lock_guard lock(planner_mutex());
   // FFTW_MEASURE overwrites the buffers while planning: they are scratch here.
   const unsigned flags = effort == PlanEffort::kMeasure ? FFTW_MEASURE : FFTW_ESTIMATE;
-  forward_ = fftwf_plan_dft_r2c_1d(n, real.data(), reinterpret_cast<fftwf_complex*>(spectrum.data()),
-                                   flags);
-  inverse_ = fftwf_plan_dft_c2r_1d(n, reinterpret_cast<fftwf_complex*>(spectrum.data()), real.data(),
-                                   flags);
+  forward_ = fftwf_plan_dft_r2c_1d(n, real.data(),
+                                   reinterpret_cast<fftwf_complex*>(spectrum.data()), flags);
+  inverse_ = fftwf_plan_dft_c2r_1d(n, reinterpret_cast<fftwf_complex*>(spectrum.data()),
+                                   real.data(), flags);
 }
 
 RowFft::~RowFft() {

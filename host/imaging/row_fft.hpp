@@ -30,7 +30,9 @@ class AlignedFloats {
   std::size_t size() const { return size_; }
   std::span<float> span() const { return {data_.get(), size_}; }
   /// \brief The buffer as interleaved complex values.
-  std::complex<float>* complex() const { return reinterpret_cast<std::complex<float>*>(data_.get()); }
+  std::complex<float>* complex() const {
+    return reinterpret_cast<std::complex<float>*>(data_.get());
+  }
 
  private:
   struct Free {

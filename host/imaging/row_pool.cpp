@@ -5,7 +5,8 @@
 namespace flutterscan::imaging {
 
 RowPool::RowPool(int threads) : threads_(std::max(1, threads)) {
-  for (int worker = 1; worker < threads_; ++worker) helpers_.emplace_back([this, worker] { serve(worker); });
+  for (int worker = 1; worker < threads_; ++worker)
+    helpers_.emplace_back([this, worker] { serve(worker); });
 }
 
 RowPool::~RowPool() {

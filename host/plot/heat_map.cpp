@@ -58,8 +58,9 @@ void draw(cairo_t* cr, const HeatMap& map, int width, int height) {
       const double x = left + cell_w * static_cast<double>(c);
       const double y = bottom - cell_h * static_cast<double>(r + 1);
       const int category = map.category[i];
-      const Colour fill = category >= 0 ? kPalette[static_cast<std::size_t>(category) % std::size(kPalette)]
-                                        : Colour{1, 1, 1};
+      const Colour fill = category >= 0
+                              ? kPalette[static_cast<std::size_t>(category) % std::size(kPalette)]
+                              : Colour{1, 1, 1};
       cairo_set_source_rgb(cr, fill.r, fill.g, fill.b);
       cairo_rectangle(cr, x, y, cell_w, cell_h);
       cairo_fill_preserve(cr);
@@ -74,9 +75,11 @@ void draw(cairo_t* cr, const HeatMap& map, int width, int height) {
   cairo_set_source_rgb(cr, 0, 0, 0);
   font(cr, 15 * scale, false);
   for (std::size_t c = 0; c < map.columns.size(); ++c)
-    text(cr, map.columns[c], left + cell_w * (static_cast<double>(c) + 0.5), bottom + 8 * scale, 0.5, 0);
+    text(cr, map.columns[c], left + cell_w * (static_cast<double>(c) + 0.5), bottom + 8 * scale,
+         0.5, 0);
   for (std::size_t r = 0; r < map.rows.size(); ++r)
-    text(cr, map.rows[r], left - 10 * scale, bottom - cell_h * (static_cast<double>(r) + 0.5), 1, 0.5);
+    text(cr, map.rows[r], left - 10 * scale, bottom - cell_h * (static_cast<double>(r) + 0.5), 1,
+         0.5);
   font(cr, 17 * scale, false);
   text(cr, map.x_label, (left + right) / 2, height - 22 * scale, 0.5, 1);
   cairo_save(cr);
@@ -106,17 +109,22 @@ std::string write_png(const HeatMap& map, const std::string& path, int width, in
   const std::size_t cells = map.rows.size() * map.columns.size();
   if (cells == 0) return failed("it has no cells");
   if (map.category.size() != cells || (!map.cell_text.empty() && map.cell_text.size() != cells))
-    return failed("it has " + std::to_string(map.rows.size()) + " x " + std::to_string(map.columns.size()) +
-                  " cells but " + std::to_string(map.category.size()) + " categories");
+    return failed("it has " + std::to_string(map.rows.size()) + " x " +
+                  std::to_string(map.columns.size()) + " cells but " +
+                  std::to_string(map.category.size()) + " categories");
   for (int category : map.category)
-    if (category >= static_cast<int>(map.categories.size())) return failed("a cell names no category");
-  if (width < 320 || height < 200 || width > 16384 || height > 16384) return failed("image size out of range");
+    if (category >= static_cast<int>(map.categories.size()))
+      return failed("a cell names no category");
+  if (width < 320 || height < 200 || width > 16384 || height > 16384)
+    return failed("image size out of range");
   const std::unique_ptr<cairo_surface_t, decltype(&cairo_surface_destroy)> surface(
       cairo_image_surface_create(CAIRO_FORMAT_RGB24, width, height), cairo_surface_destroy);
-  const std::unique_ptr<cairo_t, decltype(&cairo_destroy)> cr(cairo_create(surface.get()), cairo_destroy);
+  const std::unique_ptr<cairo_t, decltype(&cairo_destroy)> cr(cairo_create(surface.get()),
+                                                              cairo_destroy);
   draw(cr.get(), map, width, height);
   cairo_surface_flush(surface.get());
-  if (const std::string problem = write_surface_png(surface.get(), path); !problem.empty()) return failed(problem);
+  if (const std::string problem = write_surface_png(surface.get(), path); !problem.empty())
+    return failed(problem);
   return {};
 }
 

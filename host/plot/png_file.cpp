@@ -12,7 +12,6 @@
 namespace flutterscan::plot {
 namespace {
 
-
 struct PngSink {
   int fd;
   int error = 0;  ///< errno of a failed write
@@ -75,6 +74,5 @@ std::string write_surface_png(cairo_surface_t* surface, const std::string& path)
   if (!failure.empty()) ::unlink(temporary.c_str());
   return failure;
 }
-
 
 }  // namespace flutterscan::plot

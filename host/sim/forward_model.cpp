@@ -51,7 +51,8 @@ imaging::Image record_frame(const imaging::Image& expected, const imaging::Captu
   const double full_scale = std::pow(2.0, model.bit_depth) - 1.0;
   auto record = [&](double electrons) {
     const double mean = std::max(0.0, electrons);
-    double e = mean > 0 ? static_cast<double>(std::poisson_distribution<long long>(mean)(rng)) : 0.0;
+    double e =
+        mean > 0 ? static_cast<double>(std::poisson_distribution<long long>(mean)(rng)) : 0.0;
     e = std::min(e, model.full_well) + (model.read_noise > 0 ? read(rng) : 0.0);
     double dn = std::clamp(std::round(e / model.gain + model.black_level), 0.0, full_scale);
     if (model.encoding != imaging::Encoding::kLinear) {

@@ -182,8 +182,7 @@ class CliTest : public ::testing::Test {
     EXPECT_TRUE(result.out.empty()) << result;
     EXPECT_FALSE(result.err.empty()) << result;
     for (const auto& needle : needles)
-      EXPECT_TRUE(contains(result.err, needle)) << "stderr lacks \"" << needle << "\"\n"
-                                                << result;
+      EXPECT_TRUE(contains(result.err, needle)) << "stderr lacks \"" << needle << "\"\n" << result;
   }
 
   /// \brief A successful search: exit 0, one JSON line, returned parsed.
@@ -292,9 +291,8 @@ TEST_F(CliTest, UnknownMeritIsNamed) {
 }
 
 TEST_F(CliTest, BadCrosstalkEntryNamesRowAndColumn) {
-  expect_usage_error(
-      {"codes", "score", kSeedMaxMin1, "--merit", "joint", "--crosstalk", "1,0;0,x"},
-      {"--crosstalk", "row 1, column 1"});
+  expect_usage_error({"codes", "score", kSeedMaxMin1, "--merit", "joint", "--crosstalk", "1,0;0,x"},
+                     {"--crosstalk", "row 1, column 1"});
 }
 
 TEST_F(CliTest, NegativeElectronsIsRejected) {
@@ -302,22 +300,21 @@ TEST_F(CliTest, NegativeElectronsIsRejected) {
 }
 
 TEST_F(CliTest, SearchWithBothBudgetsIsRejected) {
-  expect_usage_error({"codes", "search", "--merit", "maxmin", "--seconds", "1", "--evaluations",
-                      "1000"},
-                     {"--seconds", "--evaluations"});
+  expect_usage_error(
+      {"codes", "search", "--merit", "maxmin", "--seconds", "1", "--evaluations", "1000"},
+      {"--seconds", "--evaluations"});
 }
 
 TEST_F(CliTest, SearchWithoutABudgetIsRejected) {
   const RunResult result = run({"codes", "search", "--merit", "maxmin"});
   EXPECT_EQ(result.exit_code, 2) << result;
   EXPECT_TRUE(result.out.empty()) << result;
-  EXPECT_TRUE(contains(result.err, "--seconds") || contains(result.err, "--evaluations"))
-      << result;
+  EXPECT_TRUE(contains(result.err, "--seconds") || contains(result.err, "--evaluations")) << result;
 }
 
 TEST_F(CliTest, PairsSearchOfOneLedIsRejected) {
-  expect_usage_error({"codes", "search", "--merit", "pairs", "--leds", "1", "--evaluations", "1000"},
-                     {"pairs"});
+  expect_usage_error(
+      {"codes", "search", "--merit", "pairs", "--leds", "1", "--evaluations", "1000"}, {"pairs"});
 }
 
 TEST_F(CliTest, MissingOrUnknownSubcommandIsBadUsage) {
@@ -351,8 +348,8 @@ TEST_F(CliTest, ALaterBadCodePrintsNothing) {
 // codes search
 
 TEST_F(CliTest, AnnealSearchIsDeterministicWithASeed) {
-  const std::vector<std::string> options{"--merit", "maxmin", "--evaluations", "300000",
-                                         "--seed", "5"};
+  const std::vector<std::string> options{"--merit", "maxmin", "--evaluations",
+                                         "300000",  "--seed", "5"};
   const json first = search_json(options);
   const json second = search_json(options);
   ASSERT_TRUE(first.contains("code") && second.contains("code"));
@@ -371,8 +368,8 @@ TEST_F(CliTest, AnnealSearchIsDeterministicWithASeed) {
 }
 
 TEST_F(CliTest, GeneticSearchIsDeterministicAndItsSelectionIsWeak) {
-  const std::vector<std::string> options{"--algorithm", "genetic", "--evaluations", "20000",
-                                         "--seed", "5"};
+  const std::vector<std::string> options{"--algorithm", "genetic", "--evaluations",
+                                         "20000",       "--seed",  "5"};
   const json first = search_json(options);
   const json second = search_json(options);
   ASSERT_TRUE(first.contains("code") && second.contains("code"));
@@ -442,8 +439,7 @@ TEST_F(CliTest, PlotWithABadCodeLeavesAnExistingFileIntact) {
     std::ofstream stream(png, std::ios::binary);
     stream << original;
   }
-  const RunResult result =
-      run({"codes", "plot", "raskar", "1212x4", "-o", png.string()});
+  const RunResult result = run({"codes", "plot", "raskar", "1212x4", "-o", png.string()});
   EXPECT_EQ(result.exit_code, 2) << result;
   EXPECT_TRUE(contains(result.err, "1212x4")) << result;
   EXPECT_EQ(read_file(png), original);
@@ -506,15 +502,17 @@ TEST_F(CliTest, HelpOnEverySubcommandSucceeds) {
 
 constexpr const char* kCrosstalk = "0.90,0.08,0.01;0.10,0.85,0.12;0.01,0.07,0.88";
 
-bool is_png(const fs::path& path) { return read_file(path).rfind("\x89PNG\r\n\x1a\n", 0) == 0; }
+bool is_png(const fs::path& path) {
+  return read_file(path).rfind("\x89PNG\r\n\x1a\n", 0) == 0;
+}
 
 class ImagingCliTest : public CliTest {
  protected:
   /// Simulates the Code 128 label FS-0042 into dir_/frame.png (+ .json, .truth.png).
   void simulate_label() {
-    const RunResult result = run({"simulate", "--scene", "code128:FS-0042", "--code", "found-joint", "--blur", "52",
-                                  "--electrons", "3000", "--crosstalk", kCrosstalk, "--seed", "3", "-o",
-                                  (dir_ / "frame.png").string()});
+    const RunResult result = run({"simulate", "--scene", "code128:FS-0042", "--code", "found-joint",
+                                  "--blur", "52", "--electrons", "3000", "--crosstalk", kCrosstalk,
+                                  "--seed", "3", "-o", (dir_ / "frame.png").string()});
     ASSERT_EQ(result.exit_code, 0) << result;
   }
   std::string frame() const { return (dir_ / "frame.png").string(); }
@@ -543,8 +541,8 @@ TEST_F(ImagingCliTest, SimulateIsDeterministicForASeed) {
 TEST_F(ImagingCliTest, DeblurWithTheDescriptorDecodesTheLabel) {
   simulate_label();
   for (const char* method : {"joint-wiener", "tv"}) {
-    const RunResult result =
-        run({"deblur", frame(), "--descriptor", descriptor(), "--method", method, "--decode", "--json", "-o", output()});
+    const RunResult result = run({"deblur", frame(), "--descriptor", descriptor(), "--method",
+                                  method, "--decode", "--json", "-o", output()});
     ASSERT_EQ(result.exit_code, 0) << result;
     const auto objects = json_lines(result.out);
     ASSERT_EQ(objects.size(), 1U);
@@ -560,9 +558,10 @@ TEST_F(ImagingCliTest, DeblurWithTheDescriptorDecodesTheLabel) {
 TEST_F(ImagingCliTest, DeblurFromFlagsAlsoDecodes) {
   simulate_label();
   const json descriptor_json = json::parse(read_file(descriptor()));
-  const RunResult result =
-      run({"deblur", frame(), "--code", "found-joint", "--blur", "52", "--crosstalk", kCrosstalk, "--black-level",
-           "64", "--gain", std::to_string(descriptor_json["gain_e_per_dn"].get<double>()), "--decode", "-o", output()});
+  const RunResult result = run({"deblur", frame(), "--code", "found-joint", "--blur", "52",
+                                "--crosstalk", kCrosstalk, "--black-level", "64", "--gain",
+                                std::to_string(descriptor_json["gain_e_per_dn"].get<double>()),
+                                "--decode", "-o", output()});
   ASSERT_EQ(result.exit_code, 0) << result;
   EXPECT_TRUE(contains(result.out, "decoded: FS-0042")) << result;
 }
@@ -571,39 +570,51 @@ TEST_F(ImagingCliTest, DeblurRefusesBadInputNamingIt) {
   simulate_label();
   const std::string not_an_image = (dir_ / "notes.png").string();
   std::ofstream(not_an_image) << "hello";
-  expect_usage_error({"deblur", (dir_ / "missing.png").string(), "--descriptor", descriptor(), "-o", output()},
-                     {"missing.png", "does not exist"});
-  expect_usage_error({"deblur", not_an_image, "--code", "found-joint", "--blur", "52", "-o", output()},
-                     {"notes.png", "cannot read"});
+  expect_usage_error(
+      {"deblur", (dir_ / "missing.png").string(), "--descriptor", descriptor(), "-o", output()},
+      {"missing.png", "does not exist"});
+  expect_usage_error(
+      {"deblur", not_an_image, "--code", "found-joint", "--blur", "52", "-o", output()},
+      {"notes.png", "cannot read"});
   expect_usage_error({"deblur", frame(), "--code", "found-joint", "--blur", "900", "-o", output()},
                      {"not shorter than the image"});
-  expect_usage_error({"deblur", frame(), "--descriptor", descriptor(), "--code", "seed-maxmin-1", "-o", output()},
-                     {"disagrees with the descriptor"});
-  expect_usage_error({"deblur", frame(), "--code", "found-joint", "--blur", "nan", "-o", output()}, {"blur"});
-  expect_usage_error({"deblur", frame(), "--code", "found-joint", "--blur", "52", "--read-noise", "-3", "-o", output()},
+  expect_usage_error(
+      {"deblur", frame(), "--descriptor", descriptor(), "--code", "seed-maxmin-1", "-o", output()},
+      {"disagrees with the descriptor"});
+  expect_usage_error({"deblur", frame(), "--code", "found-joint", "--blur", "nan", "-o", output()},
+                     {"blur"});
+  expect_usage_error({"deblur", frame(), "--code", "found-joint", "--blur", "52", "--read-noise",
+                      "-3", "-o", output()},
                      {"read noise"});
   expect_usage_error({"deblur", frame(), "--code", "found-joint", "--blur", "52", "--crosstalk",
                       "1,0,0;1,0,0;0,0,1", "-o", output()},
                      {"singular"});
   expect_usage_error({"deblur", frame(), "-o", output()}, {"--descriptor", "--code"});
-  expect_usage_error({"deblur", frame(), "--descriptor", descriptor(), "--method", "magic", "-o", output()},
-                     {"unknown method 'magic'"});
-  expect_usage_error({"deblur", frame(), "--code", "raskar", "--blur", "52", "-o", output()}, {"grey frame"});
+  expect_usage_error(
+      {"deblur", frame(), "--descriptor", descriptor(), "--method", "magic", "-o", output()},
+      {"unknown method 'magic'"});
+  expect_usage_error({"deblur", frame(), "--code", "raskar", "--blur", "52", "-o", output()},
+                     {"grey frame"});
   EXPECT_FALSE(fs::exists(output()));
 }
 
 TEST_F(ImagingCliTest, FailedDeblurLeavesAnExistingOutputAlone) {
   simulate_label();
   std::ofstream(output(), std::ios::binary) << "previous result";
-  expect_usage_error({"deblur", frame(), "--descriptor", descriptor(), "--method", "magic", "-o", output()}, {"magic"});
+  expect_usage_error(
+      {"deblur", frame(), "--descriptor", descriptor(), "--method", "magic", "-o", output()},
+      {"magic"});
   EXPECT_EQ(read_file(output()), "previous result");
 }
 
 TEST_F(ImagingCliTest, SimulateRefusesBadScenesAndCodes) {
-  expect_usage_error({"simulate", "--scene", "poster:X", "--code", "found-joint", "-o", frame()}, {"poster"});
-  expect_usage_error({"simulate", "--scene", "code128:X", "--code", "12x4", "-o", frame()}, {"slot 2"});
-  expect_usage_error({"simulate", "--scene", "code128:X", "--code", "found-joint", "--blur", "700", "-o", frame()},
-                     {"--blur"});
+  expect_usage_error({"simulate", "--scene", "poster:X", "--code", "found-joint", "-o", frame()},
+                     {"poster"});
+  expect_usage_error({"simulate", "--scene", "code128:X", "--code", "12x4", "-o", frame()},
+                     {"slot 2"});
+  expect_usage_error(
+      {"simulate", "--scene", "code128:X", "--code", "found-joint", "--blur", "700", "-o", frame()},
+      {"--blur"});
   EXPECT_FALSE(fs::exists(frame()));
 }
 

@@ -143,7 +143,8 @@ TEST(Merits, NamesRoundTrip) {
 }
 
 TEST(Merits, ObjectiveRoundTripsAndOrdersMseLowerIsBetter) {
-  for (Merit m : kAllMerits) EXPECT_NEAR(merit_from_objective(m, merit_objective(m, 0.25)), 0.25, 1e-12);
+  for (Merit m : kAllMerits)
+    EXPECT_NEAR(merit_from_objective(m, merit_objective(m, 0.25)), 0.25, 1e-12);
   EXPECT_GT(merit_objective(Merit::kMse, 0.001), merit_objective(Merit::kMse, 0.002));
   EXPECT_GT(merit_objective(Merit::kJoint, 200), merit_objective(Merit::kJoint, 100));
 }

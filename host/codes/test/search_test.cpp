@@ -34,7 +34,8 @@ TEST(AnnealSearch, BeatsTheSeedsMaxMinCodeQuickly) {
   // The seed's best max-min code scores -21.4382 dB; 20 M incremental moves
   // take about two seconds on two cores (this seed reaches -21.07 dB; a
   // different build's floating-point contraction takes another path).
-  const SearchResult found = run(SearchAlgorithm::kAnneal, options_for(Merit::kMaxMin, 20000000, 1));
+  const SearchResult found =
+      run(SearchAlgorithm::kAnneal, options_for(Merit::kMaxMin, 20000000, 1));
   EXPECT_TRUE(found.best.is_one_of_n());
   EXPECT_EQ(found.best.length(), 52);
   const auto full = evaluate_merit(Merit::kMaxMin, found.best, {});

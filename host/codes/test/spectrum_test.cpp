@@ -10,9 +10,13 @@ namespace {
 
 constexpr std::string_view kRaskar = "1010000111000001010000110011110111010111001001100111";
 
-std::vector<double> raskar() { return led_sequence(LedCode::parse(kRaskar, 1).value(), 0); }
+std::vector<double> raskar() {
+  return led_sequence(LedCode::parse(kRaskar, 1).value(), 0);
+}
 
-double min_of(const SampledSpectrum& s) { return *std::min_element(s.db.begin(), s.db.end()); }
+double min_of(const SampledSpectrum& s) {
+  return *std::min_element(s.db.begin(), s.db.end());
+}
 
 TEST(Spectrum, SeedGridIsFirstPowerOfTwoAbove) {
   EXPECT_EQ(seed_grid_size(52), 64);

@@ -18,15 +18,18 @@ CaptureModel seed_capture(double blur) {
   return m;
 }
 
-double sum(const std::vector<double>& v) { return std::accumulate(v.begin(), v.end(), 0.0); }
+double sum(const std::vector<double>& v) {
+  return std::accumulate(v.begin(), v.end(), 0.0);
+}
 
 TEST(CaptureModel, BudgetCapsShortLeds) {
-  const auto code = LedCode::parse("1111111111111111122222222222222222244444444444444444", 3).value();
+  const auto code =
+      LedCode::parse("1111111111111111122222222222222222244444444444444444", 3).value();
   const auto I = budgeted_led_electrons(code, 3000, 3);
   EXPECT_NEAR(I[0], 3.0 * 3000.0 / 52, 1e-9);  // 17 slots: E / 17 would pass the cap c E / L
   EXPECT_NEAR(I[1], 3000.0 / 18, 1e-9);        // 18 slots: the whole budget fits under it
   const auto capped = budgeted_led_electrons(code, 3000, 1);
-  EXPECT_NEAR(capped[0], 3000.0 / 52, 1e-9);      // c = 1: peak limit E / L
+  EXPECT_NEAR(capped[0], 3000.0 / 52, 1e-9);  // c = 1: peak limit E / L
 }
 
 TEST(CaptureModel, PsfCarriesTheWhiteLevelOfItsChannel) {
@@ -39,7 +42,9 @@ TEST(CaptureModel, PsfCarriesTheWhiteLevelOfItsChannel) {
   // One slot per pixel: tap t is lit exactly when the code lights that LED in slot t.
   const auto red = channel_psf(m, 0);
   for (int t = 0; t < static_cast<int>(red.size()); ++t)
-    EXPECT_NEAR(red[static_cast<std::size_t>(t)], m.code.is_on(t, 0) ? m.led_electrons[0] : 0.0, 1e-9) << t;
+    EXPECT_NEAR(red[static_cast<std::size_t>(t)], m.code.is_on(t, 0) ? m.led_electrons[0] : 0.0,
+                1e-9)
+        << t;
 }
 
 TEST(CaptureModel, SubPixelSlotsAreExact) {
@@ -60,7 +65,9 @@ TEST(CaptureModel, CrosstalkAndAmbientEnterEveryChannel) {
   m.crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
   m.ambient_electrons = {100, 0, 0};
   double expected = 100;
-  for (int k = 0; k < 3; ++k) expected += m.crosstalk[static_cast<std::size_t>(k)] * m.led_electrons[static_cast<std::size_t>(k)] * m.code.on_slots(k);
+  for (int k = 0; k < 3; ++k)
+    expected += m.crosstalk[static_cast<std::size_t>(k)] *
+                m.led_electrons[static_cast<std::size_t>(k)] * m.code.on_slots(k);
   EXPECT_NEAR(channel_white_electrons(m, 0), expected, 1e-6);
 }
 
@@ -116,7 +123,8 @@ TEST(CaptureDescriptor, BadFieldsAreNamed) {
 TEST(MotionFrame, EveryDirectionRoundTrips) {
   Plane p(5, 3);
   for (std::size_t i = 0; i < p.pixels.size(); ++i) p.pixels[i] = static_cast<float>(i);
-  for (Direction d : {Direction::kPlusX, Direction::kMinusX, Direction::kPlusY, Direction::kMinusY}) {
+  for (Direction d :
+       {Direction::kPlusX, Direction::kMinusX, Direction::kPlusY, Direction::kMinusY}) {
     const Plane moved = to_motion_frame(p, d);
     EXPECT_EQ(from_motion_frame(moved, d).pixels, p.pixels);
   }

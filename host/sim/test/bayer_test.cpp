@@ -100,7 +100,8 @@ TEST(Bayer, DemosaicKeepsSitesAndFillsEachColourFromItsOwnSites) {
   const auto rgb = imaging::demosaic_bilinear(mosaic);
   ASSERT_EQ(rgb.channel_count(), 3);
   for (int c = 0; c < 3; ++c)
-    for (float v : rgb.channels[static_cast<std::size_t>(c)].pixels) EXPECT_EQ(v, c + 1.0f) << "channel " << c;
+    for (float v : rgb.channels[static_cast<std::size_t>(c)].pixels)
+      EXPECT_EQ(v, c + 1.0f) << "channel " << c;
 
   // A linear ramp is reproduced exactly inside the frame (bilinear), and each
   // site keeps its own sample in its own channel.
@@ -126,7 +127,8 @@ TEST(Bayer, RefusesWhatItCannotDeblur) {
   CaptureModel m = bench_like_capture(Direction::kPlusX);
   const imaging::DeblurOptions options;
   EXPECT_FALSE(imaging::deblur_bayer(Plane(1, 64), m, options, BayerMode::kRawPlanes).ok());
-  EXPECT_FALSE(imaging::deblur_bayer(Plane(40, 8), m, options, BayerMode::kRawPlanes).ok());  // blur 52 > 40
+  EXPECT_FALSE(
+      imaging::deblur_bayer(Plane(40, 8), m, options, BayerMode::kRawPlanes).ok());  // blur 52 > 40
   m.channels = 1;
   m.crosstalk = {1, 1, 1};
   m.ambient_electrons = {0};
@@ -135,7 +137,8 @@ TEST(Bayer, RefusesWhatItCannotDeblur) {
   EXPECT_NE(mono.error().find("3-channel"), std::string::npos) << mono.error();
 }
 
-/// PSNRs of one label scene: the blurred frame, RGB deblurred, Bayer raw planes, Bayer demosaic-first.
+/// PSNRs of one label scene: the blurred frame, RGB deblurred, Bayer raw planes, Bayer
+/// demosaic-first.
 struct Scores {
   double blurred, rgb, raw, demosaic;
 };
@@ -148,8 +151,10 @@ Scores score(const Plane& scene, const CaptureModel& m, imaging::Method method) 
   double white = 0;
   for (int c = 0; c < 3; ++c) white += imaging::channel_white_electrons(m, c);
   for (std::size_t i = 0; i < blurred.pixels.size(); ++i)
-    blurred.pixels[i] = static_cast<float>(
-        (frames.rgb.channels[0].pixels[i] + frames.rgb.channels[1].pixels[i] + frames.rgb.channels[2].pixels[i]) / white);
+    blurred.pixels[i] =
+        static_cast<float>((frames.rgb.channels[0].pixels[i] + frames.rgb.channels[1].pixels[i] +
+                            frames.rgb.channels[2].pixels[i]) /
+                           white);
   const auto rgb = imaging::deblur(frames.rgb, m, options);
   const auto raw = imaging::deblur_bayer(frames.mosaic, m, options, BayerMode::kRawPlanes);
   const auto demosaic = imaging::deblur_bayer(frames.mosaic, m, options, BayerMode::kDemosaicFirst);
@@ -158,7 +163,8 @@ Scores score(const Plane& scene, const CaptureModel& m, imaging::Method method) 
   EXPECT_EQ(raw.value().latent.height, scene.height);
   EXPECT_EQ(raw.value().noise_variance.size(), 4U);
   return {imaging::psnr(scene, blurred, region), imaging::psnr(scene, rgb.value().latent, region),
-          imaging::psnr(scene, raw.value().latent, region), imaging::psnr(scene, demosaic.value().latent, region)};
+          imaging::psnr(scene, raw.value().latent, region),
+          imaging::psnr(scene, demosaic.value().latent, region)};
 }
 
 Plane code128_label() {
@@ -174,7 +180,8 @@ TEST(Bayer, BothModesDeblurNearlyAsWellAsRgbInEveryDirection) {
   // 24 dB (docs/bayer.md), so "nearly" is within 6 dB here (measured: 4.8 dB
   // raw, 3.4 dB demosaic-first, joint Wiener).
   const Plane along_x = code128_label();
-  for (Direction d : {Direction::kPlusX, Direction::kMinusX, Direction::kPlusY, Direction::kMinusY}) {
+  for (Direction d :
+       {Direction::kPlusX, Direction::kMinusX, Direction::kPlusY, Direction::kMinusY}) {
     const Plane scene = imaging::from_motion_frame(along_x, d);
     const Scores s = score(scene, bench_like_capture(d), imaging::Method::kJointWiener);
     EXPECT_GT(s.raw, s.rgb - 6.0) << imaging::direction_name(d);
@@ -194,12 +201,14 @@ TEST(Bayer, RawPlanesDeblurADecodableCode128) {
     const auto result = imaging::deblur_bayer(mosaic, bayer, {}, mode);
     ASSERT_TRUE(result.ok());
     const auto decoded = decode_barcodes(result.value().latent);
-    EXPECT_NE(std::find(decoded.begin(), decoded.end(), "FS-0042"), decoded.end()) << imaging::bayer_mode_name(mode);
+    EXPECT_NE(std::find(decoded.begin(), decoded.end(), "FS-0042"), decoded.end())
+        << imaging::bayer_mode_name(mode);
   }
 }
 
 TEST(Bayer, TotalVariationOnRawPlanesBeatsTheBlurredFrame) {
-  const Scores s = score(code128_label(), bench_like_capture(Direction::kPlusX), imaging::Method::kTotalVariation);
+  const Scores s = score(code128_label(), bench_like_capture(Direction::kPlusX),
+                         imaging::Method::kTotalVariation);
   EXPECT_GT(s.raw, s.blurred + 6.0);
   EXPECT_GT(s.demosaic, s.blurred + 6.0);
 }
@@ -209,7 +218,8 @@ TEST(Bayer, RawPlanesAreRegisteredLikeRgb) {
   // pixel along the motion either way scores worse. Lots of light, so the
   // registration, not the noise, decides.
   const Plane along_x = bars(384, 48, 7);
-  for (Direction d : {Direction::kPlusX, Direction::kMinusX, Direction::kPlusY, Direction::kMinusY}) {
+  for (Direction d :
+       {Direction::kPlusX, Direction::kMinusX, Direction::kPlusY, Direction::kMinusY}) {
     CaptureModel m = bench_like_capture(d);
     m.led_electrons = imaging::budgeted_led_electrons(m.code, 20000, 3);
     m.full_well = 1e9;
@@ -217,7 +227,8 @@ TEST(Bayer, RawPlanesAreRegisteredLikeRgb) {
     m.gain = 1;
     m.black_level = 0;
     const Plane scene = imaging::from_motion_frame(along_x, d);
-    const auto raw = imaging::deblur_bayer(record_both(scene, m, 3).mosaic, m, {}, BayerMode::kRawPlanes);
+    const auto raw =
+        imaging::deblur_bayer(record_both(scene, m, 3).mosaic, m, {}, BayerMode::kRawPlanes);
     ASSERT_TRUE(raw.ok());
     const Plane latent = imaging::to_motion_frame(raw.value().latent, d);
     auto shifted_psnr = [&](int shift) {
@@ -225,11 +236,13 @@ TEST(Bayer, RawPlanesAreRegisteredLikeRgb) {
       for (int y = 0; y < latent.height; ++y)
         for (int x = 0; x < latent.width; ++x)
           moved.at(x, y) = latent.at(std::clamp(x + shift, 0, latent.width - 1), y);
-      const auto region = imaging::scored_region(latent.width, latent.height, m.blur_px, Direction::kPlusX);
+      const auto region =
+          imaging::scored_region(latent.width, latent.height, m.blur_px, Direction::kPlusX);
       return imaging::psnr(along_x, moved, region);
     };
     const double at = shifted_psnr(0);
-    EXPECT_GT(at, 16.0) << imaging::direction_name(d);  // odd-width bars: the half-resolution latent caps it
+    EXPECT_GT(at, 16.0) << imaging::direction_name(
+        d);  // odd-width bars: the half-resolution latent caps it
     EXPECT_GT(at, shifted_psnr(-1) + 3.0) << imaging::direction_name(d);
     EXPECT_GT(at, shifted_psnr(1) + 3.0) << imaging::direction_name(d);
   }
@@ -238,7 +251,8 @@ TEST(Bayer, RawPlanesAreRegisteredLikeRgb) {
 TEST(Bayer, OddSizedMosaicKeepsItsSize) {
   const CaptureModel m = bench_like_capture(Direction::kPlusY);
   const Plane scene = imaging::from_motion_frame(bars(257, 33, 8), Direction::kPlusY);
-  const auto raw = imaging::deblur_bayer(record_both(scene, m, 2).mosaic, m, {}, BayerMode::kRawPlanes);
+  const auto raw =
+      imaging::deblur_bayer(record_both(scene, m, 2).mosaic, m, {}, BayerMode::kRawPlanes);
   ASSERT_TRUE(raw.ok());
   EXPECT_EQ(raw.value().latent.width, scene.width);
   EXPECT_EQ(raw.value().latent.height, scene.height);

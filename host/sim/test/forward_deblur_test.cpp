@@ -7,9 +7,9 @@
 #include <cmath>
 #include <random>
 
+#include "imaging/capture_descriptor.hpp"
 #include "imaging/deblur.hpp"
 #include "imaging/frame_conversion.hpp"
-#include "imaging/capture_descriptor.hpp"
 #include "imaging/metrics.hpp"
 #include "imaging/motion_frame.hpp"
 #include "sim/forward_model.hpp"
@@ -64,7 +64,8 @@ TEST(ForwardModel, WhiteSceneGivesTheChannelWhiteLevel) {
   const CaptureModel m = coded_capture(3000, 52);
   const auto e = expected_electrons(Plane(200, 10, 1.0f), m);
   for (int c = 0; c < 3; ++c)
-    EXPECT_NEAR(e.channels[static_cast<std::size_t>(c)].at(100, 5), imaging::channel_white_electrons(m, c), 1e-3);
+    EXPECT_NEAR(e.channels[static_cast<std::size_t>(c)].at(100, 5),
+                imaging::channel_white_electrons(m, c), 1e-3);
 }
 
 TEST(ForwardModel, ShotAndReadNoiseHaveTheirVariance) {
@@ -129,8 +130,9 @@ TEST(Deblur, JointWienerRecoversACodedBlur) {
   double white = 0;
   for (int c = 0; c < 3; ++c) white += imaging::channel_white_electrons(m, c);
   for (std::size_t i = 0; i < blurred.pixels.size(); ++i)
-    blurred.pixels[i] = static_cast<float>((frame.channels[0].pixels[i] + frame.channels[1].pixels[i] +
-                                            frame.channels[2].pixels[i]) / white);
+    blurred.pixels[i] = static_cast<float>(
+        (frame.channels[0].pixels[i] + frame.channels[1].pixels[i] + frame.channels[2].pixels[i]) /
+        white);
   const auto region = imaging::scored_region(scene.width, scene.height, 52, Direction::kPlusX);
   EXPECT_GT(restored, 20.0);
   EXPECT_GT(restored, imaging::psnr(scene, blurred, region) + 8.0);

@@ -22,21 +22,21 @@ inline constexpr int kMaxSlots = 256;
 /// \brief What is wrong with a code string or a code.
 enum class CodeError : std::uint8_t {
   kNone,
-  kBadLedCount,   ///< the LED count is outside 1..kMaxLeds
-  kEmpty,         ///< no slots
-  kTooLong,       ///< more than kMaxSlots slots
-  kNotADigit,     ///< a character that is not a hex digit
-  kNoSuchLed,     ///< a digit lights an LED the code does not have
-  kNotOneOfN,     ///< a slot lights no LED or several, where exactly one is required
+  kBadLedCount,  ///< the LED count is outside 1..kMaxLeds
+  kEmpty,        ///< no slots
+  kTooLong,      ///< more than kMaxSlots slots
+  kNotADigit,    ///< a character that is not a hex digit
+  kNoSuchLed,    ///< a digit lights an LED the code does not have
+  kNotOneOfN,    ///< a slot lights no LED or several, where exactly one is required
 };
 
 /// \brief An error with where it happened: enough to say "slot 17: digit 3 ...".
 struct CodeIssue {
   CodeError error = CodeError::kNone;
-  int slot = -1;        ///< offending slot, -1 where the error is not at a slot
-  char character = 0;   ///< offending character or digit as written
-  int leds = 0;         ///< LED count of the code (for the message)
-  int count = 0;        ///< kTooLong: slots given; kBadLedCount: LEDs asked for
+  int slot = -1;       ///< offending slot, -1 where the error is not at a slot
+  char character = 0;  ///< offending character or digit as written
+  int leds = 0;        ///< LED count of the code (for the message)
+  int count = 0;       ///< kTooLong: slots given; kBadLedCount: LEDs asked for
 };
 
 /// \brief Whether a code must light exactly one LED per slot.
