@@ -82,49 +82,66 @@ LedCode code_of_length(int slots) {
   return LedCode::from_masks(masks, 3).value();
 }
 
-void write_scaling_chart(const std::string& path, int repeats) {
+/// One curve of the cost charts: a method at a thread count.
+struct CostSeries {
+  const char* method;
+  double (*time_ms)(const bench::SpeedFrame&, int threads, int repeats);
+  int threads;
+  int repeats_divisor;  ///< the iterative methods take fewer timed runs
+  plot::Rgb colour;
+};
+
+/// Charts `series` over frames made by `frame_at(x)` for every x; writes `path`.
+void write_cost_chart(const std::string& path, const std::string& title, const std::string& x_label,
+                      const std::vector<double>& xs,
+                      const std::function<bench::SpeedFrame(double)>& frame_at, int repeats) {
+  const std::vector<CostSeries> series = {
+      {"joint Wiener", joint_wiener_ms, 1, 1, {0.1, 0.25, 0.85}},
+      {"joint Wiener", joint_wiener_ms, 2, 1, {0.1, 0.25, 0.85}},
+      {"RL 20", richardson_lucy_ms, 1, 5, {0.85, 0.1, 0.1}},
+      {"RL 20", richardson_lucy_ms, 2, 5, {0.85, 0.1, 0.1}},
+      {"tv 40", total_variation_ms, 1, 5, {0.1, 0.6, 0.15}},
+      {"tv 40", total_variation_ms, 2, 5, {0.1, 0.6, 0.15}},
+  };
   plot::LineChart chart;
-  chart.title = "Joint Wiener: time per frame against frame size";
-  chart.x_label = "frame size (megapixels, 16:9, RGB8)";
+  chart.title = title;
+  chart.x_label = x_label;
   chart.y_label = "ms per frame (median)";
   chart.log_x = true;
-  chart.notes.push_back("52-px blur, seed max-min code; dashed: 1 thread, solid: 2 threads");
-  const LedCode code = codes::to_code(*codes::find_library_code("seed-maxmin-1"));
-  plot::Series one{"1 thread", {}, {}, {0.85, 0.1, 0.1}, 2, true, 4};
-  plot::Series two{"2 threads", {}, {}, {0.1, 0.25, 0.85}, 2, false, 4};
-  for (double megapixels : {0.3, 1.0, 2.07, 5.0, 12.0}) {
-    const int height = static_cast<int>(std::sqrt(megapixels * 1e6 * 9 / 16));
-    const int width = height * 16 / 9;
-    const auto frame = bench::make_speed_frame(width, height, code, 52);
-    one.x.push_back(megapixels);
-    one.y.push_back(joint_wiener_ms(frame, 1, repeats));
-    two.x.push_back(megapixels);
-    two.y.push_back(joint_wiener_ms(frame, 2, repeats));
-    std::fprintf(stderr, "  %.2f Mpx: %.2f ms (1 thread), %.2f ms (2 threads)\n", megapixels,
-                 one.y.back(), two.y.back());
+  chart.notes.push_back("seed max-min code family; dashed: 1 thread, solid: 2 threads");
+  for (const auto& s : series) {
+    const std::string threads = s.threads == 1 ? ", 1 thread" : ", 2 threads";
+    chart.series.push_back({s.method + threads, {}, {}, s.colour, 2, s.threads == 1, 4});
   }
-  chart.series = {one, two};
+  for (double x : xs) {
+    const auto frame = frame_at(x);
+    for (std::size_t i = 0; i < series.size(); ++i) {
+      const auto& s = series[i];
+      chart.series[i].x.push_back(x);
+      chart.series[i].y.push_back(s.time_ms(frame, s.threads, std::max(1, repeats / s.repeats_divisor)));
+      std::fprintf(stderr, "  %g: %s %.2f ms\n", x, chart.series[i].label.c_str(), chart.series[i].y.back());
+    }
+  }
   if (auto error = plot::write_png(chart, path); !error.empty()) throw RuntimeFailure(error);
+}
 
-  plot::LineChart blur;
-  blur.title = "Time per 1080p frame against blur length";
-  blur.x_label = "blur length = code length (pixels = slots)";
-  blur.y_label = "ms per frame (median), 2 threads";
-  blur.log_x = true;
-  plot::Series wiener{"joint Wiener", {}, {}, {0.1, 0.25, 0.85}, 2, false, 4};
-  plot::Series rl{"Richardson-Lucy, 20 iterations", {}, {}, {0.85, 0.1, 0.1}, 2, false, 4};
-  for (int slots : {13, 26, 52, 104, 208}) {
-    const auto frame = bench::make_speed_frame(1920, 1080, code_of_length(slots), slots);
-    wiener.x.push_back(slots);
-    wiener.y.push_back(joint_wiener_ms(frame, 2, repeats));
-    rl.x.push_back(slots);
-    rl.y.push_back(richardson_lucy_ms(frame, 2, std::max(1, repeats / 5)));
-    std::fprintf(stderr, "  blur %d: %.2f ms (joint Wiener), %.1f ms (RL)\n", slots,
-                 wiener.y.back(), rl.y.back());
-  }
-  blur.series = {wiener, rl};
-  const std::string blur_path = path.substr(0, path.rfind('.')) + "-blur.png";
-  if (auto error = plot::write_png(blur, blur_path); !error.empty()) throw RuntimeFailure(error);
+void write_scaling_charts(const std::string& path, int repeats) {
+  const LedCode code = codes::to_code(*codes::find_library_code("seed-maxmin-1"));
+  write_cost_chart(
+      path, "Time per frame against frame size (52 px blur)", "frame size (megapixels, 16:9, RGB8)",
+      {0.3, 1.0, 2.07, 5.0, 12.0},
+      [&](double megapixels) {
+        const int height = static_cast<int>(std::sqrt(megapixels * 1e6 * 9 / 16));
+        return bench::make_speed_frame(height * 16 / 9, height, code, 52);
+      },
+      repeats);
+  write_cost_chart(
+      path.substr(0, path.rfind('.')) + "-blur.png", "Time per 1080p frame against blur length",
+      "blur length = code length (pixels = slots)", {13, 26, 52, 104, 208},
+      [](double slots) {
+        return bench::make_speed_frame(1920, 1080, code_of_length(static_cast<int>(slots)), slots);
+      },
+      repeats);
 }
 
 void run_speed(const SpeedOptions& options) {
@@ -156,7 +173,7 @@ void run_speed(const SpeedOptions& options) {
     std::printf("  OpenCV baseline / joint Wiener (2 threads): %.1fx\n", ratio);
   }
   if (!options.scaling.empty())
-    write_scaling_chart(options.scaling, std::max(3, options.repeats / 3));
+    write_scaling_charts(options.scaling, std::max(3, options.repeats / 3));
 }
 
 struct SeedOptions {
