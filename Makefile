@@ -3,7 +3,7 @@
 JOBS ?= $(shell nproc)
 WERROR ?= $(if $(FLUTTERSCAN_WERROR),$(FLUTTERSCAN_WERROR),OFF)
 
-.PHONY: all deps build test demo bench asan arm-common format clean
+.PHONY: all deps build test demo bench asan arm-common fw-qemu format clean
 
 all: build
 
@@ -18,7 +18,11 @@ arm-common: deps
 	cmake --preset arm-common -DFLUTTERSCAN_WERROR=$(WERROR) >/dev/null
 	cmake --build --preset arm-common -j $(JOBS)
 
-test: build arm-common
+fw-qemu: deps
+	cmake --preset fw-qemu -DFLUTTERSCAN_WERROR=$(WERROR) >/dev/null
+	cmake --build --preset fw-qemu -j $(JOBS)
+
+test: build arm-common fw-qemu
 	ctest --preset host-release -j $(JOBS)
 
 demo: build
@@ -36,4 +40,4 @@ format:
 	git ls-files '*.cpp' '*.hpp' | xargs clang-format -i
 
 clean:
-	rm -rf build build-debug build-asan build-arm-common
+	rm -rf build build-debug build-asan build-arm-common build-fw-qemu
