@@ -23,6 +23,21 @@ void extend_row_periodically(std::span<float> padded, int width, std::span<const
   for (std::size_t i = 0; i < blend.size(); ++i) tail[i] = last + step * blend[i];
 }
 
+void filter_and_sum_channels(const RowFft& fft, std::span<const std::vector<std::complex<float>>> filters,
+                             int width, std::span<const float> blend, std::span<AlignedFloats> padded,
+                             AlignedFloats& spectrum, float* sum) {
+  const auto bins = static_cast<std::size_t>(fft.bins());
+  for (std::size_t c = 0; c < filters.size(); ++c) {
+    extend_row_periodically(padded[c].span(), width, blend);
+    fft.forward(padded[c].data(), spectrum.complex());
+    const float* filter = reinterpret_cast<const float*>(filters[c].data());
+    if (c == 0)
+      multiply_spectra(filter, spectrum.data(), sum, bins);
+    else
+      accumulate_spectra(filter, spectrum.data(), sum, bins, false);
+  }
+}
+
 std::vector<std::complex<double>> psf_spectrum(std::span<const double> taps, int n) {
   std::vector<std::complex<double>> spectrum(static_cast<std::size_t>(n / 2 + 1));
   for (std::size_t j = 0; j < spectrum.size(); ++j) {
@@ -82,20 +97,9 @@ JointWiener::Scratch JointWiener::make_scratch() const {
 
 void JointWiener::deconvolve_row(int y, const RowLoader& load, std::span<float> out,
                                  Scratch& scratch) const {
-  const auto bins = static_cast<std::size_t>(fft_.bins());
   load(y, scratch.rows);
-  float* sum = scratch.sum.data();
-  const float* spectrum = scratch.spectrum.data();
-  for (std::size_t c = 0; c < filters_.size(); ++c) {
-    const std::span<float> padded = scratch.padded[c].span();
-    extend_row_periodically(padded, width_, blend_);
-    fft_.forward(padded.data(), scratch.spectrum.complex());
-    const float* filter = reinterpret_cast<const float*>(filters_[c].data());
-    if (c == 0)
-      multiply_spectra(filter, spectrum, sum, bins);
-    else
-      accumulate_spectra(filter, spectrum, sum, bins, false);
-  }
+  filter_and_sum_channels(fft_, filters_, width_, blend_, scratch.padded, scratch.spectrum,
+                          scratch.sum.data());
   float* result = scratch.padded[0].data();
   fft_.inverse(scratch.sum.complex(), result);
   std::copy(result, result + out.size(), out.begin());

@@ -30,6 +30,13 @@ std::vector<float> periodic_blend(int width, int padded);
 /// extension: blend[i] carries the row's last value back to its first.
 void extend_row_periodically(std::span<float> padded, int width, std::span<const float> blend);
 
+/// \brief For every channel c: extends the loaded row in padded[c] (its first `width`
+/// samples) periodically, transforms it and adds filters[c] x spectrum into `sum`
+/// (bins complex values, interleaved floats). `spectrum` is scratch.
+void filter_and_sum_channels(const RowFft& fft, std::span<const std::vector<std::complex<float>>> filters,
+                             int width, std::span<const float> blend, std::span<AlignedFloats> padded,
+                             AlignedFloats& spectrum, float* sum);
+
 /// \brief One channel's part of the problem: PSF taps (e- per unit reflectance) and noise variance.
 struct ChannelPsf {
   std::vector<double> taps;

@@ -110,17 +110,7 @@ void TotalVariation::load_data(int y, const RowLoader& load, Scratch& s, bool wi
   const auto bins = static_cast<std::size_t>(fft_.bins());
   load(y, s.rows);
   float* data = data_.data() + static_cast<std::size_t>(y) * 2 * bins;
-  const float* spectrum = s.spectrum.data();
-  for (std::size_t c = 0; c < filters_.size(); ++c) {
-    const std::span<float> padded = s.padded[c].span();
-    extend_row_periodically(padded, width_, blend_);
-    fft_.forward(padded.data(), s.spectrum.complex());
-    const float* filter = reinterpret_cast<const float*>(filters_[c].data());
-    if (c == 0)
-      multiply_spectra(filter, spectrum, data, bins);
-    else
-      accumulate_spectra(filter, spectrum, data, bins, false);
-  }
+  filter_and_sum_channels(fft_, filters_, width_, blend_, s.padded, s.spectrum, data);
   if (!wiener_start) return;
   float* __restrict out = s.spectrum.data();
   const float* __restrict inverse = wiener_inverse_.data();
