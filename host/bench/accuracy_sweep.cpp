@@ -4,6 +4,7 @@
 //   accuracy_sweep --electrons 100,300,1000,3000,10000 --caps 1,3,8 [--read-noise 4,...]
 //                  [--seeds 3] [--methods joint-wiener,rl,tv] [--csv FILE]
 //                  [--chart FILE.png] [--regime PREFIX] [--quiet] [--psnr-only]
+//                  [--print-blur PX --texture T]   (weathered print: sim::SceneSpec)
 //
 // Prints one Markdown table per (E, c, read noise): mean PSNR / SSIM / decode
 // rate per scheme and method (--quiet: none). --chart plots PSNR against E per
@@ -74,7 +75,7 @@ std::vector<std::string> words(const std::string& text) {
   return out;
 }
 
-std::vector<Scene> scenes() {
+std::vector<Scene> scenes(double print_blur, double texture) {
   const std::vector<std::pair<std::string, std::string>> specs = {
       {"code128:FS-0042", "FS-0042"},
       {"ean13:4006381333931", "4006381333931"},
@@ -88,6 +89,8 @@ std::vector<Scene> scenes() {
     parsed.value().width = 640;
     parsed.value().height = 360;
     parsed.value().module_px = 3;
+    parsed.value().print_blur_px = print_blur;
+    parsed.value().texture = texture;
     auto rendered = sim::render_scene(parsed.value());
     if (!rendered.ok()) {
       std::fprintf(stderr, "accuracy_sweep: %s: %s\n", spec.c_str(), rendered.error().c_str());
@@ -110,6 +113,7 @@ int main(int argc, char** argv) {
   std::string regime_prefix;
   std::vector<std::string> method_names = {"joint-wiener", "rl", "tv"};
   std::string csv_path, chart_path;
+  double print_blur = 0, texture = 0;
   for (int i = 1; i < argc; ++i)
     if (std::string(argv[i]) == "--quiet")
       quiet = true;
@@ -147,7 +151,7 @@ int main(int argc, char** argv) {
       used_names.push_back(name);
     }
   const auto schemes = bench::standard_schemes();
-  const auto scene_set = scenes();
+  const auto scene_set = scenes(print_blur, texture);
 
   std::vector<Case> cases;
   for (double c : caps)

@@ -25,6 +25,7 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <random>
 #include <string>
 #include <system_error>
 #include <utility>
@@ -172,7 +173,27 @@ std::string spec_problem(const SceneSpec& spec) {
       return std::string(what) + " reflectance " + format_number(value) + " is outside 0..1";
     }
   }
+  if (!(spec.print_blur_px >= 0.0 && spec.print_blur_px <= 10.0))
+    return "print blur " + format_number(spec.print_blur_px) + " px is outside 0..10";
+  if (!(spec.texture >= 0.0 && spec.texture <= 0.5))
+    return "print texture " + format_number(spec.texture) + " is outside 0..0.5";
   return {};
+}
+
+/// Ink spread and paper texture over a rendered label (SceneSpec::print_blur_px, ::texture).
+imaging::Plane weather_print(imaging::Plane plane, const SceneSpec& spec) {
+  if (spec.print_blur_px > 0) {
+    cv::Mat view(plane.height, plane.width, CV_32F, plane.pixels.data());
+    cv::GaussianBlur(view, view, cv::Size(0, 0), spec.print_blur_px, spec.print_blur_px,
+                     cv::BORDER_REPLICATE);
+  }
+  if (spec.texture > 0) {
+    std::mt19937_64 rng(spec.texture_seed);
+    std::normal_distribution<float> normal(0.0f, 1.0f);
+    const auto texture = static_cast<float>(spec.texture);
+    for (float& v : plane.pixels) v = std::clamp(v * (1.0f + texture * normal(rng)), 0.0f, 1.0f);
+  }
+  return plane;
 }
 
 /// A barcode's modules, one cell per module (dark = ink), row-major.
@@ -554,17 +575,11 @@ PlaneResult render_scene(const SceneSpec& spec) {
   if (std::string problem = content_problem(spec.kind, spec.content); !problem.empty()) {
     return PlaneResult::failure(problem);
   }
-  switch (spec.kind) {
-    case SceneKind::kCode128:
-    case SceneKind::kEan13:
-    case SceneKind::kQr:
-    case SceneKind::kDataMatrix:
-      return render_barcode(spec);
-    case SceneKind::kText:
-      return render_text(spec);
-    case SceneKind::kImage:
-      return render_image(spec);
-  }
+  if (spec.kind == SceneKind::kImage) return render_image(spec);
+  PlaneResult label =
+      spec.kind == SceneKind::kText ? render_text(spec) : render_barcode(spec);
+  if (!label.ok()) return label;
+  return PlaneResult::success(weather_print(std::move(label.value()), spec));
   return PlaneResult::failure("unknown scene kind");
 }
 

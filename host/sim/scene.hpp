@@ -20,6 +20,7 @@
 // are sRGB-encoded (linearised, then Rec. 709 luminance), float files linear;
 // it fills the whole frame (resized to width x height), with no label or belt.
 
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -45,6 +46,13 @@ struct SceneSpec {
   double paper = 0.9;    ///< reflectance of the label
   double ink = 0.06;     ///< reflectance of the print
   double belt = 0.35;    ///< reflectance of the belt around the label
+  /// Real print is not pixel-exact: ink spreads (a Gaussian of this sigma, px, over the
+  /// label's edges) and paper and toner vary (each pixel's reflectance times 1 + texture x a
+  /// standard normal, clipped to 0..1). 0 and 0 give exact two-tone labels. Image scenes
+  /// ignore both.
+  double print_blur_px = 0;
+  double texture = 0;
+  std::uint64_t texture_seed = 1;
 };
 
 /// \brief The name parse_scene() knows a kind by ("code128", "ean13", "qr",

@@ -313,3 +313,37 @@ TEST(ParseScene, NamesTheProblem) {
 
 }  // namespace
 }  // namespace flutterscan::sim
+
+namespace flutterscan::sim {
+namespace {
+
+TEST(RenderScene, WeatheredPrintStillDecodesAndIsDeterministic) {
+  auto spec = parse_scene("code128:FLUTTER-0042").value();
+  const imaging::Plane exact = render_scene(spec).value();
+  spec.print_blur_px = 0.6;
+  spec.texture = 0.02;
+  const imaging::Plane weathered = render_scene(spec).value();
+  EXPECT_EQ(render_scene(spec).value().pixels, weathered.pixels);
+  EXPECT_NE(weathered.pixels, exact.pixels);
+  // Ink spread leaves grey edge pixels that the exact label does not have.
+  const auto greys = std::count_if(weathered.pixels.begin(), weathered.pixels.end(),
+                                   [](float v) { return v > 0.2f && v < 0.7f && std::abs(v - 0.35f) > 0.05f; });
+  EXPECT_GT(greys, 1000);
+  const auto decoded = decode_barcodes(weathered);
+  ASSERT_EQ(decoded.size(), 1U);
+  EXPECT_EQ(decoded[0], "FLUTTER-0042");
+  spec.texture_seed = 2;
+  EXPECT_NE(render_scene(spec).value().pixels, weathered.pixels);
+}
+
+TEST(RenderScene, WeatheringOutOfRangeIsRefused) {
+  auto spec = parse_scene("code128:X").value();
+  spec.print_blur_px = -1;
+  EXPECT_NE(render_scene(spec).error().find("print blur"), std::string::npos);
+  spec.print_blur_px = 0;
+  spec.texture = 0.9;
+  EXPECT_NE(render_scene(spec).error().find("texture"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace flutterscan::sim
