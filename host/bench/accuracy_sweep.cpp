@@ -134,6 +134,10 @@ int main(int argc, char** argv) {
       read_noises = numbers(value);
     else if (flag == "--regime")
       regime_prefix = value;
+    else if (flag == "--print-blur")
+      print_blur = std::stod(value);
+    else if (flag == "--texture")
+      texture = std::stod(value);
     else if (flag == "--seeds")
       seeds = std::stoi(value);
     else if (flag == "--methods")
