@@ -3,7 +3,7 @@
 JOBS ?= $(shell nproc)
 WERROR ?= $(if $(FLUTTERSCAN_WERROR),$(FLUTTERSCAN_WERROR),OFF)
 
-.PHONY: all deps build test demo bench asan arm-common fw-qemu format clean
+.PHONY: all deps build test demo bench asan arm-common fw-qemu fw-stm32f405 format clean
 
 all: build
 
@@ -22,7 +22,11 @@ fw-qemu: deps
 	cmake --preset fw-qemu -DFLUTTERSCAN_WERROR=$(WERROR) >/dev/null
 	cmake --build --preset fw-qemu -j $(JOBS)
 
-test: build arm-common fw-qemu
+fw-stm32f405: deps
+	cmake --preset fw-stm32f405 -DFLUTTERSCAN_WERROR=$(WERROR) >/dev/null
+	cmake --build --preset fw-stm32f405 -j $(JOBS)
+
+test: build arm-common fw-qemu fw-stm32f405
 	ctest --preset host-release -j $(JOBS)
 
 demo: build
@@ -40,4 +44,4 @@ format:
 	git ls-files '*.cpp' '*.hpp' | xargs clang-format -i
 
 clean:
-	rm -rf build build-debug build-asan build-arm-common build-fw-qemu
+	rm -rf build build-debug build-asan build-arm-common build-fw-qemu build-fw-stm32f405
