@@ -3,7 +3,7 @@
 JOBS ?= $(shell nproc)
 WERROR ?= $(if $(FLUTTERSCAN_WERROR),$(FLUTTERSCAN_WERROR),OFF)
 
-.PHONY: all deps build test demo bench asan arm-common fw-qemu fw-stm32f405 format clean
+.PHONY: all deps build test demo bench fuzz asan arm-common fw-qemu fw-stm32f405 format clean
 
 all: build
 
@@ -34,6 +34,10 @@ demo: build
 
 bench: build
 	tools/bench
+
+# The firmware core under libFuzzer (FUZZ_RUNS executions, default 10 million).
+fuzz: deps
+	tools/fuzz
 
 asan: deps
 	cmake --preset host-asan -DFLUTTERSCAN_WERROR=$(WERROR) >/dev/null

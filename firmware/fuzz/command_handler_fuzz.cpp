@@ -1,0 +1,700 @@
+// libFuzzer target: arbitrary HID request reports, interleaved with strobe
+// pulses, encoder counts, virtual time, USB resets, port faults, flash
+// corruption and reboots, into a Controller + CommandHandler on the SimPort.
+// The input format is in fuzz_input.hpp; tools/fuzz builds and runs this.
+//
+// Checked after every step (abort on violation):
+// - every reply is a 64-byte report echoing the request's command and
+//   sequence, with a known status, a payload of the size its command and
+//   status call for, and zero padding; framing errors get the status the
+//   protocol prescribes; an error reply changed nothing;
+// - every exposure event report is well-formed;
+// - the port agrees with the controller's state: a slot table plays only while
+//   exposing or self-testing, the frame timer runs only while armed in master
+//   or free-run mode, and otherwise every LED is off;
+// - no LED stays on longer than the thermal guard's max_on_time_us (a run that
+//   ends and restarts in the same microsecond counts as one run);
+// then the input ends with a Disarm report and the clock runs on: every LED
+// must be off, the last recorded LED write included.
+//
+// Work per input is bounded (operations, LED writes + port callbacks, virtual
+// time, strobe pulses), so no input hangs.
+
+#include <algorithm>
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <optional>
+#include <span>
+
+#include "flutterscan/common/protocol.hpp"
+#include "flutterscan/firmware/command_handler.hpp"
+#include "flutterscan/firmware/config_store.hpp"
+#include "flutterscan/firmware/controller.hpp"
+#include "flutterscan/firmware/sim/sim_port.hpp"
+#include "fuzz_input.hpp"
+
+namespace {
+
+namespace proto = flutterscan::protocol;
+namespace fw = flutterscan::firmware;
+using fw::fuzz::Op;
+
+// Bounds on the work of one input.
+constexpr int kMaxOps = 300;
+constexpr std::size_t kMaxWork = 20'000;            // LED writes + port callbacks
+constexpr std::uint64_t kMaxVirtualUs = 60'000'000;  // clock advanced by the ops
+constexpr int kMaxStrobePulses = 64;
+constexpr int kMaxUploadChunks = 6;
+// Clock steps while the frame timer runs (at most one tick per step).
+constexpr std::uint64_t kFrameStepUs = proto::kMinFramePeriodUs;
+// Virtual time each request report takes: commands run on the MCU one after
+// another, not at one instant (without it, Disarm, Arm and a strobe in one
+// microsecond would look like an LED that never went off).
+constexpr std::uint64_t kReportGapUs = 1;
+// After the final Disarm: longer than the longest exposure (256 slots x 10 ms).
+constexpr std::uint64_t kSettleUs = 3'000'000;
+
+[[noreturn]] void fail(const char* what, int line) {
+  std::fprintf(stderr, "command_handler_fuzz: invariant violated (line %d): %s\n", line, what);
+  std::abort();
+}
+
+// FUZZ_TRACE=1 in the environment: one line per report and event (for
+// reading what a seed or a crash does; slow).
+const bool g_trace = std::getenv("FUZZ_TRACE") != nullptr;
+
+#define FUZZ_CHECK(cond)                   \
+  do {                                     \
+    if (!(cond)) fail(#cond, __LINE__);    \
+  } while (false)
+
+/// Reads the input; missing bytes read as 0.
+class Reader {
+ public:
+  explicit Reader(std::span<const std::uint8_t> data) : data_(data) {}
+  bool empty() const { return pos_ >= data_.size(); }
+  std::uint8_t u8() { return empty() ? 0 : data_[pos_++]; }
+  std::uint16_t u16() {
+    const std::uint16_t lo = u8();
+    return static_cast<std::uint16_t>(lo | (u8() << 8));
+  }
+  std::int32_t i32() {
+    std::uint32_t v = 0;
+    for (int i = 0; i < 4; ++i) v |= static_cast<std::uint32_t>(u8()) << (8 * i);
+    return static_cast<std::int32_t>(v);
+  }
+  std::uint64_t time() {
+    const std::uint64_t v = u16();
+    return v << (u8() % 8);
+  }
+  /// Up to n bytes (fewer at the end of the input).
+  std::span<const std::uint8_t> take(std::size_t n) {
+    const std::size_t k = std::min(n, data_.size() - std::min(pos_, data_.size()));
+    const auto out = data_.subspan(pos_, k);
+    pos_ += k;
+    return out;
+  }
+
+ private:
+  std::span<const std::uint8_t> data_;
+  std::size_t pos_ = 0;
+};
+
+fw::BoardConfig board_from(std::uint8_t b) {
+  static constexpr std::array<std::array<std::uint8_t, 4>, fw::fuzz::kPinLayouts> kLayouts{{
+      {0, 1, 2, 3},
+      {3, 2, 1, 0},
+      {15, 8, 7, 0},
+      {5, 9, 12, 14},
+  }};
+  fw::BoardConfig board;
+  board.pins.led_count = 1 + (b & 3);
+  board.pins.pins = kLayouts[(b >> 2) & 3];
+  board.board_id = 0x0405;
+  board.firmware_major = 1;
+  board.firmware_minor = 2;
+  board.firmware_patch = 3;
+  board.build_id = 0xF022F022;
+  switch ((b >> 4) & 3) {
+    case 0:
+      break;  // the BoardConfig default
+    case 1:
+      board.default_guard = {{1'000, 1'000, 1'000, 1'000}, {1'000, 1'000, 1'000, 1'000}};
+      break;
+    case 2:
+      board.default_guard = {{10, 10, 10, 10}, {100, 100, 100, 100}};
+      break;
+    default:
+      board.default_guard.max_on_time_us.fill(proto::kMaxGuardOnTimeUs);
+      board.default_guard.max_duty_permille.fill(proto::kDutyFullScale);
+      break;
+  }
+  return board;
+}
+
+/// Request payload size of a known command.
+std::size_t request_payload_size(proto::Command command) {
+  switch (command) {
+    case proto::Command::kSetCode:
+      return sizeof(proto::SetCodeRequest);
+    case proto::Command::kSelectCode:
+      return sizeof(proto::SelectCodeRequest);
+    case proto::Command::kSetTiming:
+      return sizeof(proto::SetTimingRequest);
+    case proto::Command::kSetMode:
+      return sizeof(proto::SetModeRequest);
+    case proto::Command::kSetBrightness:
+      return sizeof(proto::SetBrightnessRequest);
+    case proto::Command::kSetGuard:
+      return sizeof(proto::SetGuardRequest);
+    case proto::Command::kSelfTest:
+      return sizeof(proto::SelfTestRequest);
+    case proto::Command::kEnterBootloader:
+      return sizeof(proto::EnterBootloaderRequest);
+    default:
+      return 0;
+  }
+}
+
+/// Reply payload size of a known command answered with kOk.
+std::size_t ok_reply_payload_size(proto::Command command) {
+  switch (command) {
+    case proto::Command::kGetInfo:
+      return sizeof(proto::InfoReply);
+    case proto::Command::kSetCode:
+      return sizeof(proto::SetCodeReply);
+    case proto::Command::kSelectCode:
+      return sizeof(proto::SelectCodeReply);
+    case proto::Command::kGetStatus:
+      return sizeof(proto::StatusReply);
+    case proto::Command::kSelfTest:
+      return sizeof(proto::SelfTestReply);
+    case proto::Command::kSaveConfig:
+      return sizeof(proto::SaveConfigReply);
+    default:
+      return 0;
+  }
+}
+
+/// The status the protocol prescribes for a request that fails framing
+/// (docs/protocol.md), written here independently of protocol.hpp's parser;
+/// nullopt if the request gets past framing to its command.
+std::optional<proto::Status> framing_status(std::span<const std::uint8_t> request) {
+  if (request.size() < proto::kHeaderSize || request.size() > proto::kReportSize)
+    return proto::Status::kBadLength;
+  if (request[2] > request.size() - proto::kHeaderSize) return proto::Status::kBadLength;
+  if (request[3] != 0) return proto::Status::kBadHeader;
+  if (request[0] < 0x01 || request[0] > 0x0D) return proto::Status::kUnknownCommand;
+  if (request[2] != request_payload_size(static_cast<proto::Command>(request[0])))
+    return proto::Status::kBadLength;
+  return std::nullopt;
+}
+
+bool same_settings(const fw::ControllerSettings& a, const fw::ControllerSettings& b) {
+  for (std::size_t i = 0; i < a.codes.size(); ++i) {
+    const auto& x = a.codes[i];
+    const auto& y = b.codes[i];
+    if (x.present != y.present) return false;
+    if (!x.present) continue;
+    if (x.code.leds() != y.code.leds() || x.code.length() != y.code.length()) return false;
+    if (!std::equal(x.code.masks().begin(), x.code.masks().end(), y.code.masks().begin()))
+      return false;
+  }
+  return a.selected_code == b.selected_code &&
+         a.timing.slot_time_us == b.timing.slot_time_us &&
+         a.timing.frame_period_us == b.timing.frame_period_us &&
+         a.timing.source == b.timing.source && a.mode.sync == b.mode.sync &&
+         a.mode.strobe_active_low == b.mode.strobe_active_low &&
+         a.brightness_permille == b.brightness_permille &&
+         a.guard.max_on_time_us == b.guard.max_on_time_us &&
+         a.guard.max_duty_permille == b.guard.max_duty_permille;
+}
+
+/// Status replies equal but for the uptime.
+bool same_status(proto::StatusReply a, proto::StatusReply b) {
+  a.uptime_us = 0;
+  b.uptime_us = 0;
+  return std::memcmp(&a, &b, sizeof(a)) == 0;
+}
+
+/// Sits between the SimPort and the Controller: counts callbacks (the work
+/// budget) and checks that a slot table ends with every LED off.
+class Interposer final : public fw::PortListener {
+ public:
+  fw::Controller* target = nullptr;
+  const fw::sim::SimPort* port = nullptr;
+  std::size_t callbacks = 0;
+
+  void on_strobe_edge(bool active, std::uint64_t time_us) override {
+    ++callbacks;
+    target->on_strobe_edge(active, time_us);
+  }
+  void on_slot_table_done(std::uint64_t time_us) override {
+    ++callbacks;
+    FUZZ_CHECK(port->led_mask() == 0);
+    target->on_slot_table_done(time_us);
+  }
+  void on_frame_tick(std::uint64_t time_us) override {
+    ++callbacks;
+    target->on_frame_tick(time_us);
+  }
+};
+
+using OnLimits = std::array<std::uint32_t, flutterscan::kMaxLeds>;
+
+class Harness {
+ public:
+  explicit Harness(const fw::BoardConfig& board) : board_(board), port_(board.pins) {
+    interposer_.port = &port_;
+    boot();
+  }
+  Harness(const Harness&) = delete;
+  Harness& operator=(const Harness&) = delete;
+
+  void run(Reader& in) {
+    for (int ops = 0; ops < kMaxOps && !in.empty() && !exhausted(); ++ops) {
+      const OnLimits before = guard_limits();
+      step(in);
+      observe(min_limits(before, guard_limits()));
+    }
+    finish();
+  }
+
+ private:
+  // Setup ------------------------------------------------------------------
+  void boot() {
+    handler_.reset();
+    controller_.reset();
+    controller_.emplace(port_, board_);
+    interposer_.target = &*controller_;
+    port_.set_listener(&interposer_);
+    handler_.emplace(*controller_);
+    controller_->start();
+    event_sequence_ = 0;
+  }
+
+  // Operations ---------------------------------------------------------------
+  void step(Reader& in) {
+    switch (static_cast<Op>(in.u8() % fw::fuzz::kOpCount)) {
+      case Op::kRawReport: {
+        const std::size_t length = in.u8() % (proto::kReportSize + 2);
+        feed_report(in.take(length));
+        break;
+      }
+      case Op::kReport: {
+        const auto command = static_cast<std::uint8_t>(1 + in.u8() % 13);
+        const std::uint8_t sequence = in.u8();
+        std::array<std::uint8_t, proto::kMaxPayloadSize> payload{};
+        const std::size_t size = request_payload_size(static_cast<proto::Command>(command));
+        const auto bytes = in.take(size);
+        std::copy(bytes.begin(), bytes.end(), payload.begin());
+        std::array<std::uint8_t, proto::kReportSize> report{};
+        FUZZ_CHECK(proto::encode_raw(command, sequence, proto::Status::kOk,
+                                     std::span<const std::uint8_t>(payload.data(), size),
+                                     report) == proto::kReportSize);
+        feed_report(report);
+        break;
+      }
+      case Op::kUploadCode:
+        upload_code(in);
+        break;
+      case Op::kStrobes: {
+        const int count = 1 + in.u8() % 8;
+        const std::uint64_t delay = in.time();
+        const std::uint64_t period = in.time();
+        const auto width = static_cast<std::uint32_t>(in.time());
+        for (int i = 0; i < count && strobe_pulses_ < kMaxStrobePulses; ++i, ++strobe_pulses_)
+          port_.inject_strobe(port_.now_us() + delay + static_cast<std::uint64_t>(i) * period,
+                              width);
+        break;
+      }
+      case Op::kAdvance:
+        advance(in.time());
+        break;
+      case Op::kEncoder: {
+        const bool velocity = (in.u8() & 1) != 0;
+        const std::int32_t value = in.i32();
+        if (velocity)
+          port_.set_encoder_velocity(value);
+        else
+          port_.add_encoder_counts(value);
+        break;
+      }
+      case Op::kPoll:
+        controller_->poll();
+        break;
+      case Op::kReadEvents:
+        read_events(1 + in.u8() % 20);
+        break;
+      case Op::kUsbReset:
+        controller_->on_usb_reset();
+        FUZZ_CHECK(controller_->state() == proto::ControllerState::kIdle);
+        FUZZ_CHECK((controller_->status().flags & proto::kStatusUploadInProgress) == 0);
+        break;
+      case Op::kPortFault:
+        controller_->on_port_fault();
+        FUZZ_CHECK(controller_->state() == proto::ControllerState::kFault);
+        break;
+      case Op::kPortFailures: {
+        const std::uint8_t b = in.u8();
+        port_.set_slot_timer_fails((b & 1) != 0);
+        port_.set_flash_fails((b & 2) != 0);
+        break;
+      }
+      case Op::kReboot:
+        port_.set_reset_cause(static_cast<fw::ResetCause>(in.u8() % 3));
+        boot();
+        FUZZ_CHECK(port_.led_mask() == 0);
+        break;
+      case Op::kFlashPoke: {
+        const std::size_t offset = in.u16() % sizeof(fw::ConfigImage);
+        port_.flash_page()[offset] = in.u8();
+        break;
+      }
+      case Op::kCount:
+        break;
+    }
+  }
+
+  void upload_code(Reader& in) {
+    const auto id = static_cast<std::uint8_t>(in.u8() % (proto::kMaxCodes + 1));
+    const auto leds = static_cast<std::uint8_t>(in.u8() % (flutterscan::kMaxLeds + 1));
+    const std::uint16_t slots_arg = in.u16();
+    const std::uint8_t flags_arg = in.u8();
+    const bool raw = (flags_arg & 0x80) != 0;
+    const auto total = static_cast<std::uint16_t>(raw ? slots_arg : 1 + slots_arg % 256);
+    const auto flags = static_cast<std::uint8_t>(raw ? (flags_arg >> 1) : (flags_arg & 1));
+    const auto masks = in.take(std::min<std::size_t>(total, flutterscan::kMaxSlots));
+    const auto all_leds = static_cast<std::uint8_t>((1u << leds) - 1u);
+    std::uint16_t first = 0;
+    for (int chunk = 0; chunk < kMaxUploadChunks && first < total; ++chunk) {
+      proto::SetCodeRequest r{};
+      r.code_id = id;
+      r.led_count = leds;
+      r.total_slots = total;
+      r.first_slot = first;
+      r.slot_count = static_cast<std::uint8_t>(
+          std::min<std::size_t>(total - first, proto::kSlotsPerCodeChunk));
+      r.flags = flags;
+      for (std::size_t i = 0; i < r.slot_count; ++i) {
+        const std::size_t slot = first + i;
+        std::uint8_t mask = masks.empty() ? 1 : masks[slot % masks.size()];
+        if (!raw) mask = static_cast<std::uint8_t>(mask & all_leds);
+        r.masks[i] = mask;
+      }
+      std::array<std::uint8_t, proto::kReportSize> report{};
+      FUZZ_CHECK(proto::encode_request(proto::Command::kSetCode, ++sequence_, r, report) ==
+                 proto::kReportSize);
+      if (feed_report(report) != proto::Status::kOk) break;
+      first = static_cast<std::uint16_t>(first + r.slot_count);
+    }
+  }
+
+  // Reports ------------------------------------------------------------------
+  proto::Status feed_report(std::span<const std::uint8_t> request) {
+    advance(kReportGapUs);
+    const fw::ControllerSettings settings_before = controller_->settings();
+    const proto::StatusReply status_before = controller_->status();
+    const proto::ControllerState state_before = controller_->state();
+
+    std::array<std::uint8_t, proto::kReportSize> reply;
+    reply.fill(0xA5);
+    FUZZ_CHECK(handler_->handle(request, reply) == proto::kReportSize);
+
+    const proto::MessageHeader h = proto::peek_header(reply);
+    if (g_trace)
+      std::fprintf(stderr, "%10llu us: request %zu bytes, command 0x%02x -> status %u (%s), state %u\n",
+                   static_cast<unsigned long long>(port_.now_us()), request.size(), h.command,
+                   h.status, proto::status_text(static_cast<proto::Status>(h.status)),
+                   static_cast<unsigned>(controller_->state()));
+    FUZZ_CHECK(h.command == (request.size() > 0 ? request[0] : 0));
+    FUZZ_CHECK(h.sequence == (request.size() > 1 ? request[1] : 0));
+    FUZZ_CHECK(h.status <= static_cast<std::uint8_t>(proto::Status::kHardwareError));
+    FUZZ_CHECK(h.payload_length <= proto::kMaxPayloadSize);
+    for (std::size_t i = proto::kHeaderSize + h.payload_length; i < proto::kReportSize; ++i)
+      FUZZ_CHECK(reply[i] == 0);
+    const auto status = static_cast<proto::Status>(h.status);
+    const auto payload =
+        std::span<const std::uint8_t>(reply).subspan(proto::kHeaderSize, h.payload_length);
+
+    const auto unchanged = [&] {
+      FUZZ_CHECK(same_settings(settings_before, controller_->settings()));
+      FUZZ_CHECK(same_status(status_before, controller_->status()));
+    };
+
+    if (const auto framing = framing_status(request)) {
+      FUZZ_CHECK(status == *framing);
+      FUZZ_CHECK(h.payload_length == 0);
+      unchanged();
+      return status;
+    }
+    const auto command = static_cast<proto::Command>(request[0]);
+    const auto args = request.subspan(proto::kHeaderSize, request[2]);
+    if (status != proto::Status::kOk) {
+      FUZZ_CHECK(h.payload_length == 0);
+      unchanged();
+      FUZZ_CHECK(controller_->state() == state_before);
+      return status;
+    }
+    FUZZ_CHECK(h.payload_length == ok_reply_payload_size(command));
+
+    switch (command) {
+      case proto::Command::kGetInfo: {
+        unchanged();
+        const auto info = proto::decode_payload<proto::InfoReply>(payload).value();
+        FUZZ_CHECK(info.protocol_major == proto::kProtocolMajor);
+        FUZZ_CHECK(info.led_count == board_.pins.led_count);
+        FUZZ_CHECK(info.max_codes == proto::kMaxCodes);
+        FUZZ_CHECK(info.max_slots == flutterscan::kMaxSlots);
+        FUZZ_CHECK(info.board_id == board_.board_id && info.build_id == board_.build_id);
+        break;
+      }
+      case proto::Command::kGetStatus: {
+        unchanged();
+        const auto st = proto::decode_payload<proto::StatusReply>(payload).value();
+        FUZZ_CHECK(same_status(st, controller_->status()));
+        FUZZ_CHECK(st.uptime_us == port_.now_us());
+        FUZZ_CHECK(st.state <= static_cast<std::uint8_t>(proto::ControllerState::kFault));
+        FUZZ_CHECK(st.sync_mode <= static_cast<std::uint8_t>(proto::SyncMode::kFreeRun));
+        FUZZ_CHECK(st.last_fault <= static_cast<std::uint8_t>(proto::FaultCode::kPort));
+        FUZZ_CHECK((st.flags & ~0x0Fu) == 0);
+        FUZZ_CHECK(st.active_code_id == proto::kNoCode || st.active_code_id < proto::kMaxCodes);
+        FUZZ_CHECK(st.pending_code_id == proto::kNoCode ||
+                   st.pending_code_id < proto::kMaxCodes);
+        break;
+      }
+      case proto::Command::kSetCode: {
+        const auto r = proto::decode_payload<proto::SetCodeRequest>(args).value();
+        const auto rep = proto::decode_payload<proto::SetCodeReply>(payload).value();
+        FUZZ_CHECK(rep.complete <= 1 && rep.reserved0 == 0);
+        FUZZ_CHECK(rep.slots_received == r.first_slot + r.slot_count);
+        FUZZ_CHECK(rep.slots_received <= r.total_slots);
+        FUZZ_CHECK((rep.complete == 1) == (rep.slots_received == r.total_slots));
+        if (rep.complete) {
+          const auto& stored = controller_->settings().codes[r.code_id];
+          FUZZ_CHECK(stored.present && stored.code.length() == r.total_slots &&
+                     stored.code.leds() == r.led_count);
+        }
+        break;
+      }
+      case proto::Command::kSelectCode: {
+        const auto r = proto::decode_payload<proto::SelectCodeRequest>(args).value();
+        FUZZ_CHECK(controller_->settings().selected_code == r.code_id);
+        FUZZ_CHECK(controller_->settings().codes[r.code_id].present);
+        break;
+      }
+      case proto::Command::kArm:
+        FUZZ_CHECK(state_before == proto::ControllerState::kIdle);
+        FUZZ_CHECK(controller_->state() == proto::ControllerState::kArmed);
+        break;
+      case proto::Command::kDisarm:
+      case proto::Command::kEnterBootloader:
+        FUZZ_CHECK(controller_->state() == proto::ControllerState::kIdle);
+        FUZZ_CHECK(port_.led_mask() == 0);
+        FUZZ_CHECK(!port_.slot_table_running() && !port_.frame_timer_running());
+        if (command == proto::Command::kEnterBootloader)
+          FUZZ_CHECK(controller_->bootloader_requested());
+        break;
+      case proto::Command::kSelfTest: {
+        const auto r = proto::decode_payload<proto::SelfTestRequest>(args).value();
+        const auto rep = proto::decode_payload<proto::SelfTestReply>(payload).value();
+        FUZZ_CHECK(rep.leds_stepped == board_.pins.led_count);
+        FUZZ_CHECK(rep.duration_us ==
+                   r.step_time_us * static_cast<std::uint32_t>(board_.pins.led_count));
+        FUZZ_CHECK(port_.slot_table_running());
+        break;
+      }
+      case proto::Command::kSaveConfig: {
+        const auto rep = proto::decode_payload<proto::SaveConfigReply>(payload).value();
+        FUZZ_CHECK(rep.bytes_written == sizeof(fw::ConfigImage));
+        const auto loaded = fw::load_config(port_, board_);
+        FUZZ_CHECK(loaded.ok());
+        FUZZ_CHECK(same_settings(loaded.value(), controller_->settings()));
+        break;
+      }
+      default:
+        break;
+    }
+    return status;
+  }
+
+  void read_events(int count) {
+    for (int i = 0; i < count; ++i) {
+      std::array<std::uint8_t, proto::kReportSize> report;
+      report.fill(0xA5);
+      const std::size_t size = handler_->next_event_report(report);
+      if (size == 0) return;
+      FUZZ_CHECK(size == proto::kReportSize);
+      const proto::MessageHeader h = proto::peek_header(report);
+      FUZZ_CHECK(h.command == static_cast<std::uint8_t>(proto::Command::kExposureEvent));
+      FUZZ_CHECK(h.status == 0);
+      FUZZ_CHECK(h.sequence == event_sequence_++);
+      FUZZ_CHECK(h.payload_length == sizeof(proto::ExposureEvent));
+      for (std::size_t k = proto::kHeaderSize + h.payload_length; k < proto::kReportSize; ++k)
+        FUZZ_CHECK(report[k] == 0);
+      const auto e = proto::decode_payload<proto::ExposureEvent>(
+                         std::span<const std::uint8_t>(report).subspan(proto::kHeaderSize,
+                                                                       h.payload_length))
+                         .value();
+      if (g_trace)
+        std::fprintf(stderr, "%10llu us: event frame %u start %llu slot %u us flags 0x%x code %u\n",
+                     static_cast<unsigned long long>(port_.now_us()), e.frame_counter,
+                     static_cast<unsigned long long>(e.start_time_us), e.slot_time_us, e.flags,
+                     e.code_id);
+      FUZZ_CHECK(e.frame_counter >= 1);
+      FUZZ_CHECK(e.slot_time_us >= proto::kMinSlotTimeUs && e.slot_time_us <= proto::kMaxSlotTimeUs);
+      FUZZ_CHECK(e.start_time_us <= port_.now_us());
+      FUZZ_CHECK((e.flags & ~0x1Fu) == 0);
+      FUZZ_CHECK(e.code_id < proto::kMaxCodes);
+      FUZZ_CHECK(e.slot_count >= 1 && e.slot_count <= flutterscan::kMaxSlots);
+      FUZZ_CHECK(e.reserved0 == 0 && e.reserved1 == 0);
+    }
+  }
+
+  // Time -----------------------------------------------------------------------
+  std::size_t work() const { return port_.led_transitions().size() + interposer_.callbacks; }
+  bool exhausted() { return work() > kMaxWork || port_.now_us() >= kMaxVirtualUs; }
+
+  void advance(std::uint64_t duration_us) {
+    const std::uint64_t target = std::min(port_.now_us() + duration_us, kMaxVirtualUs);
+    while (port_.now_us() < target && work() <= kMaxWork) {
+      // Strobe-started work is bounded by kMaxStrobePulses; the frame timer's
+      // is not, so it runs in steps of one frame at most.
+      const std::uint64_t next = port_.frame_timer_running()
+                                     ? std::min(target, port_.now_us() + kFrameStepUs)
+                                     : target;
+      port_.run_until(next);
+      observe(guard_limits());
+    }
+  }
+
+  // Invariants -------------------------------------------------------------------
+  OnLimits guard_limits() const { return controller_->settings().guard.max_on_time_us; }
+  static OnLimits min_limits(const OnLimits& a, const OnLimits& b) {
+    OnLimits out{};
+    for (std::size_t k = 0; k < out.size(); ++k) out[k] = std::min(a[k], b[k]);
+    return out;
+  }
+
+  /// Checks the port against the controller's state, then the LED on-times of
+  /// the writes since the last call, under `limits` (the guard in force).
+  void observe(const OnLimits& limits) {
+    check_state();
+    check_on_times(limits);
+  }
+
+  void check_state() const {
+    const proto::ControllerState state = controller_->state();
+    const bool self_test =
+        (controller_->status().flags & proto::kStatusSelfTestRunning) != 0;
+    const bool exposing = state == proto::ControllerState::kExposing;
+    const bool armed = state == proto::ControllerState::kArmed || exposing;
+    if (self_test) FUZZ_CHECK(state == proto::ControllerState::kIdle);
+    FUZZ_CHECK(port_.slot_table_running() == (exposing || self_test));
+    FUZZ_CHECK(port_.frame_timer_running() ==
+               (armed && controller_->settings().mode.sync != proto::SyncMode::kSlave));
+    if (!exposing && !self_test) FUZZ_CHECK(port_.led_mask() == 0);
+  }
+
+  struct LedRun {
+    bool on = false;
+    std::uint64_t since_us = 0;
+    std::uint32_t limit_us = 0;
+    bool ever_off = false;
+    std::uint64_t off_at_us = 0;       // the last off transition
+    std::uint64_t prev_since_us = 0;   // start of the run that ended then
+    std::uint32_t prev_limit_us = 0;
+  };
+
+  void check_run(int led, std::uint64_t start_us, std::uint64_t end_us,
+                 std::uint32_t limit_us) const {
+    if (end_us - start_us <= limit_us) return;
+    std::fprintf(stderr,
+                 "LED %d on from %llu us to %llu us (%llu us), guard max_on_time_us %u\n", led,
+                 static_cast<unsigned long long>(start_us), static_cast<unsigned long long>(end_us),
+                 static_cast<unsigned long long>(end_us - start_us), limit_us);
+    fail("an LED stayed on longer than the guard's max_on_time_us", __LINE__);
+  }
+
+  void check_on_times(const OnLimits& limits) {
+    const auto& writes = port_.led_transitions();
+    const int leds = board_.pins.led_count;
+    for (; seen_writes_ < writes.size(); ++seen_writes_) {
+      const auto& w = writes[seen_writes_];
+      for (int led = 0; led < leds; ++led) {
+        LedRun& r = runs_[static_cast<std::size_t>(led)];
+        const auto k = static_cast<std::size_t>(led);
+        const bool on = ((w.led_mask >> led) & 1u) != 0;
+        if (r.on) r.limit_us = std::min(r.limit_us, limits[k]);
+        if (r.on && !on) {
+          check_run(led, r.since_us, w.time_us, r.limit_us);
+          r.on = false;
+          r.ever_off = true;
+          r.off_at_us = w.time_us;
+          r.prev_since_us = r.since_us;
+          r.prev_limit_us = r.limit_us;
+        } else if (!r.on && on) {
+          if (r.ever_off && r.off_at_us == w.time_us) {  // off for no time: one run
+            r.since_us = r.prev_since_us;
+            r.limit_us = std::min(r.prev_limit_us, limits[k]);
+          } else {
+            r.since_us = w.time_us;
+            r.limit_us = limits[k];
+          }
+          r.on = true;
+        }
+      }
+    }
+    for (int led = 0; led < leds; ++led) {
+      LedRun& r = runs_[static_cast<std::size_t>(led)];
+      if (!r.on) continue;
+      r.limit_us = std::min(r.limit_us, limits[static_cast<std::size_t>(led)]);
+      check_run(led, r.since_us, port_.now_us(), r.limit_us);
+    }
+  }
+
+  // The end ---------------------------------------------------------------------
+  void finish() {
+    const OnLimits before = guard_limits();
+    std::array<std::uint8_t, proto::kReportSize> report{};
+    FUZZ_CHECK(proto::encode_request(proto::Command::kDisarm, ++sequence_, report) ==
+               proto::kReportSize);
+    FUZZ_CHECK(feed_report(report) == proto::Status::kOk);
+    observe(min_limits(before, guard_limits()));
+    // Only strobe edges can still be pending, and a disarmed controller ignores them.
+    port_.run_for(kSettleUs);
+    observe(guard_limits());
+    FUZZ_CHECK(port_.led_mask() == 0);
+    const auto& writes = port_.led_transitions();
+    FUZZ_CHECK(!writes.empty() && writes.back().led_mask == 0 && writes.back().pin_levels == 0);
+    FUZZ_CHECK(!port_.slot_table_running() && !port_.frame_timer_running());
+    for (const LedRun& r : runs_) FUZZ_CHECK(!r.on);
+  }
+
+  fw::BoardConfig board_;
+  fw::sim::SimPort port_;
+  std::optional<fw::Controller> controller_;
+  std::optional<fw::CommandHandler> handler_;
+  Interposer interposer_;
+  std::uint8_t sequence_ = 0;
+  std::uint8_t event_sequence_ = 0;
+  int strobe_pulses_ = 0;
+  std::size_t seen_writes_ = 0;
+  std::array<LedRun, flutterscan::kMaxLeds> runs_{};
+};
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  Reader in(std::span<const std::uint8_t>(data, size));
+  // A fresh port and controller per input: SimPort has no exact reset (clock,
+  // flash, recorded writes), and a fresh one keeps every input reproducible.
+  Harness harness(board_from(in.u8()));
+  harness.run(in);
+  return 0;
+}

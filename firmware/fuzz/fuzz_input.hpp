@@ -1,0 +1,107 @@
+#pragma once
+// The byte format of a command_handler_fuzz input, shared by the fuzz target
+// (which reads it) and the seed generator (which writes it).
+//
+// An input is one board byte followed by operations, each an op byte and its
+// arguments. A missing argument byte reads as 0, so every byte string is a
+// valid input; the fuzzer's mutations stay meaningful. Times are `Time`:
+// a little-endian u16 and a shift byte (value = u16 << (shift % 8)), so exact
+// small values and seconds are both a few bytes away.
+//
+// Adding the USB core: give SETUP packets (8 bytes plus a data stage) and the
+// HID interrupt OUT endpoint their own ops, appended at the end of Op so the
+// existing corpus keeps its meaning, and route kRawReport/kReport through the
+// endpoint instead of straight into the CommandHandler.
+
+#include <array>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace flutterscan::firmware::fuzz {
+
+/// \brief Board byte: bits 0-1 LED count - 1, bits 2-3 pin layout, bits 4-5 default guard.
+inline constexpr int kPinLayouts = 4;
+
+/// \brief Operations (op byte % kOpCount).
+enum class Op : std::uint8_t {
+  kRawReport = 0,   ///< length byte (% 66: 0..65), then that many bytes as they are
+  kReport = 1,      ///< command (1 + byte % 13), sequence, then exactly the command's
+                    ///< request payload, framed by encode_raw into a 64-byte report
+  kUploadCode = 2,  ///< code id, led count, total slots (u16, 1 + v % 256), flags byte
+                    ///< (bit 0 one-of-N, bit 7: masks unmasked and flags raw), masks:
+                    ///< one byte per slot; sent as SetCode chunks of 52 slots
+  kStrobes = 3,     ///< count (1 + byte % 8), first at now + Time, period Time, width Time
+  kAdvance = 4,     ///< Time: run the virtual clock
+  kEncoder = 5,     ///< byte (bit 0: 0 add counts, 1 set velocity), i32 little-endian
+  kPoll = 6,        ///< Controller::poll (watchdog, bootloader entry)
+  kReadEvents = 7,  ///< up to 1 + byte % 20 exposure event reports
+  kUsbReset = 8,    ///< Controller::on_usb_reset
+  kPortFault = 9,   ///< Controller::on_port_fault
+  kPortFailures = 10,  ///< byte: bit 0 slot timer fails, bit 1 flash fails
+  kReboot = 11,        ///< reset cause (byte % 3), then a new Controller on the same port
+  kFlashPoke = 12,     ///< u16 offset into the config image, byte: one flash byte overwritten
+  kCount = 13,
+};
+
+inline constexpr std::uint8_t kOpCount = static_cast<std::uint8_t>(Op::kCount);
+
+/// \brief Builds an input (seed generator and tests).
+class InputWriter {
+ public:
+  explicit InputWriter(std::uint8_t board) { bytes_.push_back(board); }
+
+  InputWriter& op(Op op) {
+    bytes_.push_back(static_cast<std::uint8_t>(op));
+    return *this;
+  }
+  InputWriter& u8(std::uint8_t v) {
+    bytes_.push_back(v);
+    return *this;
+  }
+  InputWriter& u16(std::uint16_t v) {
+    bytes_.push_back(static_cast<std::uint8_t>(v & 0xFFu));
+    bytes_.push_back(static_cast<std::uint8_t>(v >> 8));
+    return *this;
+  }
+  InputWriter& i32(std::int32_t v) {
+    const auto u = static_cast<std::uint32_t>(v);
+    for (int i = 0; i < 4; ++i) bytes_.push_back(static_cast<std::uint8_t>(u >> (8 * i)));
+    return *this;
+  }
+  /// \brief A Time argument: the nearest representable value at or below `us`.
+  InputWriter& time(std::uint64_t us) {
+    std::uint8_t shift = 0;
+    while ((us >> shift) > 0xFFFFu && shift < 7) ++shift;
+    const std::uint64_t v = us >> shift;
+    return u16(static_cast<std::uint16_t>(v > 0xFFFFu ? 0xFFFFu : v)).u8(shift);
+  }
+  InputWriter& bytes(std::span<const std::uint8_t> b) {
+    bytes_.insert(bytes_.end(), b.begin(), b.end());
+    return *this;
+  }
+
+  // Whole operations.
+  InputWriter& raw_report(std::span<const std::uint8_t> report) {
+    return op(Op::kRawReport).u8(static_cast<std::uint8_t>(report.size())).bytes(report);
+  }
+  InputWriter& advance(std::uint64_t us) { return op(Op::kAdvance).time(us); }
+  InputWriter& strobes(std::uint8_t count, std::uint64_t delay_us, std::uint64_t period_us,
+                       std::uint64_t width_us) {
+    return op(Op::kStrobes)
+        .u8(static_cast<std::uint8_t>(count - 1))
+        .time(delay_us)
+        .time(period_us)
+        .time(width_us);
+  }
+  InputWriter& read_events(std::uint8_t count) {
+    return op(Op::kReadEvents).u8(static_cast<std::uint8_t>(count - 1));
+  }
+
+  const std::vector<std::uint8_t>& data() const { return bytes_; }
+
+ private:
+  std::vector<std::uint8_t> bytes_;
+};
+
+}  // namespace flutterscan::firmware::fuzz
