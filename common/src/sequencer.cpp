@@ -85,6 +85,8 @@ LedOnStats led_on_stats(const LedCode& code) {
     }
     const int trailing = run;
     stats.longest_run_slots[k] = static_cast<std::uint16_t>(longest);
+    stats.leading_run_slots[k] = static_cast<std::uint16_t>(leading);
+    stats.trailing_run_slots[k] = static_cast<std::uint16_t>(trailing);
     // An LED on in every slot never turns off; otherwise the trailing run joins
     // the next exposure's leading run.
     const int cyclic = in_leading ? code.length() : trailing + leading;
@@ -116,6 +118,20 @@ GuardVerdict check_led_guard(const LedOnStats& stats, std::uint32_t slot_time_us
         (on_us * 1000 + effective_period_us - 1) / effective_period_us;
     if (duty_permille > limits.max_duty_permille[k])
       return {GuardStatus::kDutyTooHigh, led, duty_permille, limits.max_duty_permille[k]};
+  }
+  return {};
+}
+
+GuardVerdict check_led_guard_seam(const std::array<std::uint64_t, kMaxLeds>& previous_on_us,
+                                  const LedOnStats& next, std::uint32_t slot_time_us,
+                                  const GuardLimits& limits) {
+  for (int led = 0; led < next.leds; ++led) {
+    const auto k = static_cast<std::size_t>(led);
+    if (next.leading_run_slots[k] == 0) continue;  // the LED turns off at the seam
+    const std::uint64_t on_time_us =
+        previous_on_us[k] + static_cast<std::uint64_t>(next.leading_run_slots[k]) * slot_time_us;
+    if (on_time_us > limits.max_on_time_us[k])
+      return {GuardStatus::kOnTimeTooLong, led, on_time_us, limits.max_on_time_us[k]};
   }
   return {};
 }

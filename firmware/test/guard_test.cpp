@@ -85,5 +85,49 @@ TEST(Guard, BackToBackExposuresJoinRunsAndUseTheExposureAsPeriod) {
   EXPECT_EQ(check_led_guard(stats, 100, 1000, limits(400, 699)).status, GuardStatus::kDutyTooHigh);
 }
 
+TEST(LedOnStats, KeepsLeadingAndTrailingRunsApart) {
+  const LedOnStats stats = led_on_stats(code("110111", 1));
+  EXPECT_EQ(stats.leading_run_slots[0], 2);
+  EXPECT_EQ(stats.trailing_run_slots[0], 3);
+  const LedOnStats mixed = led_on_stats(code("1244", 3));  // LED 0 first, LED 2 last, LED 1 middle
+  EXPECT_EQ(mixed.leading_run_slots[0], 1);
+  EXPECT_EQ(mixed.trailing_run_slots[0], 0);
+  EXPECT_EQ(mixed.leading_run_slots[1], 0);
+  EXPECT_EQ(mixed.trailing_run_slots[1], 0);
+  EXPECT_EQ(mixed.leading_run_slots[2], 0);
+  EXPECT_EQ(mixed.trailing_run_slots[2], 2);
+  const LedOnStats all_on = led_on_stats(code("1111", 1));
+  EXPECT_EQ(all_on.leading_run_slots[0], 4);
+  EXPECT_EQ(all_on.trailing_run_slots[0], 4);
+}
+
+TEST(Guard, SeamJoinsThePreviousOnTimeToTheNextCodesLeadingRun) {
+  std::array<std::uint64_t, kMaxLeds> previous{};
+  previous[0] = 750;  // e.g. "0111" at 250 us slots
+  // "1000" at 250 us: 1000 us at the seam.
+  const GuardVerdict hit = check_led_guard_seam(previous, led_on_stats(code("1000", 1)), 250,
+                                                limits(750, 1000));
+  EXPECT_EQ(hit.status, GuardStatus::kOnTimeTooLong);
+  EXPECT_EQ(hit.led, 0);
+  EXPECT_EQ(hit.value, 1000u);
+  EXPECT_EQ(hit.limit, 750u);
+  // At a shorter slot time, or a code that starts dark, the seam fits.
+  EXPECT_EQ(check_led_guard_seam(previous, led_on_stats(code("1000", 1)), 250, limits(1000, 1000))
+                .status,
+            GuardStatus::kOk);
+  EXPECT_EQ(check_led_guard_seam(previous, led_on_stats(code("0100", 1)), 250, limits(750, 1000))
+                .status,
+            GuardStatus::kOk);
+  // Per LED: LED 1 was off at the end, so its leading run alone counts.
+  previous[1] = 0;
+  GuardLimits per_led = limits(750, 1000);
+  per_led.max_on_time_us[1] = 100;
+  const GuardVerdict led1 =
+      check_led_guard_seam(previous, led_on_stats(code("2200", 2)), 60, per_led);
+  EXPECT_EQ(led1.status, GuardStatus::kOnTimeTooLong);
+  EXPECT_EQ(led1.led, 1);
+  EXPECT_EQ(led1.value, 120u);
+}
+
 }  // namespace
 }  // namespace flutterscan

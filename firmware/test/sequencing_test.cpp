@@ -1,6 +1,7 @@
 // The controller's exposures on the virtual clock: what the LEDs do and when.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <bit>
 
 #include "sequence_check.hpp"
@@ -17,6 +18,30 @@ constexpr std::string_view kSeedAvgMin = "22121441112412244124112112212414441121
 
 LedCode code3(std::string_view digits) {
   return LedCode::parse(digits, 3).value();
+}
+
+/// Longest time LED `led` stays on in `log`, in us; a run that ends and restarts
+/// in the same microsecond is one run (the LED never visibly turns off).
+std::uint64_t longest_on_us(const std::vector<sim::LedTransition>& log, int led) {
+  std::uint64_t longest = 0;
+  bool on = false;
+  std::uint64_t since = 0;
+  for (std::size_t i = 0; i < log.size(); ++i) {
+    // Only the level after the last write of each microsecond counts.
+    if (i + 1 < log.size() && log[i + 1].time_us == log[i].time_us) continue;
+    const bool now_on = ((log[i].led_mask >> led) & 1u) != 0;
+    if (now_on && !on) since = log[i].time_us;
+    if (!now_on && on) longest = std::max(longest, log[i].time_us - since);
+    on = now_on;
+  }
+  return longest;
+}
+
+/// A guard allowing everything but `on_us` of continuous on-time per LED.
+proto::SetGuardRequest on_time_guard(std::uint32_t on_us) {
+  proto::SetGuardRequest guard = permissive_guard();
+  guard.max_on_time_us.fill(on_us);
+  return guard;
 }
 
 /// A rig armed in slave mode with `digits` as code 0 at `slot_us`.
@@ -319,6 +344,157 @@ TEST(Sequencing, UnreadEventsAreCountedWhenDropped) {
   rig.port.run_until(30'000);
   EXPECT_EQ(rig.status().events_dropped, 4u);
   EXPECT_EQ(rig.events().size(), kEventQueueCapacity);
+}
+
+// ---------------------------------------------------------------------------
+// The guard across back-to-back exposures of different codes or slot times
+// (firmware/fuzz/crashes/guard-*).
+
+TEST(SequencingGuardSeam, FreeRunCodeSwitchCannotJoinRunsPastTheLimit) {
+  Rig rig;
+  ASSERT_EQ(rig.send(Command::kSetGuard, on_time_guard(750)).status(), Status::kOk);
+  ASSERT_EQ(rig.upload(0, "0111", 1), Status::kOk);  // wraps into itself: 750 us, allowed
+  ASSERT_EQ(rig.upload(1, "1000", 1), Status::kOk);
+  ASSERT_EQ(rig.select(0), Status::kOk);
+  ASSERT_EQ(rig.set_mode(proto::SyncMode::kFreeRun), Status::kOk);
+  ASSERT_EQ(rig.set_timing(250, 1'000), Status::kOk);  // back to back
+  rig.port.clear_led_transitions();
+  ASSERT_EQ(rig.arm(), Status::kOk);
+  rig.port.run_until(1'500);
+  ASSERT_EQ(rig.select(1), Status::kOk);  // takes over at 2000 us, where 0111's run ends
+  rig.port.run_until(5'500);
+  const auto& log = rig.port.led_transitions();
+  EXPECT_LE(longest_on_us(log, 0), 750u);
+  const auto events = rig.events();
+  ASSERT_EQ(events.size(), 5u);
+  EXPECT_EQ(events[1].flags & proto::kEventGuardHit, 0);
+  EXPECT_EQ(events[2].start_time_us, 2'000u);
+  EXPECT_EQ(events[2].code_id, 1);
+  EXPECT_NE(events[2].flags & proto::kEventGuardHit, 0);
+  // The refused exposure stayed dark: nothing written between 0111's end and 3000 us.
+  for (const auto& t : log)
+    if (t.time_us > 2'000 && t.time_us < 3'000) ADD_FAILURE() << "LED write at " << t.time_us;
+  // After the dark exposure code 1 plays, and repeats back to back.
+  EXPECT_EQ(events[3].flags & proto::kEventGuardHit, 0);
+  EXPECT_EQ(events[4].flags & proto::kEventGuardHit, 0);
+  EXPECT_EQ(rig.status().guard_hits, 1u);
+  EXPECT_EQ(rig.controller().state(), proto::ControllerState::kExposing);  // still sequencing
+}
+
+TEST(SequencingGuardSeam, SlaveFollowExposureSlotChangeCannotJoinRunsPastTheLimit) {
+  Rig rig;
+  ASSERT_EQ(rig.send(Command::kSetGuard, on_time_guard(200)).status(), Status::kOk);
+  ASSERT_EQ(rig.upload(0, "1011", 1), Status::kOk);
+  ASSERT_EQ(rig.select(0), Status::kOk);
+  ASSERT_EQ(rig.set_timing(100, 0, proto::SlotTimeSource::kFollowExposure), Status::kOk);
+  ASSERT_EQ(rig.arm(), Status::kOk);
+  rig.port.clear_led_transitions();
+  rig.port.inject_strobe(1'000, 200);  // 100 us slots until 1400 us; measures 50 us slots
+  rig.port.inject_strobe(1'400, 200);  // starts as the first ends: 200 + 50 us on, refused
+  rig.port.inject_strobe(3'000, 200);  // apart: lit at 50 us
+  rig.port.run_until(5'000);
+  const auto& log = rig.port.led_transitions();
+  EXPECT_LE(longest_on_us(log, 0), 200u);
+  ASSERT_EQ(log.size(), 10u);
+  EXPECT_TRUE(plays_code(log, 0, LedCode::parse("1011", 1).value(), 1'000, 100));
+  EXPECT_TRUE(plays_code(log, 5, LedCode::parse("1011", 1).value(), 3'000, 50));
+  const auto events = rig.events();
+  ASSERT_EQ(events.size(), 3u);
+  EXPECT_EQ(events[0].flags & proto::kEventGuardHit, 0);
+  EXPECT_NE(events[1].flags & proto::kEventGuardHit, 0);
+  EXPECT_EQ(events[1].slot_time_us, 50u);
+  EXPECT_EQ(events[2].flags & proto::kEventGuardHit, 0);
+  EXPECT_EQ(rig.status().guard_hits, 1u);
+}
+
+TEST(SequencingGuardSeam, SlaveFixedSlotCodeSwitchCannotJoinRunsPastTheLimit) {
+  Rig rig;
+  ASSERT_EQ(rig.send(Command::kSetGuard, on_time_guard(750)).status(), Status::kOk);
+  ASSERT_EQ(rig.upload(0, "0111", 1), Status::kOk);
+  ASSERT_EQ(rig.upload(1, "1000", 1), Status::kOk);
+  ASSERT_EQ(rig.select(0), Status::kOk);
+  ASSERT_EQ(rig.set_timing(250), Status::kOk);
+  ASSERT_EQ(rig.arm(), Status::kOk);
+  rig.port.clear_led_transitions();
+  rig.port.inject_strobe(1'000, 100);
+  rig.port.inject_strobe(2'000, 100);  // back to back with itself: 750 us, allowed
+  rig.port.run_until(2'500);
+  ASSERT_EQ(rig.select(1), Status::kOk);
+  rig.port.inject_strobe(3'000, 100);  // code 1 right after 0111: 1000 us, refused
+  rig.port.inject_strobe(4'000, 100);  // after a dark exposure: lit
+  rig.port.run_until(6'000);
+  const auto& log = rig.port.led_transitions();
+  EXPECT_LE(longest_on_us(log, 0), 750u);
+  const auto events = rig.events();
+  ASSERT_EQ(events.size(), 4u);
+  EXPECT_EQ(events[0].flags & proto::kEventGuardHit, 0);
+  EXPECT_EQ(events[1].flags & proto::kEventGuardHit, 0);
+  EXPECT_NE(events[2].flags & proto::kEventGuardHit, 0);
+  EXPECT_EQ(events[2].code_id, 1);
+  EXPECT_EQ(events[3].flags & proto::kEventGuardHit, 0);
+  ASSERT_EQ(log.size(), 15u);  // three lit exposures of 5 writes
+  EXPECT_TRUE(plays_code(log, 10, LedCode::parse("1000", 1).value(), 4'000, 250));
+}
+
+TEST(SequencingGuardSeam, BackToBackSwitchesWithinTheLimitStillPlay) {
+  Rig rig;
+  ASSERT_EQ(rig.send(Command::kSetGuard, on_time_guard(750)).status(), Status::kOk);
+  ASSERT_EQ(rig.upload(0, "0011", 1), Status::kOk);  // 500 us trailing
+  ASSERT_EQ(rig.upload(1, "1000", 1), Status::kOk);  // + 250 us leading = 750 us
+  ASSERT_EQ(rig.select(0), Status::kOk);
+  ASSERT_EQ(rig.set_mode(proto::SyncMode::kFreeRun), Status::kOk);
+  ASSERT_EQ(rig.set_timing(250, 1'000), Status::kOk);
+  rig.port.clear_led_transitions();
+  ASSERT_EQ(rig.arm(), Status::kOk);
+  rig.port.run_until(1'500);
+  ASSERT_EQ(rig.select(1), Status::kOk);
+  rig.port.run_until(2'500);
+  ASSERT_EQ(rig.select(0), Status::kOk);
+  rig.port.run_until(6'500);
+  const auto& log = rig.port.led_transitions();
+  EXPECT_EQ(longest_on_us(log, 0), 750u);  // 1500..2250: joined, at the limit
+  const auto events = rig.events();
+  ASSERT_EQ(events.size(), 6u);
+  for (const auto& e : events) EXPECT_EQ(e.flags & proto::kEventGuardHit, 0) << e.frame_counter;
+  EXPECT_EQ(rig.status().guard_hits, 0u);
+  EXPECT_TRUE(plays_code(log, 10, LedCode::parse("1000", 1).value(), 2'000, 250));
+}
+
+TEST(SequencingGuardSeam, SlaveSlotChangeWithinTheLimitStillPlays) {
+  Rig rig;
+  ASSERT_EQ(rig.send(Command::kSetGuard, on_time_guard(250)).status(), Status::kOk);
+  ASSERT_EQ(rig.upload(0, "1011", 1), Status::kOk);
+  ASSERT_EQ(rig.select(0), Status::kOk);
+  ASSERT_EQ(rig.set_timing(100, 0, proto::SlotTimeSource::kFollowExposure), Status::kOk);
+  ASSERT_EQ(rig.arm(), Status::kOk);
+  rig.port.clear_led_transitions();
+  rig.port.inject_strobe(1'000, 200);  // 100 us slots; measures 50 us
+  rig.port.inject_strobe(1'400, 200);  // 200 + 50 = 250 us at the seam: allowed
+  rig.port.run_until(3'000);
+  const auto& log = rig.port.led_transitions();
+  EXPECT_EQ(longest_on_us(log, 0), 250u);
+  const auto events = rig.events();
+  ASSERT_EQ(events.size(), 2u);
+  EXPECT_EQ(events[1].flags & proto::kEventGuardHit, 0);
+  EXPECT_TRUE(plays_code(log, 5, LedCode::parse("1011", 1).value(), 1'400, 50));
+}
+
+TEST(SequencingGuardSeam, AnLedOnThroughoutCarriesItsRunIntoTheNextSeam) {
+  Rig rig;
+  ASSERT_EQ(rig.send(Command::kSetGuard, on_time_guard(2'500)).status(), Status::kOk);
+  ASSERT_EQ(rig.upload(0, "1111", 1), Status::kOk);  // wraps into itself: 1000 us per check
+  ASSERT_EQ(rig.select(0), Status::kOk);
+  ASSERT_EQ(rig.set_mode(proto::SyncMode::kFreeRun), Status::kOk);
+  ASSERT_EQ(rig.set_timing(250, 1'000), Status::kOk);
+  rig.port.clear_led_transitions();
+  ASSERT_EQ(rig.arm(), Status::kOk);
+  rig.port.run_until(4'500);
+  EXPECT_LE(longest_on_us(rig.port.led_transitions(), 0), 2'500u);
+  const auto events = rig.events();
+  ASSERT_EQ(events.size(), 4u);
+  EXPECT_EQ(events[1].flags & proto::kEventGuardHit, 0);  // 2000 us so far
+  EXPECT_NE(events[2].flags & proto::kEventGuardHit, 0);  // would make 3000 us
+  EXPECT_EQ(events[3].flags & proto::kEventGuardHit, 0);  // after the dark one
 }
 
 }  // namespace

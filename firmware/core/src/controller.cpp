@@ -214,6 +214,7 @@ Status Controller::arm() {
   pending_table_ = -1;
   frame_counter_ = 0;
   have_previous_start_ = false;
+  have_lit_exposure_ = false;
   strobe_active_ = false;
   last_pulse_width_us_ = 0;
   events_.clear();
@@ -394,8 +395,16 @@ void Controller::begin_exposure(std::uint64_t time_us) {
   exposure_pulse_width_us_ = 0;
   exposure_flags_ = flags;
 
-  const GuardVerdict verdict = check_led_guard(table.stats, slot_time, period, settings_.guard);
+  // Back to back with the last lit exposure if this one starts the moment that
+  // one's all-off word lands: then each LED's run at the seam is the previous
+  // exposure's trailing run (its code, its slot time) plus this code's leading
+  // run at this slot time. The previous code or slot time may differ from these.
+  const bool joins_previous = have_lit_exposure_ && time_us <= lit_end_us_;
+  GuardVerdict verdict = check_led_guard(table.stats, slot_time, period, settings_.guard);
+  if (verdict.status == GuardStatus::kOk && joins_previous)
+    verdict = check_led_guard_seam(lit_trailing_on_us_, table.stats, slot_time, settings_.guard);
   if (verdict.status != GuardStatus::kOk) {
+    have_lit_exposure_ = false;  // this exposure stays dark: nothing joins across it
     ++guard_hits_;
     protocol::ExposureEvent event{};
     event.frame_counter = frame_counter_;
@@ -414,6 +423,7 @@ void Controller::begin_exposure(std::uint64_t time_us) {
     enter_fault(protocol::FaultCode::kSlotTimer);
     return;
   }
+  note_lit_exposure(table.stats, time_us, slot_time, joins_previous);
   state_ = ControllerState::kExposing;
 }
 
@@ -442,6 +452,25 @@ void Controller::on_slot_table_done(std::uint64_t) {
 // ---------------------------------------------------------------------------
 // Helpers
 
+void Controller::note_lit_exposure(const LedOnStats& stats, std::uint64_t start_us,
+                                   std::uint32_t slot_time_us, bool joins_previous) {
+  const std::uint64_t duration_us = static_cast<std::uint64_t>(stats.length) * slot_time_us;
+  for (std::size_t k = 0; k < lit_trailing_on_us_.size(); ++k) {
+    if (static_cast<int>(k) >= stats.leds) {
+      lit_trailing_on_us_[k] = 0;  // not in the code: off the whole exposure
+      continue;
+    }
+    const std::uint64_t trailing_us =
+        static_cast<std::uint64_t>(stats.trailing_run_slots[k]) * slot_time_us;
+    // An LED on in every slot continues the run it joined at the start.
+    const bool on_throughout = stats.length > 0 && stats.leading_run_slots[k] == stats.length;
+    lit_trailing_on_us_[k] =
+        on_throughout && joins_previous ? lit_trailing_on_us_[k] + duration_us : trailing_us;
+  }
+  lit_end_us_ = start_us + duration_us;
+  have_lit_exposure_ = true;
+}
+
 void Controller::build_table(SlotTable& table, std::uint8_t code_id) const {
   const LedCode& code = settings_.codes[code_id].code;
   // Codes are checked against the board's LEDs on upload and load, and the
@@ -464,6 +493,7 @@ void Controller::stop_sequencing() {
   self_test_running_ = false;
   pending_table_ = -1;
   strobe_active_ = false;
+  have_lit_exposure_ = false;  // every LED is off now
 }
 
 void Controller::all_leds_off() {

@@ -89,6 +89,12 @@ struct LedOnStats {
   /// Longest run when exposures follow back to back (the last run joins the
   /// next exposure's first); equals `length` for an LED on in every slot.
   std::array<std::uint16_t, kMaxLeds> longest_cyclic_run_slots{};
+  /// Run from the code's first slot (0 if the LED is off in slot 0); equals
+  /// `length` for an LED on in every slot.
+  std::array<std::uint16_t, kMaxLeds> leading_run_slots{};
+  /// Run ending at the code's last slot (0 if the LED is off in the last slot);
+  /// equals `length` for an LED on in every slot.
+  std::array<std::uint16_t, kMaxLeds> trailing_run_slots{};
 };
 
 /// \brief On-slot counts and longest runs of every LED of `code`.
@@ -115,5 +121,15 @@ struct GuardVerdict {
 /// back to back (runs wrap into the next exposure, duty over the exposure).
 GuardVerdict check_led_guard(const LedOnStats& stats, std::uint32_t slot_time_us,
                              std::uint64_t period_us, const GuardLimits& limits);
+
+/// \brief Checks the seam between two exposures that touch (the next starts
+/// the moment the previous one ends), whatever code and slot time each has:
+/// per LED, `previous_on_us[k]` (how long LED k had been on, without a gap,
+/// when the previous exposure ended) plus the next code's leading run at
+/// `slot_time_us` against max_on_time_us. Checks nothing else: the next code's
+/// own runs are check_led_guard's.
+GuardVerdict check_led_guard_seam(const std::array<std::uint64_t, kMaxLeds>& previous_on_us,
+                                  const LedOnStats& next, std::uint32_t slot_time_us,
+                                  const GuardLimits& limits);
 
 }  // namespace flutterscan

@@ -128,6 +128,9 @@ class Controller final : public PortListener {
   protocol::Status check_code_runnable(std::uint8_t code_id) const;
   void begin_exposure(std::uint64_t time_us);
   std::uint32_t slot_time_for_next_exposure(int code_length, std::uint16_t& flags) const;
+  /// Records the exposure just started (lit) for the next one's seam check.
+  void note_lit_exposure(const LedOnStats& stats, std::uint64_t start_us,
+                         std::uint32_t slot_time_us, bool joins_previous);
   void queue_event(const protocol::ExposureEvent& event);
   void stop_sequencing();
   void all_leds_off();
@@ -154,6 +157,12 @@ class Controller final : public PortListener {
   std::uint32_t exposure_pulse_width_us_ = 0;
   bool have_previous_start_ = false;
   std::uint64_t previous_start_us_ = 0;
+  // The last exposure that lit its LEDs (a refused one stays dark): when its
+  // all-off word lands, and per LED how long the LED had been on, without a
+  // gap, at that moment. An exposure starting then joins its runs to these.
+  bool have_lit_exposure_ = false;
+  std::uint64_t lit_end_us_ = 0;
+  std::array<std::uint64_t, kMaxLeds> lit_trailing_on_us_{};
   // Strobe pulse measurement (slave mode).
   bool strobe_active_ = false;
   std::uint64_t strobe_start_us_ = 0;
