@@ -113,17 +113,21 @@ void JointWiener::deconvolve(const RowLoader& load, int height, Plane& out, RowP
   });
 }
 
+JointWiener::RowLoader plane_row_loader(std::span<const Plane> channels) {
+  return [channels](int y, std::span<const std::span<float>> rows) {
+    for (std::size_t c = 0; c < rows.size(); ++c) {
+      const auto source = channels[c].row(y);
+      std::copy(source.begin(), source.end(), rows[c].begin());
+    }
+  };
+}
+
 Plane JointWiener::deconvolve(std::span<const Plane> channels, int threads) {
   const int height = channels[0].height;
   Plane latent(width_, height);
   RowPool pool(std::max(1, std::min(threads, height)));
   deconvolve(
-      [&](int y, std::span<const std::span<float>> rows) {
-        for (std::size_t c = 0; c < rows.size(); ++c) {
-          const auto source = channels[c].row(y);
-          std::copy(source.begin(), source.end(), rows[c].begin());
-        }
-      },
+      plane_row_loader(channels),
       height, latent, pool);
   return latent;
 }

@@ -85,6 +85,9 @@ class JointWiener {
   std::vector<Scratch> workers_;
 };
 
+/// \brief A row loader reading row y of each plane of `channels` (motion frame).
+JointWiener::RowLoader plane_row_loader(std::span<const Plane> channels);
+
 /// \brief Spectrum of `taps` on the bins of an n-point real FFT.
 std::vector<std::complex<double>> psf_spectrum(std::span<const double> taps, int n);
 

@@ -270,12 +270,7 @@ Plane TotalVariation::deconvolve(std::span<const Plane> channels, const Plane& w
   Plane latent(width_, height);
   RowPool pool(std::max(1, std::min(threads, height)));
   deconvolve(
-      [&](int y, std::span<const std::span<float>> rows) {
-        for (std::size_t c = 0; c < rows.size(); ++c) {
-          const auto source = channels[c].row(y);
-          std::copy(source.begin(), source.end(), rows[c].begin());
-        }
-      },
+      plane_row_loader(channels),
       height, warm_start, latent, pool);
   return latent;
 }

@@ -5,21 +5,12 @@
 
 #include <cstdint>
 
+#include "flutterscan/firmware/cortex_m/c_runtime.hpp"
 #include "flutterscan/firmware/qemu/registers.hpp"
 
 extern "C" {
 // Linker script symbols.
 extern std::uint32_t __stack_top__;
-extern std::uint32_t __data_load__;
-extern std::uint32_t __data_start__;
-extern std::uint32_t __data_end__;
-extern std::uint32_t __bss_start__;
-extern std::uint32_t __bss_end__;
-using InitFunction = void (*)();
-extern InitFunction __preinit_array_start[];
-extern InitFunction __preinit_array_end[];
-extern InitFunction __init_array_start[];
-extern InitFunction __init_array_end[];
 
 [[noreturn]] void Reset_Handler();
 void Default_Handler();
@@ -80,14 +71,7 @@ void Reset_Handler() {
   asm volatile("dsb\n\tisb" ::: "memory");
   reg::at(reg::scb::kVtor) = reinterpret_cast<std::uintptr_t>(&g_vector_table);
 
-  // .data from its load image in flash, then .bss zeroed.
-  const std::uint32_t* source = &__data_load__;
-  for (std::uint32_t* word = &__data_start__; word < &__data_end__; ++word) *word = *source++;
-  for (std::uint32_t* word = &__bss_start__; word < &__bss_end__; ++word) *word = 0;
-
-  // Static constructors.
-  for (InitFunction* f = __preinit_array_start; f < __preinit_array_end; ++f) (*f)();
-  for (InitFunction* f = __init_array_start; f < __init_array_end; ++f) (*f)();
+  flutterscan::firmware::cortex_m::start_c_runtime();
 
   application_main();
 }
