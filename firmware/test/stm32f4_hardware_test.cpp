@@ -12,8 +12,8 @@
 #include <iterator>
 #include <vector>
 
+#include "flutterscan/common/image_header.hpp"
 #include "flutterscan/firmware/stm32f4/hardware_math.hpp"
-#include "flutterscan/firmware/stm32f4/image_header.hpp"
 #include "flutterscan/firmware/stm32f4/registers.hpp"
 #include "flutterscan/firmware/stm32f4/stm32f4_board.hpp"
 

@@ -4,7 +4,7 @@
 # `objcopy --update-section .image_header=...`.
 #   cmake -DIMAGE=raw.bin -DHEADER_OUT=header.bin -DOBJCOPY=arm-none-eabi-objcopy -P stamp_image.cmake
 # CRC-32 is zlib's (reflected 0xEDB88320, init and final XOR 0xFFFFFFFF), as
-# firmware/core/src/crc32.cpp; the host test stm32f4_hardware_test.cpp checks
+# common/include/flutterscan/common/crc32.hpp; the host test stm32f4_hardware_test.cpp checks
 # the stamped image with the C++ check_image(). Plain CMake, so the build needs
 # nothing beyond CMake and binutils.
 

@@ -9,8 +9,8 @@
 #include <cstddef>
 #include <new>
 
+#include "flutterscan/common/image_header.hpp"
 #include "flutterscan/firmware/controller.hpp"
-#include "flutterscan/firmware/stm32f4/image_header.hpp"
 #include "flutterscan/firmware/stm32f4/registers.hpp"
 #include "flutterscan/firmware/stm32f4/stm32f4_board.hpp"
 #include "flutterscan/firmware/stm32f4/stm32f4_port.hpp"

@@ -9,6 +9,7 @@
 
 #include <cstdint>
 
+#include "flutterscan/common/image_header.hpp"
 #include "flutterscan/firmware/settings.hpp"
 
 #ifndef FLUTTERSCAN_VERSION_MAJOR
@@ -23,7 +24,7 @@ inline constexpr std::uint32_t kSysClockHz = 168'000'000;
 /// SysTick interrupt period while no slot table plays (the clock's tick).
 inline constexpr std::uint32_t kIdleTickUs = 1'000;
 /// Board id reported by GetInfo for the QEMU image.
-inline constexpr std::uint16_t kQemuBoardId = 2;
+inline constexpr std::uint16_t kQemuBoardId = kBoardIdQemuNetduinoplus2;
 /// Bytes of the RAM array standing in for the config flash page (QEMU does not
 /// model the flash interface, so SaveConfig lasts until reset).
 inline constexpr std::size_t kConfigPageSize = 4096;

@@ -18,6 +18,7 @@
 #include <cstddef>
 #include <cstdint>
 
+#include "flutterscan/common/image_header.hpp"
 #include "flutterscan/firmware/settings.hpp"
 
 #ifndef FLUTTERSCAN_VERSION_MAJOR
@@ -27,7 +28,7 @@
 namespace flutterscan::firmware::stm32f4 {
 
 /// Board id of the STM32F405 product board (GetInfo; the image header).
-inline constexpr std::uint16_t kBoardId = 1;
+inline constexpr std::uint16_t kBoardId = kBoardIdStm32f405;
 
 // GPIO port indices (0 = A).
 inline constexpr int kPortA = 0;
@@ -69,8 +70,8 @@ inline constexpr int kConfigSector = 1;
 inline constexpr std::uint32_t kConfigBase = 0x08004000;
 inline constexpr std::uint32_t kConfigSize = 16 * 1024;
 /// Application: from sector 2 on, at most 64 KiB (sectors 2, 3 and half of 4).
-inline constexpr std::uint32_t kAppBase = 0x08008000;
-inline constexpr std::uint32_t kAppMaxSize = 64 * 1024;
+inline constexpr std::uint32_t kAppBase = kStm32f405AppRegion.load_address;
+inline constexpr std::uint32_t kAppMaxSize = kStm32f405AppRegion.max_size;
 /// The app's vector table follows its image header (VTOR needs 512-byte
 /// alignment for the F405's 98 vectors: PM0214 4.4.4).
 inline constexpr std::uint32_t kAppVectorOffset = 0x200;

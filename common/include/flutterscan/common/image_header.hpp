@@ -1,26 +1,39 @@
 #pragma once
-// The header at the start of the application region (kAppBase): what the
-// bootloader checks before it jumps to an application, and what a firmware
-// update checks before it flashes one. The linker places it first in the app
-// image with the CRC fields zero; the post-build step (stamp_image.cmake)
-// fills image_size and both CRCs. Host-compilable, freestanding: the
-// bootloader and host tools reuse it.
+// The header at the start of the application region: what the bootloader
+// checks before it jumps to an application (and at DFU manifest), and what the
+// host flasher checks before it flashes one: the same checker on both sides. The linker places it
+// first in the app image with the CRC fields zero; the post-build step (stamp_image.cmake) fills
+// image_size and both CRCs (firmware/port/stm32f4). Freestanding.
 //
 // Layout of an application image (the .bin as flashed at kAppBase):
 //   [0, sizeof(ImageHeader))          this header
 //   [.., vector_table_offset)          zero padding
 //   [vector_table_offset, image_size)  vector table, code, data load image
 // image_crc32 covers [vector_table_offset, image_size); header_crc32 covers
-// the header bytes before it. CRC-32 is the zlib one (firmware/crc32.hpp).
+// the header bytes before it. CRC-32 is the zlib one (common/crc32.hpp).
 
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <span>
 
-#include "flutterscan/firmware/crc32.hpp"
+#include "flutterscan/common/crc32.hpp"
 
-namespace flutterscan::firmware::stm32f4 {
+namespace flutterscan {
+
+/// Board ids (image header, GetInfo's board_id): never reused or renumbered.
+inline constexpr std::uint16_t kBoardIdStm32f405 = 1;          ///< the product board (fw-stm32f405)
+inline constexpr std::uint16_t kBoardIdQemuNetduinoplus2 = 2;  ///< QEMU's netduinoplus2 (fw-qemu)
+
+/// \brief Where a board's application image lives: what check_image() needs.
+struct AppRegion {
+  std::uint16_t board_id;
+  std::uint32_t load_address;  ///< the header's load_address (the DFU download's block 0)
+  std::uint32_t max_size;      ///< bytes the region holds (check_image's max_size)
+};
+
+/// The STM32F405 product board: application from flash sector 2, at most 64 KiB.
+inline constexpr AppRegion kStm32f405AppRegion{kBoardIdStm32f405, 0x08008000, 64 * 1024};
 
 /// "FSAP" little-endian: a flutterscan application image.
 inline constexpr std::uint32_t kImageMagic = 0x50415346;
@@ -52,11 +65,11 @@ static_assert(offsetof(ImageHeader, board_id) == 8 && offsetof(ImageHeader, load
 /// \brief Why an image is refused.
 enum class ImageCheck : std::uint8_t {
   kOk,
-  kTooShort,        ///< fewer bytes than a header, or than image_size says
-  kBadMagic,        ///< not an application image
-  kBadHeader,       ///< unknown header version or size, or header CRC mismatch
-  kWrongBoard,      ///< built for another board
-  kBadLayout,       ///< vector table offset or size impossible for the region
+  kTooShort,    ///< fewer bytes than a header, or than image_size says
+  kBadMagic,    ///< not an application image
+  kBadHeader,   ///< unknown header version or size, or header CRC mismatch
+  kWrongBoard,  ///< built for another board
+  kBadLayout,   ///< vector table offset or size impossible for the region
   kImageCrcMismatch,
 };
 
@@ -105,4 +118,4 @@ inline bool stamp_image(std::span<std::uint8_t> image) {
   return true;
 }
 
-}  // namespace flutterscan::firmware::stm32f4
+}  // namespace flutterscan
