@@ -82,7 +82,7 @@ bool VirtualController::write_report(std::span<const std::uint8_t> report) {
   std::lock_guard lock(mutex_);
   if (!plugged_in_ || in_bootloader_) return false;
   if (!responsive_) return true;
-  replies_.push_back(handle_locked(report));
+  (holding_replies_ ? held_replies_ : replies_).push_back(handle_locked(report));
   return true;
 }
 
@@ -114,6 +114,12 @@ void VirtualController::expose(std::uint32_t exposure_us) {
 void VirtualController::add_encoder_counts(std::int32_t counts) {
   std::lock_guard lock(mutex_);
   port_->add_encoder_counts(counts);
+}
+
+// Added for the sim camera (host/capture/sim_camera.cpp).
+void VirtualController::set_encoder_velocity(std::int32_t counts_per_second) {
+  std::lock_guard lock(mutex_);
+  port_->set_encoder_velocity(counts_per_second);
 }
 
 void VirtualController::advance_us(std::uint64_t duration_us) {
@@ -148,11 +154,21 @@ void VirtualController::set_responsive(bool responsive) {
   responsive_ = responsive;
 }
 
+void VirtualController::hold_replies(bool hold) {
+  std::lock_guard lock(mutex_);
+  holding_replies_ = hold;
+  if (!hold) {
+    replies_.insert(replies_.end(), held_replies_.begin(), held_replies_.end());
+    held_replies_.clear();
+  }
+}
+
 void VirtualController::unplug() {
   std::lock_guard lock(mutex_);
   if (!plugged_in_) return;
   plugged_in_ = false;
   replies_.clear();
+  held_replies_.clear();
   const auto& recent = port_->led_transitions();
   earlier_transitions_.insert(earlier_transitions_.end(), recent.begin(), recent.end());
   port_->clear_led_transitions();

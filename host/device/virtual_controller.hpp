@@ -78,6 +78,10 @@ class VirtualController {
   void expose(std::uint32_t exposure_us);
   /// \brief Turns the encoder by `counts` now.
   void add_encoder_counts(std::int32_t counts);
+  /// \brief (Added for the sim camera, host/capture/sim_camera.cpp.) From now on the
+  /// encoder turns at `counts_per_second` as the virtual clock runs, so an
+  /// exposure's encoder_delta is the belt's motion during it.
+  void set_encoder_velocity(std::int32_t counts_per_second);
   /// \brief Runs the virtual clock `duration_us` forward (frame ticks in master
   /// and free-run modes happen here).
   void advance_us(std::uint64_t duration_us);
@@ -94,6 +98,9 @@ class VirtualController {
   const firmware::BoardConfig& board() const { return options_.board; }
   /// \brief false: requests are swallowed without a reply (a hung firmware).
   void set_responsive(bool responsive);
+  /// \brief true: requests are handled but their replies held back until
+  /// hold_replies(false) (a slow link: late replies for the host to discard).
+  void hold_replies(bool hold);
   /// \brief Pulls the cable: writes fail, every LED goes dark, queued reports are lost.
   void unplug();
   /// \brief Plugs it back in: the controller boots afresh (power cycle) with the
@@ -117,6 +124,8 @@ class VirtualController {
   std::unique_ptr<firmware::Controller> controller_;
   std::unique_ptr<firmware::CommandHandler> handler_;
   std::deque<Report> replies_;
+  std::deque<Report> held_replies_;
+  bool holding_replies_ = false;
   std::vector<LedTransition> earlier_transitions_;  ///< from before a re-plug
   bool responsive_ = true;
   bool plugged_in_ = true;
