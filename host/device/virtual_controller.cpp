@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cstddef>
 
+#include "flutterscan/common/image_header.hpp"
+
 namespace flutterscan::device {
 
 namespace {
@@ -18,7 +20,7 @@ constexpr std::uint64_t kSequenceStepUs = 10;
 firmware::BoardConfig default_virtual_board() {
   firmware::BoardConfig board;
   board.pins = LedPinMap{3, {0, 1, 2, 3}};
-  board.board_id = 0x0405;
+  board.board_id = kBoardIdStm32f405;
   board.firmware_major = FLUTTERSCAN_VERSION_MAJOR;
   board.firmware_minor = FLUTTERSCAN_VERSION_MINOR;
   board.firmware_patch = FLUTTERSCAN_VERSION_PATCH;

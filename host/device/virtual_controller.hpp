@@ -37,7 +37,8 @@ using LedTransition = firmware::sim::LedTransition;
 /// like the STM32's unique ID).
 inline constexpr const char* kVirtualSerial = "51A1A7ED0000000000000001";
 
-/// \brief Three LEDs on pins 0..2, board id 0x0405, the firmware version of this build.
+/// \brief The product board as GetInfo describes it (three LEDs on pins 0..2, board
+/// id kBoardIdStm32f405) with the firmware version of this build.
 firmware::BoardConfig default_virtual_board();
 
 /// \brief How a virtual controller is built.
