@@ -1,0 +1,454 @@
+#include "capture/sim_camera.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <numeric>
+#include <random>
+#include <thread>
+
+#include "capture/backends.hpp"
+#include "device/virtual_controller.hpp"
+#include "imaging/capture_descriptor.hpp"
+#include "sim/forward_model.hpp"
+#include "sim/scene.hpp"
+
+namespace flutterscan::capture {
+namespace {
+
+std::int64_t steady_now_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+
+std::string ean13_with_check(std::uint64_t index) {
+  char digits[13];
+  std::snprintf(digits, sizeof digits, "%012llu",
+                static_cast<unsigned long long>(400000000000ULL + index * 7919ULL));
+  int sum = 0;
+  for (int i = 0; i < 12; ++i) sum += (digits[i] - '0') * (i % 2 == 0 ? 1 : 3);
+  return std::string(digits, 12) + static_cast<char>('0' + (10 - sum % 10) % 10);
+}
+
+/// The text after the kind: what a decoder should read.
+std::string content_of(const std::string& scene) {
+  return scene.substr(scene.find(':') + 1);
+}
+
+/// The light that actually reached the scene: LED transitions turned into a
+/// per-slot code. Slots are the largest step that divides every transition
+/// time from the first; the code spans first transition to the last.
+struct Lighting {
+  bool dark = true;
+  LedCode code;
+  std::uint64_t start_us = 0;
+  std::uint64_t duration_us = 0;
+};
+
+Lighting lighting_from(const std::vector<device::LedTransition>& transitions) {
+  Lighting light;
+  auto first_on = std::find_if(transitions.begin(), transitions.end(),
+                               [](const auto& t) { return t.led_mask != 0; });
+  if (first_on == transitions.end()) return light;
+  const std::uint64_t start = first_on->time_us;
+  std::uint64_t end = start;
+  std::uint64_t step = 0;
+  for (auto it = first_on; it != transitions.end(); ++it) {
+    step = std::gcd(step, it->time_us - start);
+    end = it->time_us;
+  }
+  if (transitions.back().led_mask != 0) return light;  // still lit: not a whole sequence
+  if (step == 0 || end == start) return light;
+  const std::uint64_t slots = (end - start) / step;
+  if (slots > static_cast<std::uint64_t>(kMaxSlots)) return light;
+  std::vector<std::uint8_t> masks(slots, 0);
+  std::uint8_t mask = 0;
+  auto it = first_on;
+  for (std::uint64_t s = 0; s < slots; ++s) {
+    const std::uint64_t t = start + s * step;
+    while (it != transitions.end() && it->time_us <= t) mask = (it++)->led_mask;
+    masks[s] = mask & 0x7;
+  }
+  const auto code = LedCode::from_masks(masks, 3);
+  if (!code.ok()) return light;
+  light.dark = false;
+  light.code = code.value();
+  light.start_us = start;
+  light.duration_us = end - start;
+  return light;
+}
+
+class SimCamera final : public CameraSource {
+ public:
+  SimCamera(device::VirtualController& controller, SimConveyorOptions options)
+      : controller_(controller), o_(std::move(options)), rng_(o_.seed) {}
+
+  std::string name() const override { return "sim"; }
+
+  std::string open() override {
+    if (o_.width < 64 || o_.height < 64) return "camera sim: width and height must be >= 64";
+    if (o_.tile_width + 2 * sim::kMinBeltPx > o_.width)
+      return "camera sim: tile_width " + std::to_string(o_.tile_width) +
+             " does not fit the view width " + std::to_string(o_.width);
+    if (!(o_.speed_px_per_s > 0)) return "camera sim: speed_px_per_s must be > 0";
+    if (o_.jitter < 0 || o_.jitter > 0.5) return "camera sim: jitter must be within 0..0.5";
+    if (o_.drop_probability < 0 || o_.drop_probability >= 1)
+      return "camera sim: drop_probability must be within 0..1 (exclusive)";
+    if (o_.exposure_us >= o_.frame_period_us)
+      return "camera sim: exposure_us must be shorter than frame_period_us";
+    if (o_.ring_frames > 0 && o_.jitter > 0)
+      return "camera sim: ring_frames replays identical frames: it needs jitter 0";
+    if (o_.crosstalk.size() != 9) return "camera sim: crosstalk needs 9 values (3x3)";
+    return {};
+  }
+
+  std::string configure(const CameraSettings& wanted) override {
+    if (wanted.width) o_.width = *wanted.width;
+    if (wanted.height) o_.height = *wanted.height;
+    if (wanted.pixel_format && *wanted.pixel_format != PixelFormat::kRgb16)
+      return "camera sim: only pixel format rgb16 (12-bit RGB in 16-bit containers)";
+    if (wanted.exposure_us) o_.exposure_us = static_cast<std::uint32_t>(*wanted.exposure_us);
+    if (wanted.frame_rate_hz && *wanted.frame_rate_hz > 0)
+      o_.frame_period_us = static_cast<std::uint32_t>(1e6 / *wanted.frame_rate_hz);
+    if (auto problem = open(); !problem.empty()) return problem;
+    settings_ = CameraSettings{};
+    settings_.width = o_.width;
+    settings_.height = o_.height;
+    settings_.pixel_format = PixelFormat::kRgb16;
+    settings_.exposure_us = o_.exposure_us;
+    settings_.gain_db = 0;
+    settings_.frame_rate_hz = 1e6 / o_.frame_period_us;
+    settings_.trigger = TriggerMode::kFreeRun;
+    return {};
+  }
+
+  CameraSettings settings() const override { return settings_; }
+
+  FrameFormat format() const override {
+    return {o_.width, o_.height, PixelFormat::kRgb16, o_.bit_depth,
+            static_cast<std::size_t>(o_.width) * 6};
+  }
+
+  std::string start() override {
+    if (auto problem = open(); !problem.empty()) return problem;
+    counters_ = {};
+    sequence_ = 0;
+    delivered_ = 0;
+    travel_px_ = 0;
+    host_start_ns_ = steady_now_ns();
+    running_ = true;
+    return {};
+  }
+
+  FrameWait next_frame(Frame& frame, std::chrono::milliseconds, std::string& error) override {
+    if (!running_) return FrameWait::kEnd;
+    if (o_.max_frames != 0 && sequence_ >= o_.max_frames) return FrameWait::kEnd;
+    for (;;) {
+      if (o_.pace_realtime) {
+        const std::int64_t due =
+            host_start_ns_ + static_cast<std::int64_t>(sequence_) *
+                                 static_cast<std::int64_t>(o_.frame_period_us) * 1000;
+        const std::int64_t wait = due - steady_now_ns();
+        if (wait > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(wait));
+      }
+      const bool lost = o_.drop_probability > 0 && uniform_(rng_) < o_.drop_probability;
+      if (!expose_one(frame, lost, error)) return FrameWait::kError;
+      if (!lost) {
+        ++counters_.frames_delivered;
+        return FrameWait::kFrame;
+      }
+      ++counters_.frames_dropped;
+      if (o_.max_frames != 0 && sequence_ >= o_.max_frames) return FrameWait::kEnd;
+    }
+  }
+
+  void stop() override { running_ = false; }
+  CameraCounters counters() const override { return counters_; }
+
+ private:
+  /// One frame period: strobe, encoder, rendering (unless lost), clock to the next frame.
+  bool expose_one(Frame& frame, bool lost, std::string& error) {
+    double speed = o_.speed_px_per_s;
+    if (o_.jitter > 0) speed *= std::clamp(1.0 + o_.jitter * normal_(rng_), 0.2, 1.8);
+    const std::uint64_t begin_us = controller_.now_us();
+    const double travel_at_begin = travel_px_;
+    controller_.take_led_transitions();
+    controller_.set_encoder_velocity(
+        static_cast<std::int32_t>(std::lround(speed * o_.counts_per_px)));
+    const std::int64_t timestamp_ns =
+        o_.clock_offset_ns + static_cast<std::int64_t>(static_cast<double>(begin_us) * 1000.0 *
+                                                       (1.0 + o_.clock_drift_ppm * 1e-6));
+    controller_.expose(o_.exposure_us);
+    const auto transitions = controller_.take_led_transitions();
+    const std::uint64_t after_us = controller_.now_us();
+    if (after_us < begin_us + o_.frame_period_us)
+      controller_.advance_us(begin_us + o_.frame_period_us - after_us);
+    const std::uint64_t end_us = controller_.now_us();
+    travel_px_ += speed * static_cast<double>(end_us - begin_us) * 1e-6;
+    const std::uint64_t sequence = sequence_++;
+    if (lost) return true;
+
+    frame.sequence = sequence;
+    frame.timestamp_ns = timestamp_ns;
+    frame.format = format();
+    const Lighting light = lighting_from(transitions);
+    const double travel_at_slot0 =
+        travel_at_begin +
+        speed * static_cast<double>(light.dark ? 0 : light.start_us - begin_us) * 1e-6;
+    const double blur = light.dark ? 0.0 : speed * static_cast<double>(light.duration_us) * 1e-6;
+    if (o_.ring_frames > 0 && ring_.size() == static_cast<std::size_t>(o_.ring_frames)) {
+      const Frame& stored = ring_[delivered_ % ring_.size()];
+      frame.data = stored.data;
+      frame.truth = stored.truth;
+      frame.descriptor_json = stored.descriptor_json;
+    } else {
+      if (!render(frame, light, travel_at_slot0, blur, error)) return false;
+      if (o_.ring_frames > 0) ring_.push_back(frame);
+    }
+    ++delivered_;
+    frame.host_arrival_ns = steady_now_ns();
+    return true;
+  }
+
+  imaging::CaptureModel model_for(const Lighting& light, double blur) const {
+    imaging::CaptureModel m;
+    m.code = light.code;
+    m.blur_px = blur;
+    m.crosstalk = o_.crosstalk;
+    const auto per_bit = imaging::budgeted_led_electrons(light.code, o_.electrons, o_.cap);
+    m.led_electrons.assign(per_bit.begin(), per_bit.begin() + 3);
+    m.ambient_electrons = {0, 0, 0};
+    m.read_noise = o_.read_noise;
+    m.full_well = o_.full_well;
+    m.bit_depth = o_.bit_depth;
+    m.black_level = o_.black_level;
+    m.gain = o_.full_well / (std::pow(2.0, o_.bit_depth) - 1.0);
+    return m;
+  }
+
+  bool render(Frame& frame, const Lighting& light, double travel, double blur, std::string& error) {
+    const int pad = static_cast<int>(std::ceil(blur)) + 2;
+    imaging::Plane window(o_.width + pad, o_.height);
+    const double pitch = o_.tile_width + o_.gap;
+    frame.truth.clear();
+    for (int x = 0; x < window.width; ++x) {
+      const double u = (x - pad) - travel;
+      float column_value = -1;
+      const imaging::Plane* tile = nullptr;
+      double k = 0;
+      if (u < 0) {
+        const double i = std::ceil(-u / pitch) - 1;
+        k = u + (i + 1) * pitch;
+        if (k < o_.tile_width - 1) {
+          tile = tile_for(static_cast<std::uint64_t>(i), error);
+          if (tile == nullptr) return false;
+        }
+      }
+      if (tile == nullptr) column_value = static_cast<float>(kBelt);
+      const int k0 = static_cast<int>(k);
+      const float f = static_cast<float>(k - k0);
+      for (int y = 0; y < o_.height; ++y)
+        window.at(x, y) =
+            tile == nullptr ? column_value : tile->at(k0, y) * (1 - f) + tile->at(k0 + 1, y) * f;
+    }
+    // Labels whose whole tile stays in view from the first slot to the last.
+    for (std::uint64_t i = 0;; ++i) {
+      const double left = -(static_cast<double>(i) + 1) * pitch + travel;
+      if (left + o_.tile_width + blur <= o_.width && left >= 0)
+        frame.truth.push_back(content_of(sim_label_scene(i)));
+      if (left + o_.tile_width < 0) break;
+    }
+    imaging::Image dn;
+    imaging::CaptureModel model;
+    if (light.dark) {
+      model = model_for(Lighting{false, LedCode::parse("1", 1).value(), 0, 0}, 0);
+      imaging::Image zero;
+      for (int c = 0; c < 3; ++c) zero.channels.emplace_back(window.width, window.height);
+      dn = sim::record_frame(zero, model, o_.seed * 1'000'003 + frame.sequence);
+    } else {
+      model = model_for(light, blur);
+      dn = sim::record_frame(sim::expected_electrons(window, model), model,
+                             o_.seed * 1'000'003 + frame.sequence);
+    }
+    frame.data.resize(static_cast<std::size_t>(o_.width) * o_.height * 6);
+    std::uint8_t* out = frame.data.data();
+    for (int y = 0; y < o_.height; ++y)
+      for (int x = 0; x < o_.width; ++x)
+        for (int c = 0; c < 3; ++c) {
+          const auto v = static_cast<std::uint16_t>(dn.channels[c].at(x + pad, y));
+          *out++ = static_cast<std::uint8_t>(v & 0xFF);
+          *out++ = static_cast<std::uint8_t>(v >> 8);
+        }
+    nlohmann::json descriptor = imaging::to_descriptor(model);
+    descriptor["capture"] = {{"sequence", frame.sequence},
+                             {"timestamp_ns", frame.timestamp_ns},
+                             {"truth", frame.truth},
+                             {"source", "sim"}};
+    frame.descriptor_json = descriptor.dump();
+    return true;
+  }
+
+  const imaging::Plane* tile_for(std::uint64_t index, std::string& error) {
+    auto found = tiles_.find(index);
+    if (found != tiles_.end()) return &found->second;
+    // Keep the cache small: tiles far behind the belt are gone for good.
+    while (tiles_.size() > 8) tiles_.erase(tiles_.begin());
+    auto spec = sim::parse_scene(sim_label_scene(index));
+    if (!spec.ok()) {
+      error = "camera sim: label " + std::to_string(index) + ": " + spec.error();
+      return nullptr;
+    }
+    spec.value().width = o_.tile_width;
+    spec.value().height = o_.height;
+    spec.value().belt = kBelt;
+    const bool linear = spec.value().kind == sim::SceneKind::kCode128 ||
+                        spec.value().kind == sim::SceneKind::kEan13;
+    spec.value().module_px = linear ? 2.5 : 4;
+    auto rendered = sim::render_scene(spec.value());
+    if (!rendered.ok()) {
+      error = "camera sim: label " + std::to_string(index) + ": " + rendered.error();
+      return nullptr;
+    }
+    return &tiles_.emplace(index, std::move(rendered.value())).first->second;
+  }
+
+  static constexpr double kBelt = 0.35;
+
+  device::VirtualController& controller_;
+  SimConveyorOptions o_;
+  std::mt19937_64 rng_;
+  std::uniform_real_distribution<double> uniform_{0.0, 1.0};
+  std::normal_distribution<double> normal_{0.0, 1.0};
+  CameraSettings settings_;
+  CameraCounters counters_;
+  std::uint64_t sequence_ = 0;
+  std::uint64_t delivered_ = 0;
+  double travel_px_ = 0;
+  std::int64_t host_start_ns_ = 0;
+  bool running_ = false;
+  std::map<std::uint64_t, imaging::Plane> tiles_;
+  std::vector<Frame> ring_;
+};
+
+template <typename T>
+bool parse_number(const std::string& text, T& value) {
+  if constexpr (std::is_floating_point_v<T>) {
+    try {
+      std::size_t used = 0;
+      value = static_cast<T>(std::stod(text, &used));
+      return used == text.size() && std::isfinite(static_cast<double>(value));
+    } catch (...) {
+      return false;
+    }
+  } else {
+    const auto [end, ec] = std::from_chars(text.data(), text.data() + text.size(), value);
+    return ec == std::errc() && end == text.data() + text.size();
+  }
+}
+
+}  // namespace
+
+std::string sim_label_scene(std::uint64_t index) {
+  char text[48];
+  switch (index % 4) {
+    case 0:
+      std::snprintf(text, sizeof text, "code128:FS-%05llu", static_cast<unsigned long long>(index));
+      return text;
+    case 1:
+      return "ean13:" + ean13_with_check(index);
+    case 2:
+      std::snprintf(text, sizeof text, "qr:flutterscan-%05llu",
+                    static_cast<unsigned long long>(index));
+      return text;
+    default:
+      std::snprintf(text, sizeof text, "datamatrix:DM%05llu",
+                    static_cast<unsigned long long>(index));
+      return text;
+  }
+}
+
+std::string apply_sim_options(const std::vector<std::pair<std::string, std::string>>& options,
+                              SimConveyorOptions& o) {
+  for (const auto& [key, value] : options) {
+    bool ok = true;
+    if (key == "width")
+      ok = parse_number(value, o.width);
+    else if (key == "height")
+      ok = parse_number(value, o.height);
+    else if (key == "tile_width")
+      ok = parse_number(value, o.tile_width);
+    else if (key == "gap")
+      ok = parse_number(value, o.gap);
+    else if (key == "speed_px_per_s")
+      ok = parse_number(value, o.speed_px_per_s);
+    else if (key == "jitter")
+      ok = parse_number(value, o.jitter);
+    else if (key == "counts_per_px")
+      ok = parse_number(value, o.counts_per_px);
+    else if (key == "frame_period_us")
+      ok = parse_number(value, o.frame_period_us);
+    else if (key == "exposure_us")
+      ok = parse_number(value, o.exposure_us);
+    else if (key == "electrons")
+      ok = parse_number(value, o.electrons);
+    else if (key == "cap")
+      ok = parse_number(value, o.cap);
+    else if (key == "read_noise")
+      ok = parse_number(value, o.read_noise);
+    else if (key == "drop_probability")
+      ok = parse_number(value, o.drop_probability);
+    else if (key == "clock_offset_ns")
+      ok = parse_number(value, o.clock_offset_ns);
+    else if (key == "clock_drift_ppm")
+      ok = parse_number(value, o.clock_drift_ppm);
+    else if (key == "seed")
+      ok = parse_number(value, o.seed);
+    else if (key == "max_frames")
+      ok = parse_number(value, o.max_frames);
+    else if (key == "ring_frames")
+      ok = parse_number(value, o.ring_frames);
+    else if (key == "pace_realtime") {
+      ok = value == "true" || value == "false";
+      o.pace_realtime = value == "true";
+    } else
+      return "camera sim: unknown option '" + key + "'";
+    if (!ok) return "camera sim: option " + key + ": '" + value + "' is not a valid value";
+  }
+  return {};
+}
+
+std::unique_ptr<CameraSource> make_sim_camera(device::VirtualController& controller,
+                                              const SimConveyorOptions& options) {
+  return std::make_unique<SimCamera>(controller, options);
+}
+
+CameraBackend sim_camera_backend() {
+  CameraBackend backend;
+  backend.scheme = "sim";
+  backend.summary =
+      "sim: a virtual conveyor lit by the virtual controller (needs --controller sim)";
+  backend.create = [](const std::string&, const CameraContext& context, std::string& error) {
+    if (context.controller == nullptr) {
+      error = "camera 'sim' needs the virtual controller (--controller sim)";
+      return std::unique_ptr<CameraSource>();
+    }
+    SimConveyorOptions options;
+    error = apply_sim_options(context.options, options);
+    if (!error.empty()) return std::unique_ptr<CameraSource>();
+    return make_sim_camera(*context.controller, options);
+  };
+  backend.list = [] {
+    CameraInfo info;
+    info.spec = "sim";
+    info.description = "virtual conveyor camera (always present; needs --controller sim)";
+    info.pixel_formats = {"rgb16"};
+    info.features = {"exposure", "frame rate", "strobe to controller (slave)"};
+    return std::vector<CameraInfo>{info};
+  };
+  return backend;
+}
+
+}  // namespace flutterscan::capture
