@@ -19,6 +19,7 @@
 #include "imaging/capture_descriptor.hpp"
 #include "imaging/deblur.hpp"
 #include "imaging/frame_conversion.hpp"
+#include "imaging/metrics.hpp"
 #include "sim/scene.hpp"
 
 namespace flutterscan::app {
@@ -42,6 +43,7 @@ struct DeblurFlags {
   std::string output;
   bool decode = false;
   bool json = false;
+  std::string truth;  ///< ground truth (reflectance x 65535) to score against
 };
 
 double elapsed_ms(std::chrono::steady_clock::time_point since) {
@@ -60,6 +62,22 @@ std::vector<double> white_levels(const imaging::Image& electrons) {
     levels.push_back(std::max(1.0, static_cast<double>(*at)));
   }
   return levels;
+}
+
+/// The ground truth at `path`, a 16-bit grey PNG of reflectance x 65535 the
+/// size of the output (what `flutterscan simulate` writes beside a frame).
+imaging::Plane read_truth(const std::string& path, int width, int height) {
+  const auto truth = read_frame(path);
+  if (!truth.ok()) throw UsageError("--truth: " + truth.error());
+  const imaging::Image& image = truth.value().dn;
+  if (image.channel_count() != 1 || image.channels[0].width != width ||
+      image.channels[0].height != height)
+    throw UsageError("--truth '" + path + "' must be a grey image of " + std::to_string(width) +
+                     "x" + std::to_string(height) + " pixels, like the input");
+  imaging::Plane plane = image.channels[0];
+  const float full_scale = static_cast<float>((1 << truth.value().container_bits) - 1);
+  for (float& v : plane.pixels) v /= full_scale;
+  return plane;
 }
 
 /// Solves the 3x3 system m * x = b by Cramer's rule; false if m is singular.
@@ -190,6 +208,16 @@ void run(const DeblurFlags& f) {
   if (auto error = write_png16(f.output, out); !error.empty()) throw RuntimeFailure(error);
   const double write_ms = elapsed_ms(start);
 
+  double psnr_db = 0, ssim_index = 0;
+  if (!f.truth.empty()) {
+    const imaging::Plane& latent = result.value().latent;
+    const imaging::Plane truth = read_truth(f.truth, latent.width, latent.height);
+    const auto region =
+        imaging::scored_region(latent.width, latent.height, model.blur_px, model.direction);
+    psnr_db = imaging::psnr(truth, latent, region);
+    ssim_index = imaging::ssim(truth, latent, region);
+  }
+
   std::vector<std::string> decoded;
   double decode_ms = 0;
   if (f.decode) {
@@ -208,11 +236,15 @@ void run(const DeblurFlags& f) {
       report["timings_ms"]["decode"] = decode_ms;
       report["decoded"] = decoded;
     }
+    if (!f.truth.empty()) report["truth"] = {{"psnr_db", psnr_db}, {"ssim", ssim_index}};
     std::cout << report.dump() << "\n";
     return;
   }
   std::cout << "wrote " << f.output << " (" << f.method << ", " << static_cast<int>(deblur_ms)
             << " ms)\n";
+  if (!f.truth.empty())
+    std::cout << "against " << f.truth << ": PSNR " << psnr_db << " dB, SSIM " << ssim_index
+              << "\n";
   if (f.decode) {
     if (decoded.empty()) std::cout << "no barcode decoded\n";
     for (const auto& text : decoded) std::cout << "decoded: " << text << "\n";
@@ -262,6 +294,9 @@ void add_deblur(CLI::App& app) {
       ->capture_default_str();
   command->add_option("-o,--output", f->output, "16-bit grey PNG to write")->required();
   command->add_flag("--decode", f->decode, "also decode the barcodes on the result");
+  command->add_option("--truth", f->truth,
+                      "ground truth to score against (16-bit grey PNG of reflectance, as "
+                      "`simulate` writes): prints PSNR and SSIM over design.md's region");
   command->add_flag("--json", f->json, "print one JSON object (method, timings, decoded values)");
   command->callback([f] { run(*f); });
 }

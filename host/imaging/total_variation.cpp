@@ -45,6 +45,7 @@ Step step_of(const TotalVariationSettings& settings, int k) {
 TotalVariationSettings l0_settings() {
   TotalVariationSettings settings;
   settings.prior = EdgePrior::kL0Gradient;
+  settings.weight_per_noise = 0;
   settings.weight_along = 2.0;
   settings.weight_across = 8.0;
   settings.threshold_along = 0.3;
@@ -77,10 +78,19 @@ TotalVariation::TotalVariation(std::span<const ChannelPsf> channels, int width,
     filters_.push_back(std::move(filter));
   }
   wiener_inverse_.resize(bins);
+  double posterior_variance = 0;  // mean over all n frequencies (bins 1..n/2-1 stand for two)
   for (std::size_t j = 0; j < bins; ++j) {
     const double w = 2.0 * std::numbers::pi * static_cast<double>(j) / n;
     const double denominator = data_power_[j] + settings.wiener_lambda * (2.0 - 2.0 * std::cos(w));
     wiener_inverse_[j] = denominator > 0 ? static_cast<float>(1.0 / (denominator * n)) : 0.0f;
+    const bool paired = j > 0 && 2 * static_cast<int>(j) != n;
+    if (denominator > 0) posterior_variance += (paired ? 2.0 : 1.0) / denominator / n;
+  }
+  if (settings_.weight_per_noise > 0 && posterior_variance > 0) {
+    settings_.weight_along = settings_.weight_per_noise / std::sqrt(posterior_variance);
+    settings_.weight_across = settings_.across_ratio * settings_.weight_along;
+    settings_.threshold_along = settings_.threshold_per_noise * std::sqrt(posterior_variance);
+    settings_.threshold_across = settings_.threshold_along;
   }
   inverse_.resize(bins);
   blend_ = periodic_blend(width, n);
@@ -269,9 +279,7 @@ Plane TotalVariation::deconvolve(std::span<const Plane> channels, const Plane& w
   const int height = channels[0].height;
   Plane latent(width_, height);
   RowPool pool(std::max(1, std::min(threads, height)));
-  deconvolve(
-      plane_row_loader(channels),
-      height, warm_start, latent, pool);
+  deconvolve(plane_row_loader(channels), height, warm_start, latent, pool);
   return latent;
 }
 

@@ -555,6 +555,30 @@ TEST_F(ImagingCliTest, DeblurWithTheDescriptorDecodesTheLabel) {
   }
 }
 
+TEST_F(ImagingCliTest, DeblurScoresAgainstTheTruth) {
+  simulate_label();
+  const std::string truth = (dir_ / "frame.truth.png").string();
+  double psnr[2] = {0, 0};
+  int i = 0;
+  for (const char* method : {"joint-wiener", "tv"}) {
+    const RunResult result = run({"deblur", frame(), "--descriptor", descriptor(), "--method",
+                                  method, "--truth", truth, "--json", "-o", output()});
+    ASSERT_EQ(result.exit_code, 0) << result;
+    const auto objects = json_lines(result.out);
+    ASSERT_EQ(objects.size(), 1U);
+    psnr[i] = objects[0]["truth"]["psnr_db"].get<double>();
+    EXPECT_GT(objects[0]["truth"]["ssim"].get<double>(), 0.3) << result;
+    ++i;
+  }
+  EXPECT_GT(psnr[0], 20.0);
+  EXPECT_GT(psnr[1], psnr[0] + 5.0);  // tv's margin over joint Wiener on labels
+  // The truth must match the input's size.
+  const RunResult wrong =
+      run({"deblur", frame(), "--descriptor", descriptor(), "--truth", frame(), "-o", output()});
+  EXPECT_EQ(wrong.exit_code, 2) << wrong;
+  EXPECT_NE(wrong.err.find("--truth"), std::string::npos) << wrong;
+}
+
 TEST_F(ImagingCliTest, DeblurFromFlagsAlsoDecodes) {
   simulate_label();
   const json descriptor_json = json::parse(read_file(descriptor()));
