@@ -13,6 +13,7 @@
 // by the winning scheme and labelled with the best coded scheme's margin in dB
 // over the best white snapshot.
 
+#include <CLI/CLI.hpp>
 #include <algorithm>
 #include <atomic>
 #include <cmath>
@@ -59,22 +60,6 @@ struct Score {
   bool decoded = false;
 };
 
-std::vector<double> numbers(const std::string& text) {
-  std::vector<double> out;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) out.push_back(std::stod(item));
-  return out;
-}
-
-std::vector<std::string> words(const std::string& text) {
-  std::vector<std::string> out;
-  std::stringstream stream(text);
-  std::string item;
-  while (std::getline(stream, item, ',')) out.push_back(item);
-  return out;
-}
-
 std::vector<Scene> scenes(double print_blur, double texture) {
   const std::vector<std::pair<std::string, std::string>> specs = {
       {"code128:FS-0042", "FS-0042"},
@@ -114,46 +99,48 @@ int main(int argc, char** argv) {
   std::vector<std::string> method_names = {"joint-wiener", "rl", "tv"};
   std::string csv_path, chart_path;
   double print_blur = 0, texture = 0;
-  for (int i = 1; i < argc; ++i)
-    if (std::string(argv[i]) == "--quiet")
-      quiet = true;
-    else if (std::string(argv[i]) == "--psnr-only")
-      psnr_only = true;
-  for (int i = 1; i + 1 < argc; i += 2) {
-    const std::string flag = argv[i];
-    if (flag == "--quiet" || flag == "--psnr-only") {
-      --i;
-      continue;
-    }
-    const std::string value = argv[i + 1];
-    if (flag == "--electrons")
-      light = numbers(value);
-    else if (flag == "--caps")
-      caps = numbers(value);
-    else if (flag == "--read-noise")
-      read_noises = numbers(value);
-    else if (flag == "--regime")
-      regime_prefix = value;
-    else if (flag == "--print-blur")
-      print_blur = std::stod(value);
-    else if (flag == "--texture")
-      texture = std::stod(value);
-    else if (flag == "--seeds")
-      seeds = std::stoi(value);
-    else if (flag == "--methods")
-      method_names = words(value);
-    else if (flag == "--csv")
-      csv_path = value;
-    else if (flag == "--chart")
-      chart_path = value;
+  CLI::App app{"Accuracy of every capture scheme and method: PSNR, SSIM, barcode decode rate"};
+  app.add_option("--electrons", light, "light levels E, e- per channel (comma-separated)")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--caps", caps, "overdrive caps c")
+      ->delimiter(',')
+      ->check(CLI::Range(1.0, 1000.0))
+      ->capture_default_str();
+  app.add_option("--read-noise", read_noises, "read noise levels, e- rms")
+      ->delimiter(',')
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--seeds", seeds, "noise seeds per scene")
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  app.add_option("--methods", method_names, "joint-wiener, wiener-avg, rl, tv")
+      ->delimiter(',')
+      ->check([](const std::string& name) {
+        return imaging::method_from_name(name) ? std::string() : "unknown method '" + name + "'";
+      })
+      ->capture_default_str();
+  app.add_option("--csv", csv_path, "write every frame's scores here");
+  app.add_option("--chart", chart_path, "PNG of PSNR against light level per scheme");
+  app.add_option("--regime", regime_prefix, "write regime maps PREFIX-cN.png");
+  app.add_option("--print-blur", print_blur, "weathered print: ink spread, px")
+      ->check(CLI::NonNegativeNumber);
+  app.add_option("--texture", texture, "weathered print: paper and toner texture (0..1)")
+      ->check(CLI::Range(0.0, 1.0));
+  app.add_flag("--quiet", quiet, "no Markdown tables");
+  app.add_flag("--psnr-only", psnr_only, "skip SSIM and decoding");
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    return app.exit(error) == 0 ? 0 : 2;  // --help: 0; bad usage: 2 (design.md)
   }
   std::vector<imaging::Method> methods;
   std::vector<std::string> used_names;
-  for (const auto& name : method_names)
-    if (const auto method = imaging::method_from_name(name)) {
-      methods.push_back(*method);
-      used_names.push_back(name);
-    }
+  for (const auto& name : method_names) {
+    methods.push_back(*imaging::method_from_name(name));
+    used_names.push_back(name);
+  }
   const auto schemes = bench::standard_schemes();
   const auto scene_set = scenes(print_blur, texture);
 
