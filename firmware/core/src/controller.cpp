@@ -37,9 +37,9 @@ void Controller::start() {
   apply_brightness();
 }
 
-void Controller::poll() {
+void Controller::poll(bool may_enter_bootloader) {
   port_.kick_watchdog();
-  if (bootloader_requested_ && !bootloader_entered_) {
+  if (bootloader_requested_ && !bootloader_entered_ && may_enter_bootloader) {
     bootloader_entered_ = true;
     port_.enter_bootloader();
   }

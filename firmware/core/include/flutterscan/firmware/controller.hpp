@@ -46,8 +46,9 @@ class Controller final : public PortListener {
   /// loaded from flash (defaults if it is missing or corrupt), brightness applied.
   void start();
   /// \brief Main-loop work: kicks the watchdog; enters the bootloader once
-  /// EnterBootloader was accepted and its reply sent.
-  void poll();
+  /// EnterBootloader was accepted and `may_enter_bootloader` (the USB layer
+  /// passes false while the reply has not been read).
+  void poll(bool may_enter_bootloader = true);
 
   // Commands ---------------------------------------------------------------
   /// \brief GetInfo.
