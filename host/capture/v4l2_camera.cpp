@@ -19,7 +19,6 @@ namespace flutterscan::capture {
 namespace {
 
 using OpenResult = Result<std::unique_ptr<V4l2Camera>, std::string>;
-using FrameResult = Result<V4l2Frame, std::string>;
 
 std::string errno_text() {
   return std::strerror(errno);
@@ -53,23 +52,10 @@ const char* v4l2_io_method_name(V4l2IoMethod method) {
   return "?";
 }
 
-Result<std::unique_ptr<V4l2Camera>, std::string> V4l2Camera::open(const V4l2Request& request) {
-  const std::string& device = request.device;
-  if (request.buffer_count < 4) {
-    return OpenResult::failure(device + ": buffer count " + std::to_string(request.buffer_count) +
-                               " is below the minimum of 4");
-  }
-  if (request.width < 0 || request.height < 0) {
-    return OpenResult::failure(device + ": negative frame size " + std::to_string(request.width) +
-                               "x" + std::to_string(request.height));
-  }
-  if (request.frame_rate < 0.0 || !std::isfinite(request.frame_rate)) {
-    return OpenResult::failure(device + ": frame rate " + std::to_string(request.frame_rate) +
-                               " is not a positive number");
-  }
+Result<std::unique_ptr<V4l2Camera>, std::string> V4l2Camera::open(const std::string& device) {
   const int fd = ::open(device.c_str(), O_RDWR | O_NONBLOCK | O_CLOEXEC);
   if (fd < 0) return OpenResult::failure("cannot open " + device + ": " + errno_text());
-  std::unique_ptr<V4l2Camera> camera(new V4l2Camera(fd, request));
+  std::unique_ptr<V4l2Camera> camera(new V4l2Camera(fd, device));
   V4l2Description& description = camera->description_;
 
   v4l2_capability capability{};
@@ -102,35 +88,66 @@ Result<std::unique_ptr<V4l2Camera>, std::string> V4l2Camera::open(const V4l2Requ
     description.offered_fourccs.push_back(format.pixelformat);
   }
 
-  if (std::string error = camera->negotiate_format(); !error.empty()) {
-    return OpenResult::failure(error);
-  }
-  if (std::string error = camera->set_frame_rate(); !error.empty()) {
-    return OpenResult::failure(error);
-  }
-  auto controls = apply_linear_controls(fd, device, request.controls,
-                                        description.format.info.layout == V4l2Layout::kBayer);
-  if (!controls) return OpenResult::failure(controls.error());
-  description.controls = std::move(controls.value());
   return OpenResult::success(std::move(camera));
 }
 
+std::string V4l2Camera::configure(const V4l2Config& config) {
+  const std::string& device = device_;
+  if (streaming_) return device + ": cannot configure while streaming";
+  if (config.buffer_count < 4) {
+    return device + ": buffer count " + std::to_string(config.buffer_count) +
+           " is below the minimum of 4";
+  }
+  if (config.width < 0 || config.height < 0) {
+    return device + ": negative frame size " + std::to_string(config.width) + "x" +
+           std::to_string(config.height);
+  }
+  if (config.frame_rate < 0.0 || !std::isfinite(config.frame_rate)) {
+    return device + ": frame rate " + std::to_string(config.frame_rate) +
+           " is not a positive number";
+  }
+  configured_ = false;
+  config_ = config;
+  description_.format = {};
+  description_.controls = {};
+  description_.warnings.clear();
+  if (std::string error = negotiate_format(); !error.empty()) return error;
+  if (std::string error = set_frame_rate(); !error.empty()) return error;
+  auto controls = apply_linear_controls(fd_, device, config.controls,
+                                        description_.format.info.layout == V4l2Layout::kBayer);
+  if (!controls) return controls.error();
+  description_.controls = std::move(controls.value());
+  configured_ = true;
+  return {};
+}
+
+std::vector<std::string> V4l2Camera::control_features() const {
+  return v4l2_control_features(fd_);
+}
+
 std::string V4l2Camera::negotiate_format() {
-  const std::string& device = request_.device;
+  const std::string& device = device_;
   const std::vector<std::uint32_t>& offered = description_.offered_fourccs;
   auto is_offered = [&](std::uint32_t f) {
     return std::find(offered.begin(), offered.end(), f) != offered.end();
   };
   std::optional<V4l2FormatInfo> chosen;
-  if (request_.fourcc != 0) {
-    chosen = v4l2_format_info(request_.fourcc);
-    if (!chosen) {
-      return device + ": pixel format " + fourcc_text(request_.fourcc) +
-             " is not one the v4l2 backend accepts (raw Bayer 8/10/12/16, RGB24, BGR24, GREY, "
-             "Y16, YUYV, MJPEG)";
+  if (!config_.fourccs.empty()) {
+    for (std::uint32_t fourcc : config_.fourccs) {
+      if (!v4l2_format_info(fourcc)) {
+        return device + ": pixel format " + fourcc_text(fourcc) +
+               " is not one the v4l2 backend accepts (raw Bayer 8/10/12/16, RGB24, BGR24, GREY, "
+               "Y16, YUYV, MJPEG)";
+      }
     }
-    if (!offered.empty() && !is_offered(request_.fourcc)) {
-      return device + ": pixel format " + fourcc_text(request_.fourcc) +
+    for (std::uint32_t fourcc : config_.fourccs) {
+      if (is_offered(fourcc)) {
+        chosen = v4l2_format_info(fourcc);
+        break;
+      }
+    }
+    if (!chosen) {
+      return device + ": pixel format " + join_fourccs(config_.fourccs) +
              " is not offered (offers: " + join_fourccs(offered) + ")";
     }
   } else {
@@ -152,9 +169,8 @@ std::string V4l2Camera::negotiate_format() {
   if (v4l2_ioctl(fd_, VIDIOC_G_FMT, &format) != 0) {
     return device + ": cannot read the current format (VIDIOC_G_FMT: " + errno_text() + ")";
   }
-  const int width = request_.width > 0 ? request_.width : static_cast<int>(format.fmt.pix.width);
-  const int height =
-      request_.height > 0 ? request_.height : static_cast<int>(format.fmt.pix.height);
+  const int width = config_.width > 0 ? config_.width : static_cast<int>(format.fmt.pix.width);
+  const int height = config_.height > 0 ? config_.height : static_cast<int>(format.fmt.pix.height);
   format = {};
   format.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   format.fmt.pix.width = static_cast<std::uint32_t>(width);
@@ -205,17 +221,17 @@ std::string V4l2Camera::negotiate_format() {
 }
 
 std::string V4l2Camera::set_frame_rate() {
-  const std::string& device = request_.device;
+  const std::string& device = device_;
   v4l2_streamparm parm{};
   parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   const bool readable = v4l2_ioctl(fd_, VIDIOC_G_PARM, &parm) == 0;
   const bool settable = readable && (parm.parm.capture.capability & V4L2_CAP_TIMEPERFRAME);
-  if (request_.frame_rate > 0.0) {
+  if (config_.frame_rate > 0.0) {
     if (!settable) {
-      return device + ": frame rate " + std::to_string(request_.frame_rate) +
+      return device + ": frame rate " + std::to_string(config_.frame_rate) +
              " fps requested but the driver cannot set the frame interval";
     }
-    const double rate = request_.frame_rate;
+    const double rate = config_.frame_rate;
     const bool whole = std::abs(rate - std::round(rate)) < 1e-9;
     parm = {};
     parm.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
@@ -236,9 +252,8 @@ std::string V4l2Camera::set_frame_rate() {
   const double got = (readable && interval.numerator > 0)
                          ? static_cast<double>(interval.denominator) / interval.numerator
                          : 0.0;
-  if (request_.frame_rate > 0.0 &&
-      std::abs(got - request_.frame_rate) > 0.01 * request_.frame_rate) {
-    return device + ": frame rate " + std::to_string(request_.frame_rate) +
+  if (config_.frame_rate > 0.0 && std::abs(got - config_.frame_rate) > 0.01 * config_.frame_rate) {
+    return device + ": frame rate " + std::to_string(config_.frame_rate) +
            " fps requested, driver set " + std::to_string(got) + " fps";
   }
   description_.format.frame_rate = got;
@@ -247,13 +262,14 @@ std::string V4l2Camera::set_frame_rate() {
 
 std::string V4l2Camera::start() {
   if (streaming_) return {};
-  const std::string& device = request_.device;
+  if (!configured_) return device_ + ": start() before a successful configure()";
+  const std::string& device = device_;
   std::string error;
-  if (request_.io == V4l2IoMethod::kAuto || request_.io == V4l2IoMethod::kMmap) {
+  if (config_.io == V4l2IoMethod::kAuto || config_.io == V4l2IoMethod::kMmap) {
     error = request_mmap_buffers();
     if (error.empty()) {
       io_in_use_ = V4l2IoMethod::kMmap;
-    } else if (request_.io == V4l2IoMethod::kAuto) {
+    } else if (config_.io == V4l2IoMethod::kAuto) {
       description_.warnings.push_back(error + "; streaming with USERPTR instead");
       error.clear();
     } else {
@@ -284,9 +300,9 @@ std::string V4l2Camera::start() {
 }
 
 std::string V4l2Camera::request_mmap_buffers() {
-  const std::string& device = request_.device;
+  const std::string& device = device_;
   v4l2_requestbuffers buffers{};
-  buffers.count = static_cast<std::uint32_t>(request_.buffer_count);
+  buffers.count = static_cast<std::uint32_t>(config_.buffer_count);
   buffers.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   buffers.memory = V4L2_MEMORY_MMAP;
   if (v4l2_ioctl(fd_, VIDIOC_REQBUFS, &buffers) != 0) {
@@ -322,9 +338,9 @@ std::string V4l2Camera::request_mmap_buffers() {
 }
 
 std::string V4l2Camera::request_userptr_buffers() {
-  const std::string& device = request_.device;
+  const std::string& device = device_;
   v4l2_requestbuffers buffers{};
-  buffers.count = static_cast<std::uint32_t>(request_.buffer_count);
+  buffers.count = static_cast<std::uint32_t>(config_.buffer_count);
   buffers.type = V4L2_BUF_TYPE_VIDEO_CAPTURE;
   buffers.memory = V4L2_MEMORY_USERPTR;
   if (v4l2_ioctl(fd_, VIDIOC_REQBUFS, &buffers) != 0) {
@@ -363,24 +379,26 @@ std::string V4l2Camera::queue_buffer(std::uint32_t index) {
     buffer.memory = V4L2_MEMORY_MMAP;
   }
   if (v4l2_ioctl(fd_, VIDIOC_QBUF, &buffer) != 0) {
-    return request_.device + ": cannot queue buffer " + std::to_string(index) +
+    return device_ + ": cannot queue buffer " + std::to_string(index) +
            " (VIDIOC_QBUF: " + errno_text() + ")";
   }
   return {};
 }
 
-Result<V4l2Frame, std::string> V4l2Camera::next_frame() {
-  const std::string& device = request_.device;
-  if (!streaming_) return FrameResult::failure(device + ": next_frame() before start()");
+V4l2Wait V4l2Camera::next_frame(V4l2Frame& frame, int timeout_ms, std::string& error) {
+  const std::string& device = device_;
+  if (!streaming_) {
+    error = device + ": next_frame() before start()";
+    return V4l2Wait::kError;
+  }
   if (held_buffer_) {
     const std::uint32_t index = *held_buffer_;
     held_buffer_.reset();
-    if (std::string error = queue_buffer(index); !error.empty()) {
-      return FrameResult::failure(error);
-    }
+    error = queue_buffer(index);
+    if (!error.empty()) return V4l2Wait::kError;
   }
   using Clock = std::chrono::steady_clock;
-  const auto deadline = Clock::now() + std::chrono::milliseconds(request_.frame_timeout_ms);
+  const auto deadline = Clock::now() + std::chrono::milliseconds(std::max(timeout_ms, 0));
   const V4l2Format& format = description_.format;
   const std::size_t min_bytes = static_cast<std::size_t>(format.bytes_per_line) * format.height;
   for (;;) {
@@ -389,22 +407,19 @@ Result<V4l2Frame, std::string> V4l2Camera::next_frame() {
     buffer.memory = io_in_use_ == V4l2IoMethod::kUserPtr ? V4L2_MEMORY_USERPTR : V4L2_MEMORY_MMAP;
     if (v4l2_ioctl(fd_, VIDIOC_DQBUF, &buffer) != 0) {
       if (errno != EAGAIN) {
-        return FrameResult::failure(
-            device + ": cannot dequeue a frame (VIDIOC_DQBUF: " + errno_text() + ")");
+        error = device + ": cannot dequeue a frame (VIDIOC_DQBUF: " + errno_text() + ")";
+        return V4l2Wait::kError;
       }
       const auto left =
           std::chrono::duration_cast<std::chrono::milliseconds>(deadline - Clock::now());
-      if (left.count() <= 0) {
-        return FrameResult::failure(device + ": no frame within " +
-                                    std::to_string(request_.frame_timeout_ms) + " ms");
-      }
+      if (left.count() <= 0) return V4l2Wait::kTimeout;
       pollfd waiting{fd_, POLLIN, 0};
       ::poll(&waiting, 1, static_cast<int>(std::min<long long>(left.count(), kPollSliceMs)));
       continue;
     }
     if (buffer.index >= buffers_.size()) {
-      return FrameResult::failure(device + ": driver returned unknown buffer index " +
-                                  std::to_string(buffer.index));
+      error = device + ": driver returned unknown buffer index " + std::to_string(buffer.index);
+      return V4l2Wait::kError;
     }
     // Gaps in the driver's counter are frames the driver dropped.
     std::uint32_t gap = 0;
@@ -420,12 +435,11 @@ Result<V4l2Frame, std::string> V4l2Camera::next_frame() {
     if ((buffer.flags & V4L2_BUF_FLAG_ERROR) || short_frame ||
         used > buffers_[buffer.index].length) {
       ++stats_.corrupt;
-      if (std::string error = queue_buffer(buffer.index); !error.empty()) {
-        return FrameResult::failure(error);
-      }
+      error = queue_buffer(buffer.index);
+      if (!error.empty()) return V4l2Wait::kError;
       continue;
     }
-    V4l2Frame frame;
+    frame = {};
     frame.data = {buffers_[buffer.index].start, used};
     frame.sequence = buffer.sequence;
     frame.timestamp_ns = static_cast<std::int64_t>(buffer.timestamp.tv_sec) * 1'000'000'000 +
@@ -448,7 +462,7 @@ Result<V4l2Frame, std::string> V4l2Camera::next_frame() {
     frame.dropped_before = gap;
     frame.index = stats_.frames++;
     held_buffer_ = buffer.index;
-    return FrameResult::success(frame);
+    return V4l2Wait::kFrame;
   }
 }
 

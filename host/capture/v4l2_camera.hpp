@@ -33,23 +33,26 @@ enum class V4l2IoMethod {
 /// \brief "auto", "mmap" or "userptr".
 const char* v4l2_io_method_name(V4l2IoMethod method);
 
-/// \brief Everything asked of the camera when opening it.
-struct V4l2Request {
-  std::string device = "/dev/video0";
-  int width = 0;             ///< 0: keep the driver's current width.
-  int height = 0;            ///< 0: keep the driver's current height.
-  std::uint32_t fourcc = 0;  ///< 0: the first accepted format the device offers.
-  double frame_rate = 0.0;   ///< Frames per second; 0: leave as is.
+/// \brief Everything asked of an open camera by configure().
+struct V4l2Config {
+  int width = 0;   ///< 0: keep the driver's current width.
+  int height = 0;  ///< 0: keep the driver's current height.
+  /// Wanted pixel formats, the first one the device offers wins; empty: the
+  /// first of v4l2_accepted_formats() the device offers.
+  std::vector<std::uint32_t> fourccs;
+  double frame_rate = 0.0;  ///< Frames per second; 0: leave as is.
   V4l2ControlRequest controls;
   int buffer_count = 4;  ///< Buffers requested (the driver may give more); at least 4.
   V4l2IoMethod io = V4l2IoMethod::kAuto;
-  int frame_timeout_ms = 2000;  ///< Longest wait for one frame before next_frame() fails.
 };
 
 /// \brief Which clock a buffer timestamp is on (V4L2_BUF_FLAG_TIMESTAMP_*).
 enum class V4l2Clock { kUnknown, kMonotonic, kCopy };
 /// \brief Which moment of the exposure the timestamp marks (V4L2_BUF_FLAG_TSTAMP_SRC_*).
 enum class V4l2TimestampSource { kEndOfFrame, kStartOfExposure };
+
+/// \brief What next_frame() got.
+enum class V4l2Wait { kFrame, kTimeout, kError };
 
 /// \brief One captured frame. `data` points into a driver buffer that stays
 /// valid until the next call to next_frame() or stop().
@@ -92,26 +95,34 @@ struct V4l2Stats {
 /// \brief An open V4L2 capture device (see the file comment).
 class V4l2Camera {
  public:
-  /// \brief Opens `request.device`, checks it can capture and stream, sets the
-  /// format, frame rate and controls, and reads them back. Refuses (error
-  /// message naming the setting and device) anything it cannot set exactly.
-  static Result<std::unique_ptr<V4l2Camera>, std::string> open(const V4l2Request& request);
+  /// \brief Opens `device` non-blocking, checks it can capture and stream
+  /// (VIDIOC_QUERYCAP) and lists its formats (VIDIOC_ENUM_FMT).
+  static Result<std::unique_ptr<V4l2Camera>, std::string> open(const std::string& device);
 
   ~V4l2Camera();
   V4l2Camera(const V4l2Camera&) = delete;
   V4l2Camera& operator=(const V4l2Camera&) = delete;
 
+  /// \brief Sets the format, frame rate and controls and reads them back.
+  /// Refuses (error message naming the setting and device; empty = success)
+  /// anything it cannot set exactly. Not while streaming.
+  std::string configure(const V4l2Config& config);
+
+  const std::string& device() const { return device_; }
   const V4l2Description& description() const { return description_; }
+  /// \brief Which controls the device has, as words for a camera listing
+  /// (v4l2_control_features).
+  std::vector<std::string> control_features() const;
   /// \brief The buffer sharing in use once started (kAuto before start()).
   V4l2IoMethod io_method() const { return io_in_use_; }
   const V4l2Stats& stats() const { return stats_; }
 
-  /// \brief Allocates the buffers, queues them and starts streaming. An empty
-  /// string on success, else the reason.
+  /// \brief Allocates the buffers, queues them and starts streaming (after
+  /// configure()). An empty string on success, else the reason.
   std::string start();
-  /// \brief Waits (at most the request's frame timeout) for the next good
-  /// frame; the previous frame's buffer goes back to the driver first.
-  Result<V4l2Frame, std::string> next_frame();
+  /// \brief Waits at most `timeout_ms` for the next good frame; the previous
+  /// frame's buffer goes back to the driver first. kError sets `error`.
+  V4l2Wait next_frame(V4l2Frame& frame, int timeout_ms, std::string& error);
   /// \brief Stops streaming and frees the buffers; safe to call twice.
   void stop();
 
@@ -122,7 +133,7 @@ class V4l2Camera {
     bool mapped = false;  ///< mmap'ed (else allocated here for USERPTR).
   };
 
-  V4l2Camera(int fd, V4l2Request request) : fd_(fd), request_(std::move(request)) {}
+  V4l2Camera(int fd, std::string device) : fd_(fd), device_(std::move(device)) {}
   std::string negotiate_format();
   std::string set_frame_rate();
   std::string request_mmap_buffers();
@@ -131,7 +142,9 @@ class V4l2Camera {
   void release_buffers();
 
   int fd_ = -1;
-  V4l2Request request_;
+  std::string device_;
+  V4l2Config config_;
+  bool configured_ = false;
   V4l2Description description_;
   V4l2IoMethod io_in_use_ = V4l2IoMethod::kAuto;
   std::vector<Buffer> buffers_;

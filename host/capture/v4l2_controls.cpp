@@ -212,4 +212,25 @@ Result<V4l2ControlReport, std::string> apply_linear_controls(int fd, const std::
   return Report::success(std::move(report));
 }
 
+std::vector<std::string> v4l2_control_features(int fd) {
+  struct Feature {
+    std::uint32_t id;
+    const char* word;
+  };
+  const Feature features[] = {
+      {V4L2_CID_EXPOSURE_ABSOLUTE, "exposure"},
+      {V4L2_CID_GAIN, "gain"},
+      {V4L2_CID_ANALOGUE_GAIN, "analogue gain"},
+      {V4L2_CID_GAMMA, "gamma"},
+      {V4L2_CID_EXPOSURE_AUTO, "auto exposure"},
+      {V4L2_CID_AUTOGAIN, "auto gain"},
+      {V4L2_CID_AUTO_WHITE_BALANCE, "auto white balance"},
+  };
+  std::vector<std::string> words;
+  for (const Feature& feature : features) {
+    if (find_control(fd, feature.id)) words.emplace_back(feature.word);
+  }
+  return words;
+}
+
 }  // namespace flutterscan::capture

@@ -48,4 +48,9 @@ Result<V4l2ControlReport, std::string> apply_linear_controls(int fd, const std::
                                                              const V4l2ControlRequest& request,
                                                              bool raw_sensor_data);
 
+/// \brief The controls of the open V4L2 device `fd` that the backend uses, as
+/// words for a camera listing: "exposure", "gain", "gamma", "auto exposure",
+/// "auto gain", "auto white balance".
+std::vector<std::string> v4l2_control_features(int fd);
+
 }  // namespace flutterscan::capture

@@ -26,12 +26,13 @@ namespace {
 
 using flutterscan::capture::V4l2Camera;
 using flutterscan::capture::V4l2Clock;
+using flutterscan::capture::V4l2Config;
 using flutterscan::capture::V4l2IoMethod;
-using flutterscan::capture::V4l2Request;
 using flutterscan::capture::V4l2TimestampSource;
 
 struct Options {
-  V4l2Request request;
+  std::string device = "/dev/video0";
+  V4l2Config request;
   int frames = 30;
   std::vector<V4l2IoMethod> methods{V4l2IoMethod::kMmap, V4l2IoMethod::kUserPtr};
 };
@@ -46,7 +47,7 @@ void usage() {
 bool parse(int argc, char** argv, Options& options) {
   options.request.width = 640;
   options.request.height = 480;
-  options.request.fourcc = V4L2_PIX_FMT_RGB24;
+  options.request.fourccs = {V4L2_PIX_FMT_RGB24};
   options.request.frame_rate = 15.0;
   options.request.controls.gain = 120;
   for (int i = 1; i < argc; ++i) {
@@ -57,7 +58,7 @@ bool parse(int argc, char** argv, Options& options) {
     }
     const std::string value = argv[++i];
     if (flag == "--device") {
-      options.request.device = value;
+      options.device = value;
     } else if (flag == "--size") {
       if (std::sscanf(value.c_str(), "%dx%d", &options.request.width, &options.request.height) !=
           2) {
@@ -70,7 +71,7 @@ bool parse(int argc, char** argv, Options& options) {
         std::fprintf(stderr, "v4l2_vivid_check: --format %s is unknown\n", value.c_str());
         return false;
       }
-      options.request.fourcc = *fourcc;
+      options.request.fourccs = {*fourcc};
     } else if (flag == "--fps") {
       options.request.frame_rate = std::atof(value.c_str());
     } else if (flag == "--gain") {
@@ -107,11 +108,12 @@ bool check(const Options& options, V4l2IoMethod method) {
     std::fflush(stdout);
     return false;
   };
-  V4l2Request request = options.request;
+  V4l2Config request = options.request;
   request.io = method;
-  auto opened = V4l2Camera::open(request);
+  auto opened = V4l2Camera::open(options.device);
   if (!opened) return fail(opened.error());
   V4l2Camera& camera = *opened.value();
+  if (std::string error = camera.configure(request); !error.empty()) return fail(error);
   const auto& description = camera.description();
   std::printf("device: %s (%s, %s), format %s %dx%d, %.3f fps\n", description.card.c_str(),
               description.driver.c_str(), description.bus_info.c_str(),
@@ -143,9 +145,15 @@ bool check(const Options& options, V4l2IoMethod method) {
   V4l2TimestampSource source = V4l2TimestampSource::kEndOfFrame;
   const std::size_t image_size = description.format.image_size;
   for (int i = 0; i < options.frames; ++i) {
-    auto frame = camera.next_frame();
-    if (!frame) return fail("frame " + std::to_string(i) + ": " + frame.error());
-    const auto& f = frame.value();
+    flutterscan::capture::V4l2Frame f;
+    std::string error;
+    const auto got = camera.next_frame(f, 2000, error);
+    if (got == flutterscan::capture::V4l2Wait::kTimeout) {
+      return fail("frame " + std::to_string(i) + ": none within 2 s");
+    }
+    if (got != flutterscan::capture::V4l2Wait::kFrame) {
+      return fail("frame " + std::to_string(i) + ": " + error);
+    }
     if (i == 0) {
       first_sequence = f.sequence;
       first_ns = f.timestamp_ns;
