@@ -1,0 +1,549 @@
+#include "device/dfu_flasher.hpp"
+
+#include <libusb.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <thread>
+
+#include "device/controller_client.hpp"
+#include "device/usb_discovery.hpp"
+
+namespace flutterscan::device {
+
+namespace {
+
+/// DFU runtime and DFU mode interfaces: class 0xFE (application specific), subclass 1.
+constexpr std::uint8_t kDfuClass = 0xFE;
+constexpr std::uint8_t kDfuSubclass = 1;
+constexpr std::uint8_t kDfuProtocolRuntime = 1;
+constexpr std::uint8_t kDfuProtocolDfuMode = 2;
+/// DFU_DETACH's wValue: the contract's wDetachTimeOut, ms.
+constexpr std::uint16_t kDetachTimeoutMs = 1000;
+/// Control transfer timeout (an erase can take a while; bwPollTimeout covers the rest).
+constexpr unsigned kControlTimeoutMs = 5000;
+/// bmRequestType of DFU class requests to an interface (USB 2.0 9.3.1).
+constexpr std::uint8_t kClassInterfaceOut = 0x21;
+constexpr std::uint8_t kClassInterfaceIn = 0xA1;
+/// GETSTATUS polls allowed for one block or the manifest before giving up.
+constexpr int kMaxPolls = 2000;
+/// Between looks at the bus while waiting for a device to enumerate.
+constexpr auto kEnumeratePoll = std::chrono::milliseconds(100);
+
+void say(const FlashOptions& options, const std::string& line) {
+  if (options.log) options.log(line);
+}
+
+std::string block_text(std::size_t block) {
+  return "block " + std::to_string(block);
+}
+
+}  // namespace
+
+std::string dfu_status_text(std::uint8_t status) {
+  switch (status) {
+    case 0x00:
+      return "OK";
+    case 0x01:
+      return "errTARGET: file is not targeted for this device";
+    case 0x02:
+      return "errFILE: file fails a vendor-specific check";
+    case 0x03:
+      return "errWRITE: unable to write memory";
+    case 0x04:
+      return "errERASE: memory erase failed";
+    case 0x05:
+      return "errCHECK_ERASED: memory erase check failed";
+    case 0x06:
+      return "errPROG: program memory failed";
+    case 0x07:
+      return "errVERIFY: programmed memory failed verification";
+    case 0x08:
+      return "errADDRESS: address out of range (blocks out of order?)";
+    case 0x09:
+      return "errNOTDONE: end of download before it was expected";
+    case 0x0A:
+      return "errFIRMWARE: the image failed the bootloader's check (header, board, size or CRC)";
+    case 0x0B:
+      return "errVENDOR: vendor-specific error";
+    case 0x0C:
+      return "errUSBR: unexpected USB reset";
+    case 0x0D:
+      return "errPOR: unexpected power-on reset";
+    case 0x0E:
+      return "errUNKNOWN: unknown error";
+    case 0x0F:
+      return "errSTALLEDPKT: unexpected request";
+  }
+  return "DFU status " + std::to_string(status);
+}
+
+const char* dfu_state_name(DfuState state) {
+  switch (state) {
+    case DfuState::kAppIdle:
+      return "appIDLE";
+    case DfuState::kAppDetach:
+      return "appDETACH";
+    case DfuState::kDfuIdle:
+      return "dfuIDLE";
+    case DfuState::kDnloadSync:
+      return "dfuDNLOAD-SYNC";
+    case DfuState::kDnBusy:
+      return "dfuDNBUSY";
+    case DfuState::kDnloadIdle:
+      return "dfuDNLOAD-IDLE";
+    case DfuState::kManifestSync:
+      return "dfuMANIFEST-SYNC";
+    case DfuState::kManifest:
+      return "dfuMANIFEST";
+    case DfuState::kManifestWaitReset:
+      return "dfuMANIFEST-WAIT-RESET";
+    case DfuState::kUploadIdle:
+      return "dfuUPLOAD-IDLE";
+    case DfuState::kError:
+      return "dfuERROR";
+  }
+  return "unknown DFU state";
+}
+
+// ---------------------------------------------------------------------------
+// The DFU request sequence
+
+Expected<DfuStatus> dfu_get_status(DfuControl& dfu) {
+  const auto reply = dfu.control_in(DfuRequest::kGetStatus, 0, 6);
+  if (!reply.ok()) return fail<DfuStatus>(reply.error());
+  const auto& bytes = reply.value();
+  if (bytes.size() != 6)
+    return fail<DfuStatus>(
+        ErrorKind::kBadReply,
+        "DFU GETSTATUS returned " + std::to_string(bytes.size()) + " bytes, expected 6");
+  DfuStatus status;
+  status.status = bytes[0];
+  status.poll_timeout_ms = static_cast<std::uint32_t>(bytes[1] | bytes[2] << 8 | bytes[3] << 16);
+  status.state = static_cast<DfuState>(bytes[4]);
+  return Expected<DfuStatus>::success(status);
+}
+
+Expected<Done> dfu_make_idle(DfuControl& dfu) {
+  auto status = dfu_get_status(dfu);
+  if (!status.ok()) return fail(status.error());
+  if (status.value().state == DfuState::kDfuIdle) return done();
+  const DfuRequest fix =
+      status.value().state == DfuState::kError ? DfuRequest::kClrStatus : DfuRequest::kAbort;
+  if (auto sent = dfu.control_out(fix, 0, {}); !sent.ok()) return sent;
+  status = dfu_get_status(dfu);
+  if (!status.ok()) return fail(status.error());
+  if (status.value().state != DfuState::kDfuIdle)
+    return fail(ErrorKind::kRejected,
+                std::string("the bootloader stays in ") + dfu_state_name(status.value().state) +
+                    " (" + dfu_status_text(status.value().status) + ") instead of dfuIDLE");
+  return done();
+}
+
+namespace {
+
+/// GETSTATUS until the state is one of `done_states`, sleeping bwPollTimeout
+/// while it is one of `busy_states`.
+Expected<DfuState> poll_until(DfuControl& dfu, std::initializer_list<DfuState> done_states,
+                              std::initializer_list<DfuState> busy_states, const DfuSleeper& sleep,
+                              const std::string& what) {
+  for (int poll = 0; poll < kMaxPolls; ++poll) {
+    const auto status = dfu_get_status(dfu);
+    if (!status.ok()) return fail<DfuState>(status.error());
+    const DfuStatus s = status.value();
+    if (s.state == DfuState::kError || s.status != 0)
+      return fail<DfuState>(ErrorKind::kRejected, "the bootloader refused " + what + ": " +
+                                                      dfu_status_text(s.status) + " (state " +
+                                                      dfu_state_name(s.state) + ")");
+    if (std::find(done_states.begin(), done_states.end(), s.state) != done_states.end())
+      return Expected<DfuState>::success(s.state);
+    if (std::find(busy_states.begin(), busy_states.end(), s.state) == busy_states.end())
+      return fail<DfuState>(ErrorKind::kBadReply, std::string("unexpected DFU state ") +
+                                                      dfu_state_name(s.state) + " after " + what);
+    sleep(std::chrono::milliseconds(s.poll_timeout_ms));
+  }
+  return fail<DfuState>(ErrorKind::kTimeout, "the bootloader stayed busy after " + what);
+}
+
+}  // namespace
+
+Expected<Done> dfu_download(DfuControl& dfu, std::span<const std::uint8_t> image,
+                            const ProgressCallback& progress, const DfuSleeper& sleep) {
+  if (auto idle = dfu_make_idle(dfu); !idle.ok()) return idle;
+  const std::size_t blocks = (image.size() + kDfuBlockSize - 1) / kDfuBlockSize;
+  if (blocks > 0xFFFF) return fail(ErrorKind::kBadInput, "image too large for DFU block numbers");
+  if (progress) progress(0, image.size());
+  for (std::size_t block = 0; block < blocks; ++block) {
+    const std::size_t offset = block * kDfuBlockSize;
+    const auto data = image.subspan(offset, std::min(kDfuBlockSize, image.size() - offset));
+    if (auto sent = dfu.control_out(DfuRequest::kDnload, static_cast<std::uint16_t>(block), data);
+        !sent.ok())
+      return fail(sent.error().kind, "DNLOAD " + block_text(block) + ": " + sent.error().message);
+    const auto state =
+        poll_until(dfu, {DfuState::kDnloadIdle}, {DfuState::kDnBusy, DfuState::kDnloadSync}, sleep,
+                   block_text(block));
+    if (!state.ok()) return fail(state.error());
+    if (progress) progress(offset + data.size(), image.size());
+  }
+  // The zero-length DNLOAD ends the download; GETSTATUS then runs the manifest.
+  if (auto sent = dfu.control_out(DfuRequest::kDnload, static_cast<std::uint16_t>(blocks), {});
+      !sent.ok())
+    return fail(sent.error().kind, "final zero-length DNLOAD: " + sent.error().message);
+  const auto manifest =
+      poll_until(dfu, {DfuState::kDfuIdle, DfuState::kManifestWaitReset},
+                 {DfuState::kManifestSync, DfuState::kManifest}, sleep, "the image at manifest");
+  if (!manifest.ok()) return fail(manifest.error());
+  return done();
+}
+
+Expected<std::vector<std::uint8_t>> dfu_upload(DfuControl& dfu, std::size_t length) {
+  using Bytes = std::vector<std::uint8_t>;
+  if (auto idle = dfu_make_idle(dfu); !idle.ok()) return fail<Bytes>(idle.error());
+  Bytes out;
+  for (std::size_t block = 0; out.size() < length; ++block) {
+    if (block > 0xFFFF) break;
+    const auto data = dfu.control_in(DfuRequest::kUpload, static_cast<std::uint16_t>(block),
+                                     static_cast<std::uint16_t>(kDfuBlockSize));
+    if (!data.ok())
+      return fail<Bytes>(data.error().kind,
+                         "UPLOAD " + block_text(block) + ": " + data.error().message);
+    out.insert(out.end(), data.value().begin(), data.value().end());
+    if (data.value().size() < kDfuBlockSize) break;  // a short block ends the upload
+  }
+  // Stopped before a short block: back to dfuIDLE.
+  if (auto idle = dfu_make_idle(dfu); !idle.ok()) return fail<Bytes>(idle.error());
+  if (out.size() > length) out.resize(length);
+  return Expected<Bytes>::success(out);
+}
+
+// ---------------------------------------------------------------------------
+// libusb
+
+namespace {
+
+/// A libusb context for the flasher's lifetime.
+class UsbContext {
+ public:
+  UsbContext() { ok_ = libusb_init(&context_) == 0; }
+  ~UsbContext() {
+    if (ok_) libusb_exit(context_);
+  }
+  UsbContext(const UsbContext&) = delete;
+  UsbContext& operator=(const UsbContext&) = delete;
+  bool ok() const { return ok_; }
+  libusb_context* get() const { return context_; }
+
+ private:
+  libusb_context* context_ = nullptr;
+  bool ok_ = false;
+};
+
+/// An open device with one claimed interface; released and closed on destruction.
+class ClaimedInterface {
+ public:
+  ClaimedInterface(libusb_device_handle* handle, int interface_number)
+      : handle_(handle), interface_(interface_number) {}
+  ~ClaimedInterface() {
+    if (handle_ == nullptr) return;
+    libusb_release_interface(handle_, interface_);
+    libusb_close(handle_);
+  }
+  ClaimedInterface(const ClaimedInterface&) = delete;
+  ClaimedInterface& operator=(const ClaimedInterface&) = delete;
+  libusb_device_handle* handle() const { return handle_; }
+  int interface_number() const { return interface_; }
+
+ private:
+  libusb_device_handle* handle_;
+  int interface_;
+};
+
+class LibusbDfuControl final : public DfuControl {
+ public:
+  explicit LibusbDfuControl(const ClaimedInterface& claimed) : claimed_(claimed) {}
+
+  Expected<Done> control_out(DfuRequest request, std::uint16_t value,
+                             std::span<const std::uint8_t> data) override {
+    const int rc = libusb_control_transfer(
+        claimed_.handle(),
+        LIBUSB_ENDPOINT_OUT | LIBUSB_REQUEST_TYPE_CLASS | LIBUSB_RECIPIENT_INTERFACE,
+        static_cast<std::uint8_t>(request), value,
+        static_cast<std::uint16_t>(claimed_.interface_number()),
+        const_cast<unsigned char*>(data.data()), static_cast<std::uint16_t>(data.size()),
+        kControlTimeoutMs);
+    if (rc < 0)
+      return fail(transfer_error_kind(rc),
+                  std::string("USB control transfer failed: ") + libusb_strerror(rc));
+    return done();
+  }
+
+  Expected<std::vector<std::uint8_t>> control_in(DfuRequest request, std::uint16_t value,
+                                                 std::uint16_t length) override {
+    std::vector<std::uint8_t> buffer(length);
+    const int rc = libusb_control_transfer(
+        claimed_.handle(),
+        LIBUSB_ENDPOINT_IN | LIBUSB_REQUEST_TYPE_CLASS | LIBUSB_RECIPIENT_INTERFACE,
+        static_cast<std::uint8_t>(request), value,
+        static_cast<std::uint16_t>(claimed_.interface_number()), buffer.data(), length,
+        kControlTimeoutMs);
+    if (rc < 0)
+      return fail<std::vector<std::uint8_t>>(
+          transfer_error_kind(rc),
+          std::string("USB control transfer failed: ") + libusb_strerror(rc));
+    buffer.resize(static_cast<std::size_t>(rc));
+    return Expected<std::vector<std::uint8_t>>::success(buffer);
+  }
+
+ private:
+  static ErrorKind transfer_error_kind(int rc) {
+    if (rc == LIBUSB_ERROR_TIMEOUT) return ErrorKind::kTimeout;
+    if (rc == LIBUSB_ERROR_PIPE) return ErrorKind::kRejected;  // stalled: request refused
+    return ErrorKind::kGone;
+  }
+  const ClaimedInterface& claimed_;
+};
+
+/// The serial number string of an open device, empty if unreadable.
+std::string serial_of(libusb_device_handle* handle, const libusb_device_descriptor& descriptor) {
+  unsigned char text[128];
+  if (descriptor.iSerialNumber == 0) return {};
+  const int n =
+      libusb_get_string_descriptor_ascii(handle, descriptor.iSerialNumber, text, sizeof text);
+  return n > 0 ? std::string(reinterpret_cast<const char*>(text), static_cast<std::size_t>(n))
+               : std::string();
+}
+
+/// The DFU interface (runtime or DFU mode by `protocol`) of `device`, -1 if none.
+int find_dfu_interface(libusb_device* device, std::uint8_t protocol) {
+  libusb_config_descriptor* config = nullptr;
+  if (libusb_get_active_config_descriptor(device, &config) != 0 &&
+      libusb_get_config_descriptor(device, 0, &config) != 0)
+    return -1;
+  int found = -1;
+  for (int i = 0; i < config->bNumInterfaces && found < 0; ++i) {
+    const libusb_interface& interface = config->interface[i];
+    for (int a = 0; a < interface.num_altsetting; ++a) {
+      const libusb_interface_descriptor& alt = interface.altsetting[a];
+      if (alt.bInterfaceClass == kDfuClass && alt.bInterfaceSubClass == kDfuSubclass &&
+          alt.bInterfaceProtocol == protocol) {
+        found = alt.bInterfaceNumber;
+        break;
+      }
+    }
+  }
+  libusb_free_config_descriptor(config);
+  return found;
+}
+
+/// Opens the device with `product_id` and `serial` and claims its DFU interface.
+Expected<std::unique_ptr<ClaimedInterface>> open_dfu_interface(UsbContext& usb,
+                                                               std::uint16_t product_id,
+                                                               const std::string& serial,
+                                                               std::uint8_t protocol) {
+  using Out = Expected<std::unique_ptr<ClaimedInterface>>;
+  libusb_device** list = nullptr;
+  const ssize_t count = libusb_get_device_list(usb.get(), &list);
+  std::string problem = "not connected";
+  std::unique_ptr<ClaimedInterface> claimed;
+  for (ssize_t i = 0; i < count && !claimed; ++i) {
+    libusb_device_descriptor descriptor{};
+    if (libusb_get_device_descriptor(list[i], &descriptor) != 0 ||
+        descriptor.idVendor != protocol::kUsbVendorId || descriptor.idProduct != product_id)
+      continue;
+    libusb_device_handle* handle = nullptr;
+    if (const int rc = libusb_open(list[i], &handle); rc != 0) {
+      problem = std::string("cannot open it (") + libusb_strerror(rc) +
+                "): is the udev rule installed and are you in the plugdev group?";
+      continue;
+    }
+    if (serial_of(handle, descriptor) != serial) {
+      libusb_close(handle);
+      continue;
+    }
+    const int interface_number = find_dfu_interface(list[i], protocol);
+    if (interface_number < 0) {
+      problem = "it has no DFU interface";
+      libusb_close(handle);
+      continue;
+    }
+    libusb_set_auto_detach_kernel_driver(handle, 1);
+    if (const int rc = libusb_claim_interface(handle, interface_number); rc != 0) {
+      problem = std::string("cannot claim its DFU interface (") + libusb_strerror(rc) + ")";
+      libusb_close(handle);
+      continue;
+    }
+    claimed = std::make_unique<ClaimedInterface>(handle, interface_number);
+  }
+  if (count > 0) libusb_free_device_list(list, 1);
+  if (!claimed)
+    return fail<std::unique_ptr<ClaimedInterface>>(
+        ErrorKind::kNotFound,
+        "controller " + serial + " (USB PID " + std::to_string(product_id) + "): " + problem);
+  return Out::success(std::move(claimed));
+}
+
+/// Waits until a controller with `serial` shows up in `mode`.
+Expected<Done> wait_for_mode(const std::string& serial, DeviceMode mode,
+                             std::chrono::milliseconds timeout) {
+  const auto deadline = std::chrono::steady_clock::now() + timeout;
+  for (;;) {
+    const auto found = find_controllers();
+    if (found.ok())
+      for (const auto& device : found.value())
+        if (device.mode == mode && device.serial == serial) return done();
+    if (std::chrono::steady_clock::now() >= deadline)
+      return fail(ErrorKind::kTimeout, "controller " + serial + " did not appear in " +
+                                           mode_name(mode) + " mode within " +
+                                           std::to_string(timeout.count()) + " ms");
+    std::this_thread::sleep_for(kEnumeratePoll);
+  }
+}
+
+std::string version_text(std::uint8_t major, std::uint8_t minor, std::uint8_t patch) {
+  return std::to_string(major) + "." + std::to_string(minor) + "." + std::to_string(patch);
+}
+
+void real_sleep(std::chrono::milliseconds ms) {
+  std::this_thread::sleep_for(ms);
+}
+
+}  // namespace
+
+Expected<FlashReport> flash_controller(const FirmwareImage& image, const FlashOptions& options) {
+  FlashReport report;
+  const auto found = find_controllers();
+  if (!found.ok()) return fail<FlashReport>(found.error());
+  // The controller: named, or the only one in either mode.
+  std::vector<FoundDevice> candidates;
+  for (const auto& device : found.value())
+    if (!options.serial || device.serial == *options.serial) candidates.push_back(device);
+  if (candidates.empty())
+    return fail<FlashReport>(ErrorKind::kNotFound, options.serial
+                                                       ? "no controller with serial number " +
+                                                             *options.serial + " is connected"
+                                                       : std::string("no controller is connected"));
+  if (candidates.size() > 1)
+    return fail<FlashReport>(ErrorKind::kAmbiguous,
+                             std::to_string(candidates.size()) +
+                                 " controllers are connected and none was named: choose one with "
+                                 "--device SERIAL\n" +
+                                 describe_devices(candidates));
+  const FoundDevice target = candidates.front();
+  if (target.serial.empty())
+    return fail<FlashReport>(ErrorKind::kAccess,
+                             "cannot read the controller's serial number: " + target.problem);
+  report.serial = target.serial;
+  const std::string& serial = target.serial;
+
+  UsbContext usb;
+  if (!usb.ok()) return fail<FlashReport>(ErrorKind::kAccess, "libusb cannot start");
+
+  if (target.mode == DeviceMode::kApplication) {
+    // Which board and firmware is it? A protocol mismatch is no reason not to flash.
+    auto client = ControllerClient::connect(hid_opener(serial), ClientOptions{});
+    if (client.ok()) {
+      report.before = client.value()->info();
+      if (report.before->board_id != image.header.board_id)
+        return fail<FlashReport>(ErrorKind::kBadInput,
+                                 image.source + ": refused, the image is for board " +
+                                     std::to_string(image.header.board_id) + " but controller " +
+                                     serial + " is board " +
+                                     std::to_string(report.before->board_id));
+      say(options, "controller " + serial + " runs firmware " +
+                       version_text(report.before->firmware_major, report.before->firmware_minor,
+                                    report.before->firmware_patch));
+    } else if (client.error().kind == ErrorKind::kProtocolMismatch) {
+      say(options, "controller " + serial + ": " + client.error().message + " (flashing it now)");
+    } else {
+      say(options, "controller " + serial + ": GetInfo failed (" + client.error().message +
+                       "); detaching anyway");
+    }
+    // DFU_DETACH on the DFU runtime interface; WillDetach: the device resets itself.
+    say(options, "detaching into the DFU bootloader");
+    bool detached = false;
+    {
+      auto runtime =
+          open_dfu_interface(usb, protocol::kUsbProductIdApplication, serial, kDfuProtocolRuntime);
+      if (runtime.ok()) {
+        LibusbDfuControl control(*runtime.value());
+        const auto sent = control.control_out(DfuRequest::kDetach, kDetachTimeoutMs, {});
+        // The device may reset before the status stage: gone is fine.
+        detached = sent.ok() || sent.error().kind == ErrorKind::kGone;
+        if (!detached) say(options, "DFU_DETACH failed: " + sent.error().message);
+      } else {
+        say(options, runtime.error().message);
+      }
+    }
+    if (!detached) {
+      if (!client.ok())
+        return fail<FlashReport>(ErrorKind::kGone,
+                                 "cannot detach controller " + serial + " into its bootloader");
+      say(options, "asking the application to enter its bootloader over HID instead");
+      if (auto entered = client.value()->enter_bootloader(); !entered.ok())
+        return fail<FlashReport>(entered.error());
+    }
+    if (client.ok()) client.value().reset();
+    if (auto waited = wait_for_mode(serial, DeviceMode::kBootloader, options.enumerate_timeout);
+        !waited.ok())
+      return fail<FlashReport>(waited.error());
+    say(options, "bootloader of " + serial + " is up");
+  } else {
+    say(options, "controller " + serial + " is already in DFU mode");
+  }
+
+  {
+    auto claimed =
+        open_dfu_interface(usb, protocol::kUsbProductIdBootloader, serial, kDfuProtocolDfuMode);
+    if (!claimed.ok()) return fail<FlashReport>(claimed.error());
+    LibusbDfuControl dfu(*claimed.value());
+    const auto start = std::chrono::steady_clock::now();
+    if (auto downloaded = dfu_download(dfu, image.bytes, options.progress, real_sleep);
+        !downloaded.ok())
+      return fail<FlashReport>(
+          downloaded.error().kind,
+          downloaded.error().message +
+              "; the controller stays in DFU mode: run flutterscan flash again");
+    report.download_seconds =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    report.kib_per_second = report.download_seconds > 0 ? static_cast<double>(image.bytes.size()) /
+                                                              1024.0 / report.download_seconds
+                                                        : 0;
+    say(options, "downloaded and manifested; reading it back");
+    const auto readback = dfu_upload(dfu, image.bytes.size());
+    if (!readback.ok()) return fail<FlashReport>(readback.error());
+    if (readback.value() != image.bytes) {
+      std::size_t first = 0;
+      while (first < readback.value().size() && readback.value()[first] == image.bytes[first])
+        ++first;
+      return fail<FlashReport>(ErrorKind::kRejected,
+                               "read-back differs from the image at byte " + std::to_string(first) +
+                                   " (" + std::to_string(readback.value().size()) + " bytes read)");
+    }
+    // Start the application: DFU_DETACH, then a bus reset (either starts it).
+    dfu.control_out(DfuRequest::kDetach, kDetachTimeoutMs, {});
+    libusb_reset_device(claimed.value()->handle());
+  }
+
+  say(options, "waiting for the application");
+  if (auto waited = wait_for_mode(serial, DeviceMode::kApplication, options.enumerate_timeout);
+      !waited.ok())
+    return fail<FlashReport>(waited.error());
+  auto client = ControllerClient::connect(hid_opener(serial), ClientOptions{});
+  if (!client.ok()) return fail<FlashReport>(client.error());
+  report.after = client.value()->info();
+  const auto& h = image.header;
+  if (report.after.firmware_major != h.version_major ||
+      report.after.firmware_minor != h.version_minor ||
+      report.after.firmware_patch != h.version_patch || report.after.board_id != h.board_id)
+    return fail<FlashReport>(
+        ErrorKind::kRejected,
+        "after flashing, controller " + serial + " reports firmware " +
+            version_text(report.after.firmware_major, report.after.firmware_minor,
+                         report.after.firmware_patch) +
+            " on board " + std::to_string(report.after.board_id) + ", but the image is " +
+            version_text(h.version_major, h.version_minor, h.version_patch) + " for board " +
+            std::to_string(h.board_id));
+  return Expected<FlashReport>::success(report);
+}
+
+}  // namespace flutterscan::device
