@@ -265,9 +265,7 @@ class LibusbDfuControl final : public DfuControl {
   Expected<Done> control_out(DfuRequest request, std::uint16_t value,
                              std::span<const std::uint8_t> data) override {
     const int rc = libusb_control_transfer(
-        claimed_.handle(),
-        LIBUSB_ENDPOINT_OUT | LIBUSB_REQUEST_TYPE_CLASS | LIBUSB_RECIPIENT_INTERFACE,
-        static_cast<std::uint8_t>(request), value,
+        claimed_.handle(), kClassInterfaceOut, static_cast<std::uint8_t>(request), value,
         static_cast<std::uint16_t>(claimed_.interface_number()),
         const_cast<unsigned char*>(data.data()), static_cast<std::uint16_t>(data.size()),
         kControlTimeoutMs);
@@ -280,12 +278,10 @@ class LibusbDfuControl final : public DfuControl {
   Expected<std::vector<std::uint8_t>> control_in(DfuRequest request, std::uint16_t value,
                                                  std::uint16_t length) override {
     std::vector<std::uint8_t> buffer(length);
-    const int rc = libusb_control_transfer(
-        claimed_.handle(),
-        LIBUSB_ENDPOINT_IN | LIBUSB_REQUEST_TYPE_CLASS | LIBUSB_RECIPIENT_INTERFACE,
-        static_cast<std::uint8_t>(request), value,
-        static_cast<std::uint16_t>(claimed_.interface_number()), buffer.data(), length,
-        kControlTimeoutMs);
+    const int rc = libusb_control_transfer(claimed_.handle(), kClassInterfaceIn,
+                                           static_cast<std::uint8_t>(request), value,
+                                           static_cast<std::uint16_t>(claimed_.interface_number()),
+                                           buffer.data(), length, kControlTimeoutMs);
     if (rc < 0)
       return fail<std::vector<std::uint8_t>>(
           transfer_error_kind(rc),
