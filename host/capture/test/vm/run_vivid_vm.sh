@@ -108,7 +108,7 @@ cp "$check_program" "$root/v4l2_vivid_check"
   done
   echo 'n=0; while [ ! -e /dev/video0 ] && [ $n -lt 50 ]; do sleep 0.2; n=$((n+1)); done'
   printf '/v4l2_vivid_check'
-  printf ' %q' "${guest_args[@]}"
+  ((${#guest_args[@]} == 0)) || printf ' %q' "${guest_args[@]}"
   echo
   echo 'echo "V4L2-VM-DONE rc=$? uptime=$(cut -d" " -f1 /proc/uptime)"'
   echo 'poweroff -f'
