@@ -30,6 +30,9 @@ firmware::BoardConfig default_virtual_board() {
 VirtualController::VirtualController(VirtualControllerOptions options)
     : options_(std::move(options)) {
   port_ = std::make_unique<firmware::sim::SimPort>(options_.board.pins);
+  const auto page = port_->flash_page();
+  std::copy_n(options_.initial_flash_page.begin(),
+              std::min(options_.initial_flash_page.size(), page.size()), page.begin());
   boot_locked();
 }
 
@@ -203,6 +206,12 @@ bool VirtualController::plugged_in() const {
 bool VirtualController::in_bootloader() const {
   std::lock_guard lock(mutex_);
   return in_bootloader_;
+}
+
+std::vector<std::uint8_t> VirtualController::flash_page_contents() const {
+  std::lock_guard lock(mutex_);
+  const auto page = port_->flash_page();
+  return {page.begin(), page.end()};
 }
 
 std::uint64_t VirtualController::requests_handled() const {

@@ -48,6 +48,9 @@ struct VirtualControllerOptions {
   firmware::BoardConfig board = default_virtual_board();
   /// Protocol major GetInfo reports (to test the host's refusal of another major).
   std::uint8_t reported_protocol_major = protocol::kProtocolMajor;
+  /// Contents of the config flash page at power-on (empty: erased), e.g. saved
+  /// by an earlier run with flash_page_contents().
+  std::vector<std::uint8_t> initial_flash_page;
 };
 
 /// \brief The firmware core on the sim port; every method is thread-safe.
@@ -111,6 +114,8 @@ class VirtualController {
   /// \brief Whether the firmware reset into its DFU bootloader (EnterBootloader);
   /// the application interface is then gone until plug_in().
   bool in_bootloader() const;
+  /// \brief The config flash page now (what SaveConfig wrote).
+  std::vector<std::uint8_t> flash_page_contents() const;
   /// \brief Requests handled (replied to) since construction.
   std::uint64_t requests_handled() const;
 

@@ -155,6 +155,24 @@ TEST(VirtualController, UnplugFailsWritesAndReplugBootsWithSavedConfig) {
   EXPECT_TRUE(status.flags & proto::kStatusConfigFromFlash);
 }
 
+TEST(VirtualController, SavedFlashPageCarriesOverToANewController) {
+  VirtualController first;
+  arm_with_code(first);
+  ASSERT_EQ(status_of(first.request(encode(proto::Command::kDisarm, 5))), proto::Status::kOk);
+  ASSERT_EQ(status_of(first.request(encode(proto::Command::kSaveConfig, 6))), proto::Status::kOk);
+  VirtualControllerOptions options;
+  options.initial_flash_page = first.flash_page_contents();
+  VirtualController second(options);
+  const auto status =
+      payload_of<proto::StatusReply>(second.request(encode(proto::Command::kGetStatus, 1)));
+  EXPECT_TRUE(status.flags & proto::kStatusConfigFromFlash);
+  EXPECT_EQ(status.codes_stored, 0x01);
+  VirtualController fresh;
+  const auto fresh_status =
+      payload_of<proto::StatusReply>(fresh.request(encode(proto::Command::kGetStatus, 1)));
+  EXPECT_EQ(fresh_status.codes_stored, 0);
+}
+
 TEST(VirtualController, EnterBootloaderTakesTheApplicationAway) {
   VirtualController vc;
   const Report reply =
