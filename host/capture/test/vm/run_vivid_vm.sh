@@ -11,9 +11,10 @@
 # videobuf2-dma-contig v4l2-dv-timings v4l2-tpg vivid (insmod'ed in that
 # order), and CHECK_PROGRAM: the statically linked v4l2_vivid_check, built
 # from the backend's own sources. The guest runs it, it prints one
-# "V4L2-VM-RESULT io=<method> PASS|FAIL ..." line per I/O method on the serial
+# "V4L2-VM-RESULT io=<method> format=<fourcc> PASS|FAIL ..." line per I/O method on the serial
 # console, and the guest powers off. This script passes when every line says
-# PASS (mmap and userptr by default).
+# PASS (by default RGB24 and SRGGB10, each with mmap and userptr) and the
+# program exits 0.
 #
 # Usage: run_vivid_vm.sh CHECK_PROGRAM CACHE_DIR [check program options...]
 # Exit 0 pass, 1 fail, 77 skip (only when QEMU itself cannot start).
@@ -144,5 +145,8 @@ echo "$results"
 if grep -q 'FAIL' <<<"$results"; then
   fail "a capture check failed (see the lines above)"
 fi
+done_line=$(tr -d '\r' <"$log" | grep -m1 '^V4L2-VM-DONE')
+[[ $done_line == "V4L2-VM-DONE rc=0 "* ]] || fail "the check program did not exit cleanly: $done_line"
+
 total_seconds=$(seconds_since "$started")
-echo "vivid-vm: PASS ($(grep -c PASS <<<"$results") methods; QEMU ${boot_seconds} s, total ${total_seconds} s)"
+echo "vivid-vm: PASS ($(grep -c PASS <<<"$results") capture runs; QEMU ${boot_seconds} s, total ${total_seconds} s)"

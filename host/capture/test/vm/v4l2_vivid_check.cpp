@@ -2,17 +2,19 @@
 // QEMU guest (see run_vivid_vm.sh). Statically linked from the v4l2 backend's
 // own sources only (flutterscan_v4l2), so it fits in a busybox initramfs.
 //
-// For each I/O method asked for, it opens the device with a format, frame
-// rate and gain, captures N frames, and checks: sequence numbers gap-free and
+// For each pixel format and I/O method asked for (default: RGB24 and raw
+// Bayer SRGGB10, each with MMAP and USERPTR), it opens the device with that
+// format, a frame rate and a gain, captures N frames, and checks: sequence numbers gap-free and
 // increasing by one, timestamps strictly increasing on the monotonic clock,
 // every frame the full image size and not blank, the gain and frame rate
-// read back as set, auto gain off. It prints one line per method,
-//   V4L2-VM-RESULT io=mmap PASS frames=30 ...   or   V4L2-VM-RESULT io=mmap FAIL <why>
-// which the host side parses. Exit 0 when every method passed, 1 otherwise,
+// read back as set, auto gain off. It prints one line per run,
+//   V4L2-VM-RESULT io=mmap format=RGB24 PASS frames=30 ...   or   ... FAIL <why>
+// which the host side parses. Exit 0 when every run passed, 1 otherwise,
 // 2 on bad usage.
 
 #include <linux/videodev2.h>
 
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -35,19 +37,19 @@ struct Options {
   V4l2Config request;
   int frames = 30;
   std::vector<V4l2IoMethod> methods{V4l2IoMethod::kMmap, V4l2IoMethod::kUserPtr};
+  std::vector<std::uint32_t> formats{V4L2_PIX_FMT_RGB24, V4L2_PIX_FMT_SRGGB10};
 };
 
 void usage() {
   std::fprintf(
       stderr,
-      "usage: v4l2_vivid_check [--device /dev/video0] [--size 640x480] [--format RGB24]\n"
+      "usage: v4l2_vivid_check [--device /dev/video0] [--size 640x480] [--format RGB24,SRGGB10]\n"
       "                        [--fps 15] [--gain 120] [--frames 30] [--io mmap,userptr]\n");
 }
 
 bool parse(int argc, char** argv, Options& options) {
   options.request.width = 640;
   options.request.height = 480;
-  options.request.fourccs = {V4L2_PIX_FMT_RGB24};
   options.request.frame_rate = 15.0;
   options.request.controls.gain = 120;
   for (int i = 1; i < argc; ++i) {
@@ -66,12 +68,19 @@ bool parse(int argc, char** argv, Options& options) {
         return false;
       }
     } else if (flag == "--format") {
-      const auto fourcc = flutterscan::capture::fourcc_from_name(value);
-      if (!fourcc) {
-        std::fprintf(stderr, "v4l2_vivid_check: --format %s is unknown\n", value.c_str());
-        return false;
+      options.formats.clear();
+      std::size_t start = 0;
+      while (start <= value.size()) {
+        const std::size_t comma = std::min(value.find(',', start), value.size());
+        const std::string name = value.substr(start, comma - start);
+        const auto fourcc = flutterscan::capture::fourcc_from_name(name);
+        if (!fourcc) {
+          std::fprintf(stderr, "v4l2_vivid_check: --format %s is unknown\n", name.c_str());
+          return false;
+        }
+        options.formats.push_back(*fourcc);
+        start = comma + 1;
       }
-      options.request.fourccs = {*fourcc};
     } else if (flag == "--fps") {
       options.request.frame_rate = std::atof(value.c_str());
     } else if (flag == "--gain") {
@@ -100,16 +109,18 @@ bool parse(int argc, char** argv, Options& options) {
   return true;
 }
 
-/// Captures and checks with one I/O method; prints its result line.
-bool check(const Options& options, V4l2IoMethod method) {
+/// Captures and checks with one pixel format and I/O method; prints its result line.
+bool check(const Options& options, std::uint32_t fourcc, V4l2IoMethod method) {
   const char* io = flutterscan::capture::v4l2_io_method_name(method);
+  const std::string format_name = flutterscan::capture::fourcc_text(fourcc);
   auto fail = [&](const std::string& why) {
-    std::printf("V4L2-VM-RESULT io=%s FAIL %s\n", io, why.c_str());
+    std::printf("V4L2-VM-RESULT io=%s format=%s FAIL %s\n", io, format_name.c_str(), why.c_str());
     std::fflush(stdout);
     return false;
   };
   V4l2Config request = options.request;
   request.io = method;
+  request.fourccs = {fourcc};
   auto opened = V4l2Camera::open(options.device);
   if (!opened) return fail(opened.error());
   V4l2Camera& camera = *opened.value();
@@ -190,10 +201,10 @@ bool check(const Options& options, V4l2IoMethod method) {
   const double measured_fps = static_cast<double>(options.frames - 1) /
                               (static_cast<double>(previous_ns - first_ns) * 1e-9);
   std::printf(
-      "V4L2-VM-RESULT io=%s PASS frames=%llu dropped=%llu corrupt=%llu sequence=%u..%u "
-      "clock=monotonic timestamp=%s format=%s %dx%d fps_set=%.3f fps_measured=%.2f gain=%d "
+      "V4L2-VM-RESULT io=%s format=%s PASS frames=%llu dropped=%llu corrupt=%llu sequence=%u..%u "
+      "clock=monotonic timestamp=%s %s %dx%d fps_set=%.3f fps_measured=%.2f gain=%d "
       "wall_s=%.2f\n",
-      io, static_cast<unsigned long long>(stats.frames),
+      io, format_name.c_str(), static_cast<unsigned long long>(stats.frames),
       static_cast<unsigned long long>(stats.dropped),
       static_cast<unsigned long long>(stats.corrupt), first_sequence, previous_sequence,
       source == V4l2TimestampSource::kStartOfExposure ? "start-of-exposure" : "end-of-frame",
@@ -213,6 +224,10 @@ int main(int argc, char** argv) {
     return 2;
   }
   bool all_passed = true;
-  for (V4l2IoMethod method : options.methods) all_passed = check(options, method) && all_passed;
+  for (std::uint32_t fourcc : options.formats) {
+    for (V4l2IoMethod method : options.methods) {
+      all_passed = check(options, fourcc, method) && all_passed;
+    }
+  }
   return all_passed ? 0 : 1;
 }
