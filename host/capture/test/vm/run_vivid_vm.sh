@@ -135,6 +135,9 @@ if ! grep -q 'guest: up' "$log"; then
   if ((qemu_status == 124 || qemu_status == 137)); then
     fail "the guest did not come up within ${vm_timeout} s"
   fi
+  if grep -q -e 'SeaBIOS' -e 'Booting' -e 'Kernel panic' "$log"; then
+    fail "QEMU ran (exit $qemu_status) but the guest's init never came up"
+  fi
   skip "QEMU could not start (exit $qemu_status): $(head -c 400 "$work/qemu.err")"
 fi
 ((qemu_status == 124 || qemu_status == 137)) && fail "the guest did not finish within ${vm_timeout} s"
