@@ -16,6 +16,13 @@
 int main(int argc, char** argv) {
   const char* preload = std::getenv("LD_PRELOAD");
   if (preload == nullptr || std::strstr(preload, "libumockdev-preload") == nullptr) {
+    // The preload library comes before the sanitizer runtime in sanitizer
+    // builds; ASan would refuse to start over that.
+    std::string asan = std::getenv("ASAN_OPTIONS") ? std::getenv("ASAN_OPTIONS") : "";
+    if (asan.find("verify_asan_link_order") == std::string::npos) {
+      asan += std::string(asan.empty() ? "" : ":") + "verify_asan_link_order=0";
+      ::setenv("ASAN_OPTIONS", asan.c_str(), 1);
+    }
     std::vector<char*> args;
     args.push_back(const_cast<char*>("umockdev-wrapper"));
     for (int i = 0; i < argc; ++i) args.push_back(argv[i]);
