@@ -208,6 +208,9 @@ std::string V4l2Camera::negotiate_format() {
       chosen->layout == V4l2Layout::kMjpeg ? 0 : std::max(got.bytesperline, packed_line);
   out.image_size = got.sizeimage;
   if (out.image_size == 0) out.image_size = out.bytes_per_line * got.height;
+  if (out.image_size == 0) {
+    return device + ": driver reports no image size for " + std::string(chosen->name);
+  }
   if (chosen->layout != V4l2Layout::kMjpeg && out.image_size < out.bytes_per_line * got.height) {
     return device + ": driver reports an image size of " + std::to_string(out.image_size) +
            " bytes, less than " + std::to_string(out.bytes_per_line) + " x " +
@@ -265,12 +268,17 @@ std::string V4l2Camera::start() {
   if (!configured_) return device_ + ": start() before a successful configure()";
   const std::string& device = device_;
   std::string error;
+  io_in_use_ = V4l2IoMethod::kAuto;
   if (config_.io == V4l2IoMethod::kAuto || config_.io == V4l2IoMethod::kMmap) {
     error = request_mmap_buffers();
     if (error.empty()) {
       io_in_use_ = V4l2IoMethod::kMmap;
     } else if (config_.io == V4l2IoMethod::kAuto) {
-      description_.warnings.push_back(error + "; streaming with USERPTR instead");
+      const std::string warning = error + "; streaming with USERPTR instead";
+      std::vector<std::string>& warnings = description_.warnings;
+      if (std::find(warnings.begin(), warnings.end(), warning) == warnings.end()) {
+        warnings.push_back(warning);
+      }
       error.clear();
     } else {
       return error;

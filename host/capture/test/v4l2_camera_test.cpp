@@ -279,6 +279,28 @@ TEST(V4l2Camera, FallsBackToUserptrAndCountsADroppedFrameGap) {
   EXPECT_FALSE(device.streaming());
 }
 
+TEST(V4l2Camera, RestartsAfterStopWithFreshCounters) {
+  FakeV4l2Device device(FakeDeviceConfig{});
+  auto camera = open_camera(device);
+  ASSERT_NE(camera, nullptr);
+  ASSERT_EQ(camera->configure(rgb_config()), "");
+  for (int run = 0; run < 2; ++run) {
+    ASSERT_EQ(camera->start(), "") << "run " << run;
+    const std::vector<V4l2Frame> frames = capture(*camera, 3);
+    ASSERT_EQ(frames.size(), 3u);
+    EXPECT_EQ(frames[0].sequence, 0u);
+    EXPECT_EQ(camera->stats().frames, 3u);
+    EXPECT_EQ(camera->stats().dropped, 0u);
+    camera->stop();
+  }
+  EXPECT_EQ(device.buffer_requests(V4L2_MEMORY_USERPTR), 2);
+  int fallback_warnings = 0;
+  for (const std::string& warning : camera->description().warnings) {
+    fallback_warnings += warning.find("USERPTR instead") != std::string::npos ? 1 : 0;
+  }
+  EXPECT_EQ(fallback_warnings, 1);
+}
+
 TEST(V4l2Camera, UserptrOnRequestSkipsMmap) {
   FakeV4l2Device device(FakeDeviceConfig{});
   auto camera = open_camera(device);

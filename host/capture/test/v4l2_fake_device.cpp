@@ -296,6 +296,8 @@ long FakeV4l2Device::answer(unsigned long request, void* arg, UMockdevIoctlData*
     case VIDIOC_STREAMON:
       if (buffer_count_ == 0) return fail(EINVAL);
       streaming_ = true;
+      next_sequence_ = 0;  // drivers count from 0 at every stream start
+      delivered_ = 0;
       return 0;
     case VIDIOC_STREAMOFF:
       streaming_ = false;
