@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <climits>
 #include <filesystem>
 
 #include "capture/backends.hpp"
@@ -161,7 +162,10 @@ class V4l2Source final : public CameraSource {
       return FrameWait::kError;
     }
     V4l2Frame got;
-    const V4l2Wait wait = camera_->next_frame(got, static_cast<int>(timeout.count()), error);
+    const V4l2Wait wait = camera_->next_frame(
+        got,
+        static_cast<int>(std::clamp<std::chrono::milliseconds::rep>(timeout.count(), 0, INT_MAX)),
+        error);
     if (wait == V4l2Wait::kTimeout) return FrameWait::kTimeout;
     if (wait == V4l2Wait::kError) return FrameWait::kError;
     // Extend the 32-bit counter: the distance from the previous frame is 1 + the gap.
