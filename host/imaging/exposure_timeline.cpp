@@ -1,0 +1,119 @@
+#include "imaging/exposure_timeline.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+namespace flutterscan::imaging {
+namespace {
+
+/// Adds `weight` spread evenly over [start, start + width) to the taps it
+/// overlaps (the same arithmetic as channel_psf, so uniform timelines agree
+/// with it exactly).
+void deposit_box(std::vector<double>& taps, double start, double width, double weight) {
+  if (width <= 1e-12) {
+    const auto j = static_cast<std::size_t>(std::floor(std::max(0.0, start)));
+    taps[std::min(j, taps.size() - 1)] += weight;
+    return;
+  }
+  const double end = start + width;
+  for (auto j = static_cast<std::size_t>(std::floor(std::max(0.0, start))); j < taps.size(); ++j) {
+    const double lo = std::max(start, static_cast<double>(j));
+    const double hi = std::min(end, static_cast<double>(j + 1));
+    if (hi <= lo) {
+      if (static_cast<double>(j) >= end) break;
+      continue;
+    }
+    taps[j] += weight * (hi - lo) / width;
+  }
+}
+
+double timeline_end(std::span<const ExposureSegment> segments) {
+  double end = 0;
+  for (const auto& s : segments) end = std::max(end, s.start_px + s.width_px);
+  return end;
+}
+
+/// Light per whole slot of `mask` in channel c (crosstalk x LED electrons), or,
+/// with `only_led` >= 0, LED only_led's own light with no crosstalk.
+double mask_weight(const CaptureModel& m, std::uint8_t mask, int channel, int only_led) {
+  double weight = 0;
+  for (int k = 0; k < m.code.leds(); ++k) {
+    if (!((mask >> k) & 1U)) continue;
+    const int led = m.led_of_bit[static_cast<std::size_t>(k)];
+    if (only_led >= 0) {
+      if (led == only_led) weight += m.led_electrons[static_cast<std::size_t>(led)];
+      continue;
+    }
+    weight += m.crosstalk[static_cast<std::size_t>(channel * m.leds + led)] *
+              m.led_electrons[static_cast<std::size_t>(led)];
+  }
+  return weight;
+}
+
+std::vector<double> timeline_psf(const CaptureModel& m, int channel, int only_led,
+                                 std::span<const ExposureSegment> segments) {
+  const double end = timeline_end(segments);
+  std::vector<double> taps(static_cast<std::size_t>(std::floor(end)) + 1, 0.0);
+  for (const auto& s : segments) {
+    const double weight = s.slot_fraction * mask_weight(m, s.mask, channel, only_led);
+    if (weight > 0) deposit_box(taps, s.start_px, s.width_px, weight);
+  }
+  if (only_led < 0) {
+    const double ambient = m.ambient_electrons[static_cast<std::size_t>(channel)];
+    if (ambient > 0) deposit_box(taps, 0.0, end, ambient);
+  }
+  while (taps.size() > 1 && taps.back() == 0.0) taps.pop_back();
+  return taps;
+}
+
+}  // namespace
+
+std::vector<ExposureSegment> uniform_segments(const CaptureModel& model) {
+  const int length = model.code.length();
+  const double slot_width = model.blur_px / length;
+  std::vector<ExposureSegment> segments;
+  for (int t = 0; t < length; ++t)
+    segments.push_back({t * slot_width, slot_width, model.code.mask(t), 1.0});
+  return segments;
+}
+
+std::vector<ExposureSegment> segments_from_boundaries(const LedCode& code,
+                                                      std::span<const double> boundaries) {
+  std::vector<ExposureSegment> segments;
+  for (int t = 0; t < code.length() && t + 1 < static_cast<int>(boundaries.size()); ++t) {
+    const auto i = static_cast<std::size_t>(t);
+    segments.push_back(
+        {boundaries[i], std::max(0.0, boundaries[i + 1] - boundaries[i]), code.mask(t), 1.0});
+  }
+  return segments;
+}
+
+std::vector<ExposureSegment> cyclic_phase_segments(const CaptureModel& model, double phase_slots) {
+  const int length = model.code.length();
+  const double slot_width = model.blur_px / length;
+  double phase = std::fmod(phase_slots, static_cast<double>(length));
+  if (phase < 0) phase += length;
+  // Pattern time runs from phase to phase + L; pattern slot j covers [j, j + 1).
+  std::vector<ExposureSegment> segments;
+  const int first = static_cast<int>(std::floor(phase));
+  for (int j = first; j < first + length + 1; ++j) {
+    const double lo = std::max(static_cast<double>(j), phase);
+    const double hi = std::min(static_cast<double>(j + 1), phase + length);
+    if (hi - lo <= 1e-12) continue;
+    const std::uint8_t mask = model.code.mask(j % length);
+    segments.push_back({(lo - phase) * slot_width, (hi - lo) * slot_width, mask, hi - lo});
+  }
+  return segments;
+}
+
+std::vector<double> timeline_channel_psf(const CaptureModel& model, int channel,
+                                         std::span<const ExposureSegment> segments) {
+  return timeline_psf(model, channel, -1, segments);
+}
+
+std::vector<double> timeline_led_psf(const CaptureModel& model, int led,
+                                     std::span<const ExposureSegment> segments) {
+  return timeline_psf(model, 0, led, segments);
+}
+
+}  // namespace flutterscan::imaging
