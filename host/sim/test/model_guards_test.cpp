@@ -1,0 +1,93 @@
+// Each guard fires on a simulated frame built to trip it and stays quiet on a
+// nominal one.
+
+#include <gtest/gtest.h>
+
+#include "imaging/deblur.hpp"
+#include "imaging/frame_conversion.hpp"
+#include "imaging/model_guards.hpp"
+#include "sim/forward_model.hpp"
+#include "sim/scene.hpp"
+
+namespace flutterscan::sim {
+namespace {
+
+using imaging::CaptureModel;
+
+CaptureModel label_capture(double electrons = 3000, double blur_px = 52) {
+  CaptureModel m;
+  m.code = LedCode::parse("4242221144411121214241142422112112214412414144224412", 3).value();
+  m.blur_px = blur_px;
+  m.led_electrons = imaging::budgeted_led_electrons(m.code, electrons, 3);
+  m.crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
+  m.read_noise = 4;
+  m.full_well = 12000;
+  m.bit_depth = 12;
+  m.gain = 12000.0 / 4095.0;
+  m.black_level = 64;
+  return m;
+}
+
+imaging::Plane code128() {
+  SceneSpec spec;
+  spec.kind = SceneKind::kCode128;
+  spec.content = "GUARD-0042";
+  return render_scene(spec).value();
+}
+
+/// Records `scene` under `truth`, deblurs it with `assumed` (tv), and runs the guards.
+imaging::GuardReport guards(const imaging::Plane& scene, const CaptureModel& truth,
+                            const CaptureModel& assumed) {
+  const imaging::Image dn = record_frame(expected_electrons(scene, truth), truth, 9);
+  const imaging::Image electrons = imaging::dn_to_electrons(dn, assumed);
+  imaging::DeblurOptions options;
+  options.method = imaging::Method::kTotalVariation;
+  const auto result = imaging::deblur(electrons, assumed, options);
+  EXPECT_TRUE(result.ok());
+  imaging::GuardReport report;
+  report.saturated_share = imaging::saturated_share(dn, assumed);
+  report.residual_ratio = imaging::residual_ratio(electrons, result.value().latent, assumed);
+  return report;
+}
+
+TEST(ModelGuards, QuietOnANominalFrame) {
+  const auto report = guards(code128(), label_capture(), label_capture());
+  EXPECT_LT(report.saturated_share, imaging::kSaturationGuardShare);
+  EXPECT_LT(report.residual_ratio, 1.5);
+  EXPECT_TRUE(report.flags().empty());
+}
+
+TEST(ModelGuards, SaturationFires) {
+  const auto report = guards(code128(), label_capture(30000), label_capture(30000));
+  EXPECT_TRUE(report.saturated());
+  EXPECT_EQ(report.flags().front(), "saturated");
+}
+
+TEST(ModelGuards, MisfitFiresOnAWrongBlurLength) {
+  const auto report = guards(code128(), label_capture(3000, 52), label_capture(3000, 57));
+  EXPECT_TRUE(report.misfit()) << report.residual_ratio;
+  EXPECT_FALSE(report.saturated());
+}
+
+TEST(ModelGuards, BlurDisagreementFiresOutsideTheConfidence) {
+  imaging::BlurEstimate estimate;
+  estimate.blur_px = 52.1;
+  estimate.standard_error_px = 0.05;
+  EXPECT_FALSE(imaging::blur_disagrees(52.0, estimate));
+  EXPECT_TRUE(imaging::blur_disagrees(55.0, estimate));
+  estimate.standard_error_px = 2.0;  // a weak estimate allows more
+  EXPECT_FALSE(imaging::blur_disagrees(55.0, estimate));
+  estimate.standard_error_px = std::numeric_limits<double>::infinity();  // no estimate at all
+  EXPECT_FALSE(imaging::blur_disagrees(80.0, estimate));
+  // On a real frame: the estimate from the frame against a wrong encoder reading.
+  const CaptureModel m = label_capture();
+  const auto electrons =
+      imaging::dn_to_electrons(record_frame(expected_electrons(code128(), m), m, 4), m);
+  const auto measured = imaging::estimate_blur(electrons, m, 30, 80);
+  ASSERT_TRUE(measured.ok()) << measured.error();
+  EXPECT_FALSE(imaging::blur_disagrees(52.0, measured.value()));
+  EXPECT_TRUE(imaging::blur_disagrees(57.2, measured.value()));
+}
+
+}  // namespace
+}  // namespace flutterscan::sim
