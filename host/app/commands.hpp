@@ -18,4 +18,11 @@ void add_deblur(CLI::App& app);
 /// \brief `flutterscan bench` (bench.cpp).
 void add_bench(CLI::App& app);
 
+/// \brief `flutterscan scan` (scan.cpp).
+void add_scan(CLI::App& app);
+/// \brief `flutterscan demo` (demo.cpp).
+void add_demo(CLI::App& app);
+/// \brief `flutterscan cameras` (cameras.cpp).
+void add_cameras(CLI::App& app);
+
 }  // namespace flutterscan::app

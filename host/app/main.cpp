@@ -18,6 +18,9 @@ int main(int argc, char** argv) {
   add_simulate(app);
   add_deblur(app);
   add_bench(app);
+  add_scan(app);
+  add_demo(app);
+  add_cameras(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {

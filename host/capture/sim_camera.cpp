@@ -4,7 +4,10 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <deque>
+#include <future>
 #include <map>
+#include <mutex>
 #include <numeric>
 #include <random>
 #include <thread>
@@ -102,6 +105,8 @@ class SimCamera final : public CameraSource {
     if (o_.ring_frames > 0 && o_.jitter > 0)
       return "camera sim: ring_frames replays identical frames: it needs jitter 0";
     if (o_.crosstalk.size() != 9) return "camera sim: crosstalk needs 9 values (3x3)";
+    if (o_.render_threads < 1 || o_.render_threads > 16)
+      return "camera sim: render_threads must be within 1..16";
     return {};
   }
 
@@ -145,8 +150,11 @@ class SimCamera final : public CameraSource {
 
   FrameWait next_frame(Frame& frame, std::chrono::milliseconds, std::string& error) override {
     if (!running_) return FrameWait::kEnd;
-    if (o_.max_frames != 0 && sequence_ >= o_.max_frames) return FrameWait::kEnd;
-    for (;;) {
+    // Exposures run ahead of delivery by up to `lookahead` frames so that
+    // renders overlap on several threads; the virtual clock stays in order.
+    const std::size_t lookahead =
+        o_.ring_frames > 0 ? 1 : static_cast<std::size_t>(std::max(1, o_.render_threads));
+    while (in_flight_.size() < lookahead && (o_.max_frames == 0 || sequence_ < o_.max_frames)) {
       if (o_.pace_realtime) {
         const std::int64_t due =
             host_start_ns_ + static_cast<std::int64_t>(sequence_) *
@@ -155,22 +163,58 @@ class SimCamera final : public CameraSource {
         if (wait > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(wait));
       }
       const bool lost = o_.drop_probability > 0 && uniform_(rng_) < o_.drop_probability;
-      if (!expose_one(frame, lost, error)) return FrameWait::kError;
-      if (!lost) {
-        ++counters_.frames_delivered;
-        return FrameWait::kFrame;
+      RenderJob job = expose_one();
+      if (lost) {
+        ++counters_.frames_dropped;
+        continue;
       }
-      ++counters_.frames_dropped;
-      if (o_.max_frames != 0 && sequence_ >= o_.max_frames) return FrameWait::kEnd;
+      if (lookahead == 1) {
+        std::promise<Rendered> ready;
+        ready.set_value(render_job(job));
+        in_flight_.push_back(ready.get_future());
+      } else {
+        in_flight_.push_back(
+            std::async(std::launch::async, [this, job] { return render_job(job); }));
+      }
     }
+    if (in_flight_.empty()) return FrameWait::kEnd;
+    Rendered rendered = in_flight_.front().get();
+    in_flight_.pop_front();
+    if (!rendered.error.empty()) {
+      error = rendered.error;
+      return FrameWait::kError;
+    }
+    frame = std::move(rendered.frame);
+    frame.host_arrival_ns = steady_now_ns();
+    ++counters_.frames_delivered;
+    return FrameWait::kFrame;
   }
 
-  void stop() override { running_ = false; }
+  void stop() override {
+    running_ = false;
+    while (!in_flight_.empty()) {
+      in_flight_.front().wait();
+      in_flight_.pop_front();
+    }
+  }
   CameraCounters counters() const override { return counters_; }
 
  private:
-  /// One frame period: strobe, encoder, rendering (unless lost), clock to the next frame.
-  bool expose_one(Frame& frame, bool lost, std::string& error) {
+  /// What one exposure needs rendered.
+  struct RenderJob {
+    std::uint64_t sequence = 0;
+    std::int64_t timestamp_ns = 0;
+    Lighting light;
+    double travel_at_slot0 = 0;
+    double blur = 0;
+  };
+  struct Rendered {
+    Frame frame;
+    std::string error;
+  };
+
+  /// One frame period on the virtual clock: strobe, encoder, clock to the next frame.
+  RenderJob expose_one() {
     double speed = o_.speed_px_per_s;
     if (o_.jitter > 0) speed *= std::clamp(1.0 + o_.jitter * normal_(rng_), 0.2, 1.8);
     const std::uint64_t begin_us = controller_.now_us();
@@ -178,7 +222,8 @@ class SimCamera final : public CameraSource {
     controller_.take_led_transitions();
     controller_.set_encoder_velocity(
         static_cast<std::int32_t>(std::lround(speed * o_.counts_per_px)));
-    const std::int64_t timestamp_ns =
+    RenderJob job;
+    job.timestamp_ns =
         o_.clock_offset_ns + static_cast<std::int64_t>(static_cast<double>(begin_us) * 1000.0 *
                                                        (1.0 + o_.clock_drift_ppm * 1e-6));
     controller_.expose(o_.exposure_us);
@@ -188,29 +233,31 @@ class SimCamera final : public CameraSource {
       controller_.advance_us(begin_us + o_.frame_period_us - after_us);
     const std::uint64_t end_us = controller_.now_us();
     travel_px_ += speed * static_cast<double>(end_us - begin_us) * 1e-6;
-    const std::uint64_t sequence = sequence_++;
-    if (lost) return true;
-
-    frame.sequence = sequence;
-    frame.timestamp_ns = timestamp_ns;
-    frame.format = format();
-    const Lighting light = lighting_from(transitions);
-    const double travel_at_slot0 =
+    job.sequence = sequence_++;
+    job.light = lighting_from(transitions);
+    job.travel_at_slot0 =
         travel_at_begin +
-        speed * static_cast<double>(light.dark ? 0 : light.start_us - begin_us) * 1e-6;
-    const double blur = light.dark ? 0.0 : speed * static_cast<double>(light.duration_us) * 1e-6;
+        speed * static_cast<double>(job.light.dark ? 0 : job.light.start_us - begin_us) * 1e-6;
+    job.blur = job.light.dark ? 0.0 : speed * static_cast<double>(job.light.duration_us) * 1e-6;
+    return job;
+  }
+
+  Rendered render_job(const RenderJob& job) {
+    Rendered out;
+    Frame& frame = out.frame;
+    frame.sequence = job.sequence;
+    frame.timestamp_ns = job.timestamp_ns;
+    frame.format = format();
     if (o_.ring_frames > 0 && ring_.size() == static_cast<std::size_t>(o_.ring_frames)) {
-      const Frame& stored = ring_[delivered_ % ring_.size()];
+      const Frame& stored = ring_[job.sequence % ring_.size()];
       frame.data = stored.data;
       frame.truth = stored.truth;
       frame.descriptor_json = stored.descriptor_json;
-    } else {
-      if (!render(frame, light, travel_at_slot0, blur, error)) return false;
-      if (o_.ring_frames > 0) ring_.push_back(frame);
+      return out;
     }
-    ++delivered_;
-    frame.host_arrival_ns = steady_now_ns();
-    return true;
+    if (!render(frame, job.light, job.travel_at_slot0, job.blur, out.error)) return out;
+    if (o_.ring_frames > 0) ring_.push_back(frame);
+    return out;
   }
 
   imaging::CaptureModel model_for(const Lighting& light, double blur) const {
@@ -237,14 +284,14 @@ class SimCamera final : public CameraSource {
     for (int x = 0; x < window.width; ++x) {
       const double u = (x - pad) - travel;
       float column_value = -1;
-      const imaging::Plane* tile = nullptr;
+      std::shared_ptr<const imaging::Plane> tile;
       double k = 0;
       if (u < 0) {
         const double i = std::ceil(-u / pitch) - 1;
         k = u + (i + 1) * pitch;
         if (k < o_.tile_width - 1) {
           tile = tile_for(static_cast<std::uint64_t>(i), error);
-          if (tile == nullptr) return false;
+          if (!tile) return false;
         }
       }
       if (tile == nullptr) column_value = static_cast<float>(kBelt);
@@ -291,15 +338,16 @@ class SimCamera final : public CameraSource {
     return true;
   }
 
-  const imaging::Plane* tile_for(std::uint64_t index, std::string& error) {
+  std::shared_ptr<const imaging::Plane> tile_for(std::uint64_t index, std::string& error) {
+    std::lock_guard lock(tiles_mutex_);
     auto found = tiles_.find(index);
-    if (found != tiles_.end()) return &found->second;
+    if (found != tiles_.end()) return found->second;
     // Keep the cache small: tiles far behind the belt are gone for good.
     while (tiles_.size() > 8) tiles_.erase(tiles_.begin());
     auto spec = sim::parse_scene(sim_label_scene(index));
     if (!spec.ok()) {
       error = "camera sim: label " + std::to_string(index) + ": " + spec.error();
-      return nullptr;
+      return {};
     }
     spec.value().width = o_.tile_width;
     spec.value().height = o_.height;
@@ -310,9 +358,11 @@ class SimCamera final : public CameraSource {
     auto rendered = sim::render_scene(spec.value());
     if (!rendered.ok()) {
       error = "camera sim: label " + std::to_string(index) + ": " + rendered.error();
-      return nullptr;
+      return {};
     }
-    return &tiles_.emplace(index, std::move(rendered.value())).first->second;
+    auto tile = std::make_shared<const imaging::Plane>(std::move(rendered.value()));
+    tiles_.emplace(index, tile);
+    return tile;
   }
 
   static constexpr double kBelt = 0.35;
@@ -329,7 +379,9 @@ class SimCamera final : public CameraSource {
   double travel_px_ = 0;
   std::int64_t host_start_ns_ = 0;
   bool running_ = false;
-  std::map<std::uint64_t, imaging::Plane> tiles_;
+  std::mutex tiles_mutex_;
+  std::map<std::uint64_t, std::shared_ptr<const imaging::Plane>> tiles_;
+  std::deque<std::future<Rendered>> in_flight_;
   std::vector<Frame> ring_;
 };
 

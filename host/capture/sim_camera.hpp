@@ -52,6 +52,8 @@ struct SimConveyorOptions {
   /// Frames rendered once and replayed cyclically (0: render every frame);
   /// needs jitter 0. For benchmarks: rendering cost stays out of the pipeline.
   int ring_frames = 0;
+  /// Frames rendered at once (exposures run that far ahead of delivery).
+  int render_threads = 2;
 };
 
 /// \brief Reads key=value options (the names of SimConveyorOptions' members);

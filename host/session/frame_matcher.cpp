@@ -51,6 +51,13 @@ std::vector<FrameMatch> FrameMatcher::add_frame(const FrameStamp& frame) {
   return out;
 }
 
+std::vector<FrameMatch> FrameMatcher::decide_waiting() {
+  std::vector<FrameMatch> out;
+  while (!pending_.empty() && decide_front(pending_.size() > o_.hold_frames, out)) {
+  }
+  return out;
+}
+
 std::vector<FrameMatch> FrameMatcher::flush() {
   std::vector<FrameMatch> out;
   while (!pending_.empty()) decide_front(true, out);

@@ -84,6 +84,8 @@ class FrameMatcher {
   /// \brief A frame arrived (increasing sequence). Returns the frames decided
   /// now, in order: this one and earlier ones that waited for their event.
   std::vector<FrameMatch> add_frame(const FrameStamp& frame);
+  /// \brief Decides the waiting frames whose events have arrived since.
+  std::vector<FrameMatch> decide_waiting();
   /// \brief Decides every waiting frame (end of session).
   std::vector<FrameMatch> flush();
   /// \brief Events left behind by matches since the last call (after flush(): all unclaimed).

@@ -1,0 +1,86 @@
+#include "app/session_command.hpp"
+
+#include <unistd.h>
+
+#include <atomic>
+#include <csignal>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "app/cli_errors.hpp"
+#include "session/session.hpp"
+
+namespace flutterscan::app {
+namespace {
+
+std::atomic<bool> stop_requested{false};
+
+extern "C" void on_sigint(int) {
+  stop_requested = true;
+  std::signal(SIGINT, SIG_DFL);  // a second Ctrl-C ends at once
+}
+
+std::string format_number(double value, int decimals) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.*f", decimals, value);
+  return text;
+}
+
+}  // namespace
+
+void run_session_command(session::SessionConfig config, bool progress) {
+  stop_requested = false;
+  std::signal(SIGINT, on_sigint);
+  std::signal(SIGTERM, on_sigint);
+  const bool tty = isatty(STDERR_FILENO) != 0;
+  session::SessionHooks hooks;
+  hooks.message = [](const std::string& text) { std::cerr << "flutterscan: " << text << "\n"; };
+  hooks.listening = [](int port) {
+    std::cerr << "flutterscan: results on TCP port " << port << " (one JSON line per object)\n";
+  };
+  double last_line_s = -10;
+  if (progress)
+    hooks.progress = [&](const session::Progress& p) {
+      if (!tty && p.elapsed_s - last_line_s < 5) return;
+      last_line_s = p.elapsed_s;
+      std::cerr << (tty ? "\r" : "") << "frames " << p.frames_processed << "/" << p.frames_captured
+                << "  " << format_number(p.fps, 1) << " fps  drops " << p.frames_dropped
+                << "  objects read " << p.objects_read << "/" << p.objects << "  "
+                << format_number(p.elapsed_s, 0) << " s" << (tty ? "   " : "\n") << std::flush;
+    };
+  const session::SessionOutcome outcome = session::run_session(config, stop_requested, hooks);
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+  if (progress && tty) std::cerr << "\n";
+  if (!outcome.error.empty() && outcome.summary.empty()) {
+    if (outcome.bad_input) throw UsageError(outcome.error);
+    throw RuntimeFailure(outcome.error);
+  }
+  const auto& s = outcome.summary;
+  std::cout << "session  " << outcome.folder << "\n"
+            << "frames   " << s.value("frames_processed", 0) << " processed of "
+            << s.value("frames_captured", 0) << " captured; dropped "
+            << s.value("frames_dropped", 0) << " (processing behind), "
+            << s.value("camera_frames_lost", 0) << " lost by the camera, "
+            << s.value("frames_without_event", 0) << " without exposure event, "
+            << s.value("events_without_frame", 0) << " events without frame\n"
+            << "objects  " << s.value("objects_read", 0) << " of " << s.value("objects", 0)
+            << " read (" << format_number(100 * s.value("object_read_rate", 0.0), 1)
+            << "%), mean decode rate per object "
+            << format_number(100 * s.value("mean_decode_rate_per_object", 0.0), 1) << "%\n"
+            << "speed    " << format_number(s.value("fps", 0.0), 1) << " fps; latency p50 "
+            << format_number(s.value("latency_ms_p50", 0.0), 1) << " ms, p99 "
+            << format_number(s.value("latency_ms_p99", 0.0), 1) << " ms\n";
+  if (s.contains("ground_truth"))
+    std::cout << "truth    " << s["ground_truth"].value("labels_read", 0) << " of "
+              << s["ground_truth"].value("labels_fully_in_view", 0)
+              << " labels seen whole were read; wrong values: "
+              << s["ground_truth"]["wrong_values"].size() << "\n";
+  std::cout << "stopped  " << s.value("stopped_by", std::string()) << "\n";
+  const std::string report = (std::filesystem::path(outcome.folder) / "report.html").string();
+  if (std::filesystem::exists(report)) std::cout << "report   " << report << "\n";
+  if (!outcome.error.empty()) throw RuntimeFailure(outcome.error);
+}
+
+}  // namespace flutterscan::app

@@ -1,0 +1,65 @@
+#include "session/frame_model.hpp"
+
+#include <cmath>
+
+#include "imaging/capture_descriptor.hpp"
+
+namespace flutterscan::session {
+
+double belt_speed_px_per_us(const ExposureRecord& event, double px_per_count) {
+  const double duration_us = static_cast<double>(event.slot_count) * event.slot_time_us;
+  if (duration_us <= 0) return 0;
+  return std::abs(event.encoder_delta) * px_per_count / duration_us;
+}
+
+Result<imaging::CaptureModel, std::string> frame_model(const ExposureRecord& event,
+                                                       const LedCode& code,
+                                                       const SessionConfig& config,
+                                                       const capture::FrameFormat& format) {
+  using Out = Result<imaging::CaptureModel, std::string>;
+  const std::string where = "exposure " + std::to_string(event.frame_counter);
+  if (event.slot_count != code.length())
+    return Out::failure(where + ": " + std::to_string(event.slot_count) +
+                        " slots, the session's code has " + std::to_string(code.length()));
+  const OpticsConfig& o = config.optics;
+  imaging::CaptureModel m;
+  m.code = code;
+  m.blur_px = std::abs(event.encoder_delta) * o.px_per_count;
+  imaging::parse_direction(o.direction, m.direction);
+  if (event.encoder_delta < 0) {
+    switch (m.direction) {
+      case imaging::Direction::kPlusX:
+        m.direction = imaging::Direction::kMinusX;
+        break;
+      case imaging::Direction::kMinusX:
+        m.direction = imaging::Direction::kPlusX;
+        break;
+      case imaging::Direction::kPlusY:
+        m.direction = imaging::Direction::kMinusY;
+        break;
+      case imaging::Direction::kMinusY:
+        m.direction = imaging::Direction::kPlusY;
+        break;
+    }
+  }
+  const bool mono = format.pixel_format == capture::PixelFormat::kMono8 ||
+                    format.pixel_format == capture::PixelFormat::kMono16;
+  m.channels = mono ? 1 : 3;
+  m.leds = 3;
+  m.crosstalk = mono ? std::vector<double>{1, 1, 1} : o.crosstalk;
+  const auto per_bit = imaging::budgeted_led_electrons(code, o.electrons, o.cap);
+  m.led_electrons.assign(per_bit.begin(), per_bit.begin() + 3);
+  m.ambient_electrons.assign(static_cast<std::size_t>(m.channels), 0.0);
+  m.read_noise = o.read_noise_e;
+  m.full_well = o.full_well_e;
+  m.bit_depth = format.bit_depth;
+  m.black_level = o.black_level_dn;
+  m.gain = o.gain_e_per_dn > 0 ? o.gain_e_per_dn : o.full_well_e / (std::pow(2.0, m.bit_depth) - 1);
+  m.bayer_rggb = format.pixel_format == capture::PixelFormat::kBayerRggb8 ||
+                 format.pixel_format == capture::PixelFormat::kBayerRggb16;
+  if (auto problem = imaging::capture_model_problem(m); !problem.empty())
+    return Out::failure(where + ": " + problem);
+  return Out::success(std::move(m));
+}
+
+}  // namespace flutterscan::session

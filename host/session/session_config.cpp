@@ -1,0 +1,320 @@
+#include "session/session_config.hpp"
+
+#include <toml++/toml.h>
+
+#include <cmath>
+#include <fstream>
+#include <sstream>
+
+#include "codes/library.hpp"
+#include "flutterscan/common/protocol.hpp"
+#include "imaging/capture_descriptor.hpp"
+
+namespace flutterscan::session {
+namespace {
+
+using Out = Result<SessionConfig, std::string>;
+
+/// Reads typed values out of one table, remembering the first problem.
+class TableReader {
+ public:
+  TableReader(const toml::table* table, std::string prefix, std::string origin, std::string& error)
+      : table_(table), prefix_(std::move(prefix)), origin_(std::move(origin)), error_(error) {}
+
+  template <typename T>
+  void get(const char* key, T& value) {
+    if (table_ == nullptr || !error_.empty()) return;
+    const toml::node* node = table_->get(key);
+    if (node == nullptr) return;
+    if constexpr (std::is_same_v<T, bool>) {
+      if (auto v = node->value_exact<bool>()) return void(value = *v);
+      fail(key, *node, "true or false");
+    } else if constexpr (std::is_same_v<T, std::string>) {
+      if (auto v = node->value_exact<std::string>()) return void(value = *v);
+      fail(key, *node, "a string");
+    } else if constexpr (std::is_floating_point_v<T>) {
+      if (auto v = node->value<double>(); v && std::isfinite(*v)) return void(value = *v);
+      fail(key, *node, "a number");
+    } else {
+      if (auto v = node->value_exact<std::int64_t>()) {
+        if (*v < 0 && std::is_unsigned_v<T>) return fail(key, *node, "an integer >= 0");
+        return void(value = static_cast<T>(*v));
+      }
+      fail(key, *node, "an integer");
+    }
+  }
+
+  template <typename T>
+  void get(const char* key, std::optional<T>& value) {
+    if (table_ == nullptr || table_->get(key) == nullptr) return;
+    T v{};
+    get(key, v);
+    if (error_.empty()) value = v;
+  }
+
+  void fail(const char* key, const toml::node& node, const std::string& wanted) {
+    if (!error_.empty()) return;
+    std::ostringstream where;
+    where << origin_ << ":" << node.source().begin.line << ": " << prefix_ << key << " must be "
+          << wanted;
+    error_ = where.str();
+  }
+
+  const toml::table* table_;
+  std::string prefix_;
+  std::string origin_;
+  std::string& error_;
+};
+
+std::string known_keys_problem(const toml::table& table, const std::string& prefix,
+                               std::initializer_list<const char*> keys, const std::string& origin) {
+  for (const auto& [key, node] : table) {
+    bool known = false;
+    for (const char* k : keys) known |= key.str() == k;
+    if (!known) {
+      std::ostringstream where;
+      where << origin << ":" << node.source().begin.line << ": unknown key " << prefix << key.str();
+      return where.str();
+    }
+  }
+  return {};
+}
+
+}  // namespace
+
+Result<SessionConfig, std::string> parse_config(const std::string& text,
+                                                const std::string& origin) {
+  toml::table root;
+  try {
+    root = toml::parse(text, origin);
+  } catch (const toml::parse_error& e) {
+    std::ostringstream where;
+    where << origin << ":" << e.source().begin.line << ": " << e.description();
+    return Out::failure(where.str());
+  }
+  SessionConfig c;
+  std::string error;
+  if (auto p = known_keys_problem(
+          root, "", {"camera", "controller", "optics", "processing", "output", "results"}, origin);
+      !p.empty())
+    return Out::failure(p);
+  const toml::table* camera = root["camera"].as_table();
+  if (camera != nullptr) {
+    if (auto p = known_keys_problem(*camera, "camera.",
+                                    {"spec", "width", "height", "pixel_format", "exposure_us",
+                                     "gain_db", "frame_rate_hz", "trigger", "options"},
+                                    origin);
+        !p.empty())
+      return Out::failure(p);
+    TableReader r(camera, "camera.", origin, error);
+    r.get("spec", c.camera.spec);
+    r.get("width", c.camera.settings.width);
+    r.get("height", c.camera.settings.height);
+    r.get("exposure_us", c.camera.settings.exposure_us);
+    r.get("gain_db", c.camera.settings.gain_db);
+    r.get("frame_rate_hz", c.camera.settings.frame_rate_hz);
+    std::string pixel_format, trigger;
+    r.get("pixel_format", pixel_format);
+    r.get("trigger", trigger);
+    if (!error.empty()) return Out::failure(error);
+    if (!pixel_format.empty()) {
+      c.camera.settings.pixel_format = capture::pixel_format_from_name(pixel_format);
+      if (!c.camera.settings.pixel_format)
+        return Out::failure(origin + ": camera.pixel_format '" + pixel_format +
+                            "' is not a known format");
+    }
+    if (!trigger.empty()) {
+      auto mode = capture::trigger_mode_from_name(trigger);
+      if (!mode)
+        return Out::failure(origin + ": camera.trigger must be free-run, software or line0");
+      c.camera.settings.trigger = *mode;
+    }
+    if (const toml::table* options = (*camera)["options"].as_table()) {
+      for (const auto& [key, node] : *options) {
+        std::string value;
+        if (auto s = node.value_exact<std::string>())
+          value = *s;
+        else if (auto i = node.value_exact<std::int64_t>())
+          value = std::to_string(*i);
+        else if (auto d = node.value_exact<double>()) {
+          std::ostringstream number;
+          number.precision(17);
+          number << *d;
+          value = number.str();
+        } else if (auto b = node.value_exact<bool>())
+          value = *b ? "true" : "false";
+        else
+          return Out::failure(origin + ": camera.options." + std::string(key.str()) +
+                              " must be a string, number or boolean");
+        c.camera.options.emplace_back(std::string(key.str()), value);
+      }
+    }
+  }
+  if (const toml::table* t = root["controller"].as_table()) {
+    if (auto p = known_keys_problem(
+            *t, "controller.", {"spec", "code", "slot_time_us", "sync", "frame_period_us"}, origin);
+        !p.empty())
+      return Out::failure(p);
+    TableReader r(t, "controller.", origin, error);
+    r.get("spec", c.controller.spec);
+    r.get("code", c.controller.code);
+    r.get("slot_time_us", c.controller.slot_time_us);
+    r.get("sync", c.controller.sync);
+    r.get("frame_period_us", c.controller.frame_period_us);
+  }
+  if (const toml::table* t = root["optics"].as_table()) {
+    if (auto p = known_keys_problem(
+            *t, "optics.",
+            {"px_per_count", "direction", "crosstalk", "electrons", "cap", "read_noise_e",
+             "full_well_e", "black_level_dn", "gain_e_per_dn", "bit_depth"},
+            origin);
+        !p.empty())
+      return Out::failure(p);
+    TableReader r(t, "optics.", origin, error);
+    r.get("px_per_count", c.optics.px_per_count);
+    r.get("direction", c.optics.direction);
+    r.get("electrons", c.optics.electrons);
+    r.get("cap", c.optics.cap);
+    r.get("read_noise_e", c.optics.read_noise_e);
+    r.get("full_well_e", c.optics.full_well_e);
+    r.get("black_level_dn", c.optics.black_level_dn);
+    r.get("gain_e_per_dn", c.optics.gain_e_per_dn);
+    r.get("bit_depth", c.optics.bit_depth);
+    if (const toml::node* node = t->get("crosstalk")) {
+      const toml::array* rows = node->as_array();
+      std::vector<double> values;
+      bool ok = rows != nullptr && rows->size() == 3;
+      for (std::size_t i = 0; ok && i < 3; ++i) {
+        const toml::array* row = rows->get(i)->as_array();
+        ok = row != nullptr && row->size() == 3;
+        for (std::size_t j = 0; ok && j < 3; ++j) {
+          auto v = row->get(j)->value<double>();
+          ok = v.has_value() && *v >= 0;
+          if (ok) values.push_back(*v);
+        }
+      }
+      if (!ok) {
+        std::ostringstream where;
+        where << origin << ":" << node->source().begin.line
+              << ": optics.crosstalk must be 3 rows of 3 numbers >= 0 (rows = camera channels)";
+        return Out::failure(where.str());
+      }
+      c.optics.crosstalk = values;
+    }
+  }
+  if (const toml::table* t = root["processing"].as_table()) {
+    if (auto p = known_keys_problem(
+            *t, "processing.",
+            {"method", "workers", "threads_per_worker", "queue_depth", "max_frames", "max_seconds",
+             "match_tolerance_us", "object_match_px"},
+            origin);
+        !p.empty())
+      return Out::failure(p);
+    TableReader r(t, "processing.", origin, error);
+    std::string method;
+    r.get("method", method);
+    if (!method.empty()) {
+      auto m = imaging::method_from_name(method);
+      if (!m)
+        return Out::failure(origin + ": processing.method '" + method +
+                            "' is none of joint-wiener, wiener-avg, rl, tv");
+      c.processing.method = *m;
+    }
+    r.get("workers", c.processing.workers);
+    r.get("threads_per_worker", c.processing.threads_per_worker);
+    r.get("queue_depth", c.processing.queue_depth);
+    r.get("max_frames", c.processing.max_frames);
+    r.get("max_seconds", c.processing.max_seconds);
+    r.get("match_tolerance_us", c.processing.match_tolerance_us);
+    r.get("object_match_px", c.processing.object_match_px);
+  }
+  if (const toml::table* t = root["output"].as_table()) {
+    if (auto p = known_keys_problem(*t, "output.",
+                                    {"dir", "timestamped_subfolder", "keep_first_frames",
+                                     "keep_failed_frames", "disk_budget_mb", "report"},
+                                    origin);
+        !p.empty())
+      return Out::failure(p);
+    TableReader r(t, "output.", origin, error);
+    r.get("dir", c.output.dir);
+    r.get("timestamped_subfolder", c.output.timestamped_subfolder);
+    r.get("keep_first_frames", c.output.keep_first_frames);
+    r.get("keep_failed_frames", c.output.keep_failed_frames);
+    r.get("disk_budget_mb", c.output.disk_budget_mb);
+    r.get("report", c.output.report);
+  }
+  if (const toml::table* t = root["results"].as_table()) {
+    if (auto p = known_keys_problem(*t, "results.",
+                                    {"tcp_port", "tcp_bind", "serial", "serial_baud"}, origin);
+        !p.empty())
+      return Out::failure(p);
+    TableReader r(t, "results.", origin, error);
+    r.get("tcp_port", c.results.tcp_port);
+    r.get("tcp_bind", c.results.tcp_bind);
+    r.get("serial", c.results.serial);
+    r.get("serial_baud", c.results.serial_baud);
+  }
+  if (!error.empty()) return Out::failure(error);
+  return Out::success(std::move(c));
+}
+
+Result<SessionConfig, std::string> load_config(const std::string& path) {
+  toml::table root;
+  std::ifstream in(path);
+  if (!in) return Out::failure("cannot read config '" + path + "'");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parse_config(text.str(), path);
+}
+
+std::string check_config(SessionConfig& c) {
+  auto problem = [](const std::string& key, const std::string& what) { return key + " " + what; };
+  if (auto entry = codes::find_library_code(c.controller.code)) {
+    c.controller.parsed_code = codes::to_code(*entry);
+  } else {
+    auto parsed = LedCode::parse(c.controller.code, 3, CodeRule::kOneOfN);
+    if (!parsed.ok())
+      return problem("controller.code", "'" + c.controller.code +
+                                            "' is neither a library code nor a one-of-3 digit "
+                                            "string (slot " +
+                                            std::to_string(parsed.error().slot) + ")");
+    c.controller.parsed_code = parsed.value();
+  }
+  if (c.controller.parsed_code.leds() != 3)
+    return problem("controller.code", "must be a code of the 3 LEDs");
+  if (c.controller.slot_time_us < protocol::kMinSlotTimeUs ||
+      c.controller.slot_time_us > protocol::kMaxSlotTimeUs)
+    return problem("controller.slot_time_us", "must be within " +
+                                                  std::to_string(protocol::kMinSlotTimeUs) + ".." +
+                                                  std::to_string(protocol::kMaxSlotTimeUs));
+  if (c.controller.sync != "slave" && c.controller.sync != "master")
+    return problem("controller.sync", "must be slave or master");
+  if (c.controller.sync == "master" && c.controller.frame_period_us == 0)
+    return problem("controller.frame_period_us", "must be set (> 0) for master sync");
+  if (!(c.optics.px_per_count > 0)) return problem("optics.px_per_count", "must be > 0");
+  imaging::Direction direction;
+  if (!imaging::parse_direction(c.optics.direction, direction))
+    return problem("optics.direction", "must be +x, -x, +y or -y");
+  if (!(c.optics.electrons > 0)) return problem("optics.electrons", "must be > 0");
+  if (!(c.optics.cap > 0)) return problem("optics.cap", "must be > 0");
+  if (c.optics.bit_depth < 8 || c.optics.bit_depth > 16)
+    return problem("optics.bit_depth", "must be within 8..16");
+  if (c.processing.workers < 1 || c.processing.workers > 64)
+    return problem("processing.workers", "must be within 1..64");
+  if (c.processing.threads_per_worker < 1 || c.processing.threads_per_worker > 64)
+    return problem("processing.threads_per_worker", "must be within 1..64");
+  if (c.processing.queue_depth < 1) return problem("processing.queue_depth", "must be >= 1");
+  if (c.processing.max_seconds < 0) return problem("processing.max_seconds", "must be >= 0");
+  if (!(c.processing.match_tolerance_us > 0))
+    return problem("processing.match_tolerance_us", "must be > 0");
+  if (!(c.processing.object_match_px > 0))
+    return problem("processing.object_match_px", "must be > 0");
+  if (c.output.dir.empty()) return problem("output.dir", "must not be empty");
+  if (c.output.keep_first_frames < 0) return problem("output.keep_first_frames", "must be >= 0");
+  if (!(c.output.disk_budget_mb >= 0)) return problem("output.disk_budget_mb", "must be >= 0");
+  if (c.results.tcp_port < -1 || c.results.tcp_port > 65535)
+    return problem("results.tcp_port", "must be -1 (off), 0 (any) or a port number");
+  return {};
+}
+
+}  // namespace flutterscan::session

@@ -1,0 +1,93 @@
+#pragma once
+// A session's configuration: TOML (docs/session.md, docs/session-example.toml)
+// read with toml++, then command-line overrides. Every field has a default, so
+// an empty file (or none) is a valid sim session.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "capture/camera_source.hpp"
+#include "flutterscan/common/led_code.hpp"
+#include "flutterscan/common/result.hpp"
+#include "imaging/deblur.hpp"
+
+namespace flutterscan::session {
+
+struct CameraConfig {
+  std::string spec = "sim";  ///< backend:argument (camera_source.hpp)
+  capture::CameraSettings settings;
+  /// Backend options as key = value ([camera.options]; the sim's conveyor).
+  std::vector<std::pair<std::string, std::string>> options;
+};
+
+struct ControllerConfig {
+  std::string spec = "sim";            ///< "sim", "auto" or a serial number
+  std::string code = "seed-maxmin-1";  ///< digits or a library name (docs/codes.md)
+  LedCode parsed_code;                 ///< filled by check_config
+  std::uint32_t slot_time_us = 100;
+  std::string sync = "slave";         ///< "slave" (camera strobe) or "master" (controller triggers)
+  std::uint32_t frame_period_us = 0;  ///< master mode
+};
+
+/// \brief How the camera sees the LEDs (calibration), for the capture descriptor.
+struct OpticsConfig {
+  double px_per_count = 0.5;  ///< belt motion in image pixels per encoder count
+  std::string direction = "+x";
+  std::vector<double> crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
+  double electrons = 3000;  ///< E: white e- per channel under rect-white (sets I_k with cap)
+  double cap = 3;
+  double read_noise_e = 4;
+  double full_well_e = 12000;
+  double black_level_dn = 64;
+  double gain_e_per_dn = 0;  ///< 0: full well at full scale of bit_depth
+  int bit_depth = 12;
+};
+
+struct ProcessingConfig {
+  imaging::Method method = imaging::Method::kJointWiener;
+  int workers = 2;              ///< frames deblurred at once
+  int threads_per_worker = 1;   ///< row threads inside one deblur
+  std::size_t queue_depth = 4;  ///< frames waiting for a worker; beyond it frames are dropped
+  std::uint64_t max_frames =
+      0;                   ///< stop after this many frames (0: until the camera ends or Ctrl-C)
+  double max_seconds = 0;  ///< stop after this long (0: no limit)
+  double match_tolerance_us = 2000;
+  double object_match_px = 120;  ///< decodes this close on the belt are one object
+};
+
+struct OutputConfig {
+  std::string dir = "sessions";
+  bool timestamped_subfolder = true;  ///< DIR/YYYYmmdd-HHMMSS, else DIR itself
+  int keep_first_frames = 10;         ///< raw + fused images of the first N frames
+  bool keep_failed_frames = true;     ///< and of every frame whose decode failed
+  double disk_budget_mb = 512;        ///< frame files beyond it rotate away, oldest first
+  bool report = true;
+};
+
+struct ResultsConfig {
+  int tcp_port = -1;  ///< -1: off; 0: any free port (printed); else that port
+  std::string tcp_bind = "127.0.0.1";
+  std::string serial;  ///< e.g. /dev/ttyUSB0; empty: off
+  int serial_baud = 115200;
+};
+
+struct SessionConfig {
+  CameraConfig camera;
+  ControllerConfig controller;
+  OpticsConfig optics;
+  ProcessingConfig processing;
+  OutputConfig output;
+  ResultsConfig results;
+};
+
+/// \brief Reads a TOML file over the defaults; the error names the file, the key and the line.
+Result<SessionConfig, std::string> load_config(const std::string& path);
+/// \brief Reads TOML text (`origin` names it in errors).
+Result<SessionConfig, std::string> parse_config(const std::string& text, const std::string& origin);
+/// \brief Checks values and parses the code; the first problem, naming the key (empty if none).
+std::string check_config(SessionConfig& config);
+
+}  // namespace flutterscan::session

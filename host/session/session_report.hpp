@@ -1,0 +1,42 @@
+#pragma once
+// report.html: one self-contained page (no external resources; pictures and
+// charts are data URIs) with the session's figures, before/after pictures,
+// the decode table, throughput and latency histograms, and the code's
+// spectrum. Charts are drawn with host/plot into DIR/charts/ and embedded.
+
+#include <nlohmann/json.hpp>
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "flutterscan/common/led_code.hpp"
+#include "session/object_tracker.hpp"
+
+namespace flutterscan::session {
+
+/// \brief A before/after pair: PNG bytes of the raw frame (display-scaled) and the fused latent.
+struct Preview {
+  std::uint64_t sequence = 0;
+  std::string caption;
+  std::vector<std::uint8_t> before_png;
+  std::vector<std::uint8_t> after_png;
+};
+
+struct ReportInputs {
+  nlohmann::json summary;
+  std::vector<ObjectResult> objects;
+  std::vector<Preview> previews;
+  std::vector<double> latency_ms;         ///< per processed frame: arrival to result
+  std::vector<double> frames_per_second;  ///< processed frames in each second of the run
+  LedCode code;
+};
+
+/// \brief Standard base64 of `bytes`.
+std::string base64(const std::vector<std::uint8_t>& bytes);
+
+/// \brief Writes DIR/report.html (atomically) and its charts under DIR/charts/;
+/// error names the file that failed.
+std::string write_report(const std::string& folder, const ReportInputs& inputs);
+
+}  // namespace flutterscan::session
