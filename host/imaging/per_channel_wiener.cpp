@@ -1,0 +1,306 @@
+#include "imaging/per_channel_wiener.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <complex>
+#include <numbers>
+#include <span>
+
+#include "imaging/exposure_timeline.hpp"
+#include "imaging/joint_wiener.hpp"
+#include "imaging/motion_frame.hpp"
+#include "imaging/row_fft.hpp"
+#include "imaging/row_pool.hpp"
+
+namespace flutterscan::imaging {
+namespace {
+
+using Complex = std::complex<double>;
+using Matrix3 = std::array<std::array<Complex, 3>, 3>;
+
+/// Solves N X = B for X (3x3, Gaussian elimination with partial pivoting).
+/// N is Hermitian positive definite here (lambda P > 0 off the DC bin; at DC
+/// the data term alone), so a tiny pivot only occurs for a singular problem,
+/// where the bin is left at zero.
+Matrix3 solve3(Matrix3 n, Matrix3 b) {
+  for (int col = 0; col < 3; ++col) {
+    int pivot = col;
+    for (int r = col + 1; r < 3; ++r)
+      if (std::abs(n[r][col]) > std::abs(n[pivot][col])) pivot = r;
+    std::swap(n[col], n[pivot]);
+    std::swap(b[col], b[pivot]);
+    if (std::abs(n[col][col]) < 1e-300) return Matrix3{};
+    for (int r = 0; r < 3; ++r) {
+      if (r == col) continue;
+      const Complex f = n[r][col] / n[col][col];
+      for (int k = 0; k < 3; ++k) {
+        n[r][k] -= f * n[col][k];
+        b[r][k] -= f * b[col][k];
+      }
+    }
+  }
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 3; ++k) b[r][k] /= n[r][r];
+  return b;
+}
+
+double mean_of(const Plane& p) {
+  double sum = 0;
+  for (float v : p.pixels) sum += v;
+  return p.pixels.empty() ? 0.0 : sum / static_cast<double>(p.pixels.size());
+}
+
+/// Symmetric 3x3 eigen-decomposition by Jacobi rotations: eigenvectors as
+/// columns of `vectors`, sorted by decreasing eigenvalue.
+void symmetric_eigen(std::array<std::array<double, 3>, 3> a, std::array<double, 3>& values,
+                     std::array<std::array<double, 3>, 3>& vectors) {
+  std::array<std::array<double, 3>, 3> v{};
+  for (int i = 0; i < 3; ++i) v[i][i] = 1;
+  for (int sweep = 0; sweep < 50; ++sweep) {
+    const double off = a[0][1] * a[0][1] + a[0][2] * a[0][2] + a[1][2] * a[1][2];
+    if (off < 1e-30) break;
+    for (int p = 0; p < 2; ++p)
+      for (int q = p + 1; q < 3; ++q) {
+        if (std::abs(a[p][q]) < 1e-300) continue;
+        const double theta = (a[q][q] - a[p][p]) / (2 * a[p][q]);
+        const double t =
+            (theta >= 0 ? 1.0 : -1.0) / (std::abs(theta) + std::sqrt(theta * theta + 1));
+        const double c = 1 / std::sqrt(t * t + 1), s = t * c;
+        for (int k = 0; k < 3; ++k) {  // a <- a J
+          const double akp = a[k][p], akq = a[k][q];
+          a[k][p] = c * akp - s * akq;
+          a[k][q] = s * akp + c * akq;
+        }
+        for (int k = 0; k < 3; ++k) {  // a <- J^T a
+          const double apk = a[p][k], aqk = a[q][k];
+          a[p][k] = c * apk - s * aqk;
+          a[q][k] = s * apk + c * aqk;
+        }
+        for (int k = 0; k < 3; ++k) {
+          const double vkp = v[k][p], vkq = v[k][q];
+          v[k][p] = c * vkp - s * vkq;
+          v[k][q] = s * vkp + c * vkq;
+        }
+      }
+  }
+  std::array<int, 3> order{0, 1, 2};
+  std::sort(order.begin(), order.end(), [&](int x, int y) { return a[x][x] > a[y][y]; });
+  for (int i = 0; i < 3; ++i) {
+    values[i] = a[order[i]][order[i]];
+    for (int k = 0; k < 3; ++k) vectors[k][i] = v[k][order[i]];
+  }
+}
+
+/// The bands r_k = offset_k + sum_i basis[i][k] a_i: K = basis.size() latents.
+struct BandBasis {
+  std::vector<std::array<double, 3>> basis;
+  std::array<double, 3> offset{};
+};
+
+/// Solves for the K latents of `basis` per frequency from the three channels
+/// (motion-frame rows); returns them as planes (motion frame).
+std::vector<Plane> solve_latents(const std::vector<Plane>& rows, const CaptureModel& model,
+                                 std::span<const double> noise_variance, const BandBasis& bands,
+                                 double lambda, int threads) {
+  const int width = rows[0].width, height = rows[0].height;
+  const int latents = static_cast<int>(bands.basis.size());
+  const auto segments = uniform_segments(model);
+  CaptureModel ambient_only = model;
+  std::fill(ambient_only.led_electrons.begin(), ambient_only.led_electrons.end(), 0.0);
+  std::vector<std::vector<double>> led_taps, ambient_taps;
+  std::size_t longest = 1;
+  for (int k = 0; k < 3; ++k) {
+    led_taps.push_back(timeline_led_psf(model, k, segments));
+    ambient_taps.push_back(timeline_channel_psf(ambient_only, k, segments));
+    longest = std::max({longest, led_taps.back().size(), ambient_taps.back().size()});
+  }
+  // The offset's share of each channel (a constant: the belt continues upstream).
+  std::array<double, 3> offset_electrons{};
+  for (int c = 0; c < 3; ++c)
+    for (int k = 0; k < 3; ++k) {
+      double white = 0;
+      for (double t : led_taps[static_cast<std::size_t>(k)]) white += t;
+      white *= model.crosstalk[static_cast<std::size_t>(c * 3 + k)];
+      if (c == k)
+        for (double t : ambient_taps[static_cast<std::size_t>(k)]) white += t;
+      offset_electrons[static_cast<std::size_t>(c)] +=
+          white * bands.offset[static_cast<std::size_t>(k)];
+    }
+  const RowFft fft(row_fft_length(width + static_cast<int>(longest)));
+  const int n = fft.length();
+  const auto bins = static_cast<std::size_t>(fft.bins());
+  std::vector<std::vector<Complex>> h, ambient;
+  for (int k = 0; k < 3; ++k) {
+    h.push_back(psf_spectrum(led_taps[static_cast<std::size_t>(k)], n));
+    ambient.push_back(psf_spectrum(ambient_taps[static_cast<std::size_t>(k)], n));
+  }
+  // filter[j][i * 3 + c]: latent i's weight on channel c's spectrum in bin j (1 / n folded in).
+  std::vector<std::array<std::complex<float>, 9>> filter(bins);
+  for (std::size_t j = 0; j < bins; ++j) {
+    Matrix3 a{};  // channel c from latent i: sum_k (M[c][k] H_k + ambient) basis[i][k]
+    for (int c = 0; c < 3; ++c)
+      for (int i = 0; i < latents; ++i)
+        for (int k = 0; k < 3; ++k) {
+          Complex g = model.crosstalk[static_cast<std::size_t>(c * 3 + k)] * h[k][j];
+          if (c == k) g += ambient[c][j];
+          a[c][i] += g * bands.basis[static_cast<std::size_t>(i)][static_cast<std::size_t>(k)];
+        }
+    Matrix3 normal{}, rhs{};  // A^H V^-1 A + lambda P I, and A^H V^-1 (identity past K)
+    const double w = 2.0 * std::numbers::pi * static_cast<double>(j) / n;
+    for (int i = 0; i < 3; ++i) {
+      if (i >= latents) {
+        normal[i][i] = 1;
+        continue;
+      }
+      for (int l = 0; l < latents; ++l)
+        for (int c = 0; c < 3; ++c)
+          normal[i][l] +=
+              std::conj(a[c][i]) * a[c][l] / noise_variance[static_cast<std::size_t>(c)];
+      normal[i][i] += lambda * (2.0 - 2.0 * std::cos(w));
+      for (int c = 0; c < 3; ++c)
+        rhs[i][c] = std::conj(a[c][i]) / noise_variance[static_cast<std::size_t>(c)];
+    }
+    const Matrix3 x = solve3(normal, rhs);
+    for (int i = 0; i < 3; ++i)
+      for (int c = 0; c < 3; ++c)
+        filter[j][static_cast<std::size_t>(i * 3 + c)] =
+            std::complex<float>(x[i][c] / static_cast<double>(n));
+  }
+
+  const std::vector<float> blend = periodic_blend(width, n);
+  std::vector<Plane> out(static_cast<std::size_t>(latents), Plane(width, height));
+  RowPool pool(std::max(1, std::min(threads, height)));
+  pool.run(height, [&](int first, int last, int) {
+    std::vector<AlignedFloats> padded, spectra;
+    for (int c = 0; c < 3; ++c) {
+      padded.emplace_back(static_cast<std::size_t>(n));
+      spectra.emplace_back(2 * bins);
+    }
+    AlignedFloats latent_spectrum(2 * bins), latent_row(static_cast<std::size_t>(n));
+    for (int y = first; y < last; ++y) {
+      for (int c = 0; c < 3; ++c) {
+        const auto cu = static_cast<std::size_t>(c);
+        const auto source = rows[cu].row(y);
+        const auto offset = static_cast<float>(offset_electrons[cu]);
+        for (int x = 0; x < width; ++x)
+          padded[cu][static_cast<std::size_t>(x)] = source[static_cast<std::size_t>(x)] - offset;
+        extend_row_periodically(padded[cu].span(), width, blend);
+        fft.forward(padded[cu].data(), spectra[cu].complex());
+      }
+      for (int i = 0; i < latents; ++i) {
+        std::complex<float>* spectrum = latent_spectrum.complex();
+        for (std::size_t j = 0; j < bins; ++j) {
+          std::complex<float> sum = 0;
+          for (int c = 0; c < 3; ++c)
+            sum += filter[j][static_cast<std::size_t>(i * 3 + c)] *
+                   spectra[static_cast<std::size_t>(c)].complex()[j];
+          spectrum[j] = sum;
+        }
+        fft.inverse(spectrum, latent_row.data());
+        std::copy(latent_row.data(), latent_row.data() + width,
+                  out[static_cast<std::size_t>(i)].row(y).begin());
+      }
+    }
+  });
+  return out;
+}
+
+/// Bands from latents: r_k = offset_k + sum_i basis[i][k] a_i.
+std::vector<Plane> to_bands(const std::vector<Plane>& latents, const BandBasis& bands) {
+  std::vector<Plane> out;
+  for (int k = 0; k < 3; ++k) {
+    Plane band(latents[0].width, latents[0].height,
+               static_cast<float>(bands.offset[static_cast<std::size_t>(k)]));
+    for (std::size_t i = 0; i < latents.size(); ++i) {
+      const auto weight = static_cast<float>(bands.basis[i][static_cast<std::size_t>(k)]);
+      for (std::size_t p = 0; p < band.pixels.size(); ++p)
+        band.pixels[p] += weight * latents[i].pixels[p];
+    }
+    out.push_back(std::move(band));
+  }
+  return out;
+}
+
+/// The print plane of the bands (motion frame): their mean colour and the two
+/// principal colour directions, over the columns past the first blur length.
+BandBasis print_plane(const std::vector<Plane>& bands, double blur_px) {
+  const int x0 = std::min(bands[0].width - 1, static_cast<int>(std::ceil(blur_px)));
+  std::array<double, 3> mean{};
+  std::array<std::array<double, 3>, 3> covariance{};
+  double count = 0;
+  for (int y = 0; y < bands[0].height; ++y)
+    for (int x = x0; x < bands[0].width; ++x) {
+      std::array<double, 3> v{};
+      for (int k = 0; k < 3; ++k)
+        v[static_cast<std::size_t>(k)] =
+            std::clamp(bands[static_cast<std::size_t>(k)].at(x, y), 0.0f, 1.0f);
+      for (int k = 0; k < 3; ++k) {
+        mean[static_cast<std::size_t>(k)] += v[static_cast<std::size_t>(k)];
+        for (int l = 0; l < 3; ++l)
+          covariance[static_cast<std::size_t>(k)][static_cast<std::size_t>(l)] +=
+              v[static_cast<std::size_t>(k)] * v[static_cast<std::size_t>(l)];
+      }
+      ++count;
+    }
+  for (auto& m : mean) m /= count;
+  for (int k = 0; k < 3; ++k)
+    for (int l = 0; l < 3; ++l)
+      covariance[static_cast<std::size_t>(k)][static_cast<std::size_t>(l)] =
+          covariance[static_cast<std::size_t>(k)][static_cast<std::size_t>(l)] / count -
+          mean[static_cast<std::size_t>(k)] * mean[static_cast<std::size_t>(l)];
+  std::array<double, 3> values{};
+  std::array<std::array<double, 3>, 3> vectors{};
+  symmetric_eigen(covariance, values, vectors);
+  BandBasis plane;
+  plane.offset = mean;
+  for (int i = 0; i < 2; ++i)
+    plane.basis.push_back({vectors[0][static_cast<std::size_t>(i)],
+                           vectors[1][static_cast<std::size_t>(i)],
+                           vectors[2][static_cast<std::size_t>(i)]});
+  return plane;
+}
+
+}  // namespace
+
+Result<PerChannelResult, std::string> deblur_per_channel(const Image& electrons,
+                                                         const CaptureModel& model, double lambda,
+                                                         int threads, ColourPrior prior) {
+  using Out = Result<PerChannelResult, std::string>;
+  if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
+  if (model.channels != 3 || model.leds != 3)
+    return Out::failure("the per-channel model needs 3 channels and 3 LEDs");
+  if (electrons.channel_count() != 3)
+    return Out::failure("the frame has " + std::to_string(electrons.channel_count()) +
+                        " channels; the per-channel model needs 3");
+  if (!(lambda > 0) || !std::isfinite(lambda))
+    return Out::failure("the prior weight lambda must be a finite number > 0");
+  std::vector<Plane> rows;
+  for (const auto& plane : electrons.channels)
+    rows.push_back(to_motion_frame(plane, model.direction));
+  if (model.blur_px >= rows[0].width)
+    return Out::failure("the blur (" + std::to_string(model.blur_px) +
+                        " px) is not shorter than the image along the motion (" +
+                        std::to_string(rows[0].width) + " px)");
+  PerChannelResult result;
+  for (const auto& r : rows)
+    result.noise_variance.push_back(channel_noise_variance(model, mean_of(r)));
+  BandBasis three;
+  three.basis = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  std::vector<Plane> bands =
+      solve_latents(rows, model, result.noise_variance, three, lambda, threads);
+  if (prior == ColourPrior::kPrintPlane) {
+    const BandBasis plane = print_plane(bands, model.blur_px);
+    bands =
+        to_bands(solve_latents(rows, model, result.noise_variance, plane, lambda, threads), plane);
+  }
+  result.grey = Plane(rows[0].width, rows[0].height);
+  for (const auto& band : bands)
+    for (std::size_t i = 0; i < band.pixels.size(); ++i)
+      result.grey.pixels[i] += band.pixels[i] / 3.0f;
+  result.grey = from_motion_frame(result.grey, model.direction);
+  for (auto& band : bands) result.bands.push_back(from_motion_frame(band, model.direction));
+  return Out::success(std::move(result));
+}
+
+}  // namespace flutterscan::imaging
