@@ -122,8 +122,10 @@ void add_simulate(CLI::App& app) {
   CLI::App* command =
       app.add_subcommand("simulate", "Render a coded-light frame of a label on a moving belt");
   command
-      ->add_option("--scene", o->scene,
-                   "code128:TEXT, ean13:DIGITS, qr:TEXT, datamatrix:TEXT, text:WORDS or image:PATH")
+      ->add_option(
+          "--scene", o->scene,
+          "code128:TEXT, ean13:DIGITS, qr:TEXT, datamatrix:TEXT, text:WORDS, image:PATH or "
+          "flat:REFLECTANCE (a calibration target)")
       ->required();
   command->add_option("--code", o->code, "LED code: digits or a library name")->required();
   command->add_option("--blur", o->blur, "motion during the exposure, pixels")

@@ -23,6 +23,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
+#include <cstdlib>
 #include <exception>
 #include <filesystem>
 #include <random>
@@ -41,13 +42,14 @@ struct KindName {
   std::string_view name;
 };
 
-constexpr std::array<KindName, 6> kKindNames{{
+constexpr std::array<KindName, 7> kKindNames{{
     {SceneKind::kCode128, "code128"},
     {SceneKind::kEan13, "ean13"},
     {SceneKind::kQr, "qr"},
     {SceneKind::kDataMatrix, "datamatrix"},
     {SceneKind::kText, "text"},
     {SceneKind::kImage, "image"},
+    {SceneKind::kFlat, "flat"},
 }};
 
 constexpr int kMaxImageSide = 1 << 15;
@@ -149,6 +151,14 @@ std::string content_problem(SceneKind kind, const std::string& content) {
       }
       return {};
     }
+    case SceneKind::kFlat: {
+      char* end = nullptr;
+      const double value = std::strtod(content.c_str(), &end);
+      if (end == content.c_str() || *end != '\0' || !(value >= 0.0 && value <= 1.0))
+        return "flat takes a reflectance from 0 to 1 (flat:0.9 for a white target), not '" +
+               content + "'";
+      return {};
+    }
     case SceneKind::kQr:
     case SceneKind::kDataMatrix:
     case SceneKind::kImage:
@@ -222,6 +232,7 @@ Result<ModuleGrid, std::string> encode_symbol(SceneKind kind, const std::string&
       break;
     case SceneKind::kText:
     case SceneKind::kImage:
+    case SceneKind::kFlat:
       return GridResult::failure("not a barcode scene");
   }
   const std::string name(scene_kind_name(kind));
@@ -576,8 +587,9 @@ PlaneResult render_scene(const SceneSpec& spec) {
     return PlaneResult::failure(problem);
   }
   if (spec.kind == SceneKind::kImage) return render_image(spec);
-  PlaneResult label =
-      spec.kind == SceneKind::kText ? render_text(spec) : render_barcode(spec);
+  if (spec.kind == SceneKind::kFlat)
+    return PlaneResult::success(imaging::Plane(spec.width, spec.height, std::stof(spec.content)));
+  PlaneResult label = spec.kind == SceneKind::kText ? render_text(spec) : render_barcode(spec);
   if (!label.ok()) return label;
   return PlaneResult::success(weather_print(std::move(label.value()), spec));
   return PlaneResult::failure("unknown scene kind");

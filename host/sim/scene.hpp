@@ -31,7 +31,15 @@
 namespace flutterscan::sim {
 
 /// \brief What a scene shows.
-enum class SceneKind { kCode128, kEan13, kQr, kDataMatrix, kText, kImage };
+enum class SceneKind {
+  kCode128,
+  kEan13,
+  kQr,
+  kDataMatrix,
+  kText,
+  kImage,
+  kFlat,  ///< one reflectance over the whole frame: a calibration target
+};
 
 /// \brief Belt visible on each side of a label, pixels (at least).
 inline constexpr int kMinBeltPx = 8;
@@ -56,11 +64,11 @@ struct SceneSpec {
 };
 
 /// \brief The name parse_scene() knows a kind by ("code128", "ean13", "qr",
-/// "datamatrix", "text", "image").
+/// "datamatrix", "text", "image", "flat").
 std::string_view scene_kind_name(SceneKind kind);
 
 /// \brief Parses "KIND:CONTENT" (code128:TEXT, ean13:DIGITS, qr:TEXT,
-/// datamatrix:TEXT, text:WORDS, image:PATH) into a spec with default size and
+/// datamatrix:TEXT, text:WORDS, image:PATH, flat:REFLECTANCE) into a spec with default size and
 /// reflectances. Content is everything after the first colon. An EAN-13 takes
 /// 12 digits (the check digit is added) or 13 with a correct check digit;
 /// Code 128 and text take printable ASCII. The error names the problem.

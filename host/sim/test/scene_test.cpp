@@ -155,6 +155,20 @@ TEST(RenderScene, FractionalModulesAreAreaAveraged) {
   EXPECT_GT(partial, 10);
 }
 
+TEST(RenderScene, FlatSceneIsOneReflectance) {
+  const auto spec = parse_scene("flat:0.85");
+  ASSERT_TRUE(spec.ok()) << spec.error();
+  const auto plane = render_scene(spec.value());
+  ASSERT_TRUE(plane.ok()) << plane.error();
+  EXPECT_EQ(plane.value().width, 640);
+  for (float v : plane.value().pixels) ASSERT_FLOAT_EQ(v, 0.85f);
+  for (const char* bad : {"flat:", "flat:white", "flat:1.5", "flat:0.5x"}) {
+    const auto refused = parse_scene(bad);
+    ASSERT_FALSE(refused.ok()) << bad;
+    EXPECT_NE(refused.error().find("flat"), std::string::npos) << refused.error();
+  }
+}
+
 TEST(RenderScene, TextSceneHasInkOnPaper) {
   const SceneSpec spec = make_spec(SceneKind::kText, "HELLO BELT 42");
   const imaging::Plane image = render_ok(spec);
@@ -326,8 +340,9 @@ TEST(RenderScene, WeatheredPrintStillDecodesAndIsDeterministic) {
   EXPECT_EQ(render_scene(spec).value().pixels, weathered.pixels);
   EXPECT_NE(weathered.pixels, exact.pixels);
   // Ink spread leaves grey edge pixels that the exact label does not have.
-  const auto greys = std::count_if(weathered.pixels.begin(), weathered.pixels.end(),
-                                   [](float v) { return v > 0.2f && v < 0.7f && std::abs(v - 0.35f) > 0.05f; });
+  const auto greys = std::count_if(weathered.pixels.begin(), weathered.pixels.end(), [](float v) {
+    return v > 0.2f && v < 0.7f && std::abs(v - 0.35f) > 0.05f;
+  });
   EXPECT_GT(greys, 1000);
   const auto decoded = decode_barcodes(weathered);
   ASSERT_EQ(decoded.size(), 1U);
