@@ -17,6 +17,12 @@ void add_simulate(CLI::App& app);
 void add_deblur(CLI::App& app);
 /// \brief `flutterscan bench` (bench.cpp).
 void add_bench(CLI::App& app);
+/// \brief `flutterscan devices` (devices.cpp).
+void add_devices(CLI::App& app);
+/// \brief `flutterscan device ...` (device.cpp, device_*.cpp).
+void add_device_command(CLI::App& app);
+/// \brief `flutterscan flash` (flash.cpp).
+void add_flash(CLI::App& app);
 
 /// \brief `flutterscan scan` (scan.cpp).
 void add_scan(CLI::App& app);

@@ -21,6 +21,9 @@ int main(int argc, char** argv) {
   add_scan(app);
   add_demo(app);
   add_cameras(app);
+  add_devices(app);
+  add_device_command(app);
+  add_flash(app);
   try {
     app.parse(argc, argv);
   } catch (const CLI::CallForHelp& e) {
