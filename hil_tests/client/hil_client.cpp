@@ -8,6 +8,8 @@
 //                      [--switch-code DIGITS --switch-after K] [--reply-timeout-ms N]
 //   hil_client raw HEX [HEX ...]      (one request report per argument)
 //   hil_client bad-args
+//   hil_client wire HEX [HEX ...]     (hid_write of exactly these bytes, any length,
+//                                      then the replies; then GetStatus through the client)
 //
 // Exit status: 0 success, 1 device failure (message on stderr), 2 bad usage.
 
@@ -16,7 +18,10 @@
 #include <cstdio>
 #include <iostream>
 #include <string>
+#include <thread>
 #include <vector>
+
+#include <hidapi/hidapi.h>
 
 #include "device/controller_client.hpp"
 #include "device/usb_discovery.hpp"
@@ -169,6 +174,45 @@ int run_bad_args(ControllerClient& client) {
   return 0;
 }
 
+/// Writes each report exactly as given (hidapi adds nothing but the report id 0),
+/// then prints the replies that come back within 300 ms.
+int run_wire(const std::vector<std::string>& reports) {
+  if (hid_init() != 0) {
+    std::cerr << "hil_client: hid_init failed\n";
+    return 1;
+  }
+  hid_device* dev = hid_open(protocol::kUsbVendorId, protocol::kUsbProductIdApplication, nullptr);
+  if (dev == nullptr) {
+    std::cerr << "hil_client: hid_open failed\n";
+    return 1;
+  }
+  for (const std::string& hex : reports) {
+    std::vector<std::uint8_t> bytes;
+    if (!parse_hex(hex == "-" ? std::string() : hex, bytes)) {
+      std::cerr << "hil_client: wire " << hex << ": not hex bytes\n";
+      hid_close(dev);
+      return 2;
+    }
+    bytes.insert(bytes.begin(), 0);  // report id: none
+    const int written = hid_write(dev, bytes.data(), bytes.size());
+    std::cout << "wrote bytes=" << bytes.size() - 1 << " result=" << written << "\n";
+    const auto deadline = std::chrono::steady_clock::now() + std::chrono::milliseconds(300);
+    while (std::chrono::steady_clock::now() < deadline) {
+      std::array<unsigned char, 64> in{};
+      const int n = hid_read_timeout(dev, in.data(), in.size(), 5);
+      if (n < 0) break;
+      if (n == 0) {
+        std::this_thread::sleep_for(std::chrono::milliseconds(1));
+        continue;
+      }
+      std::cout << "wire_reply command=" << int{in[0]} << " status=" << int{in[3]} << "\n";
+    }
+  }
+  hid_close(dev);
+  hid_exit();
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -191,7 +235,14 @@ int main(int argc, char** argv) {
   std::vector<std::string> reports;
   raw->add_option("reports", reports, "Hex bytes of each report ('-': empty)")->required();
   auto* bad = app.add_subcommand("bad-args", "Out-of-range arguments, then GetStatus");
+  auto* wire = app.add_subcommand("wire", "hid_write raw bytes of any length, then GetStatus");
+  std::vector<std::string> wire_reports;
+  wire->add_option("reports", wire_reports, "Hex bytes of each write ('-': empty)")->required();
   CLI11_PARSE(app, argc, argv);
+
+  if (wire->parsed()) {
+    if (const int rc = run_wire(wire_reports); rc != 0) return rc;
+  }
 
   auto client = open_client(reply_timeout_ms);
   if (!client) return fail(client.error(), "connect");
@@ -201,5 +252,11 @@ int main(int argc, char** argv) {
     return run_session(*client.value(), digits, slot_us, exposures, switch_digits, switch_after);
   if (raw->parsed()) return run_raw(*client.value(), reports);
   if (bad->parsed()) return run_bad_args(*client.value());
+  if (wire->parsed()) {
+    auto status = client.value()->status();
+    if (!status) return fail(status.error(), "status after raw writes");
+    std::cout << "status_ok state=" << int{status.value().state} << "\n";
+    return 0;
+  }
   return 2;
 }

@@ -97,6 +97,14 @@ OutResult BoardHost::interrupt_out(int generation, std::uint8_t address,
         {{"t_us", board_.port().now_us()}, {"hex", hex(packet)}, {"swallowed", true}});
     return OutResult::kTaken;
   }
+  if (scenario_.unresponsive_after >= 0 && requests_taken_ >= scenario_.unresponsive_after) {
+    unresponsive_ = true;
+    event("device stops answering (after " + std::to_string(requests_taken_) + " requests)");
+    swallowed_one_ = true;
+    out_reports_.push_back(
+        {{"t_us", board_.port().now_us()}, {"hex", hex(packet)}, {"swallowed", true}});
+    return OutResult::kTaken;
+  }
   const fsim::OutResult r = board_.interrupt_out(address, packet);
   switch (r) {
     case fsim::OutResult::kAck:
@@ -167,11 +175,6 @@ void BoardHost::note_out_report(std::span<const std::uint8_t> packet) {
   out_reports_.push_back(std::move(r));
   if (!packet.empty() && packet[0] == static_cast<std::uint8_t>(protocol::Command::kArm))
     arm_sent_ = true;
-  if (scenario_.unresponsive_after >= 0 && requests_taken_ >= scenario_.unresponsive_after &&
-      !unresponsive_) {
-    unresponsive_ = true;
-    event("device stops answering (after " + std::to_string(requests_taken_) + " requests)");
-  }
   if (scenario_.unplug_after >= 0 && requests_taken_ >= scenario_.unplug_after) {
     scenario_.unplug_after = -1;
     unplug_locked(("unplugged after " + std::to_string(requests_taken_) + " requests").c_str());
@@ -203,6 +206,12 @@ void BoardHost::note_in_report(std::vector<std::uint8_t>& packet) {
     r["code_id"] = e.code_id;
     r["slot_count"] = e.slot_count;
     r["flags"] = e.flags;
+    ++events_delivered_;
+    if (scenario_.unplug_after_events >= 0 && events_delivered_ >= scenario_.unplug_after_events) {
+      scenario_.unplug_after_events = -1;
+      unplug_locked(
+          ("unplugged after " + std::to_string(events_delivered_) + " exposure events").c_str());
+    }
   }
   in_reports_.push_back(std::move(r));
   if (arm_sent_ && !strobes_scheduled_ && scenario_.strobes_after_arm > 0 &&

@@ -35,6 +35,8 @@ struct Scenario {
   int unresponsive_after = -1;
   /// After this many request reports the device is unplugged (-1: never).
   int unplug_after = -1;
+  /// After this many exposure events reached the host the device is unplugged (-1: never).
+  int unplug_after_events = -1;
   /// Unplug when DFU DNLOAD block N arrives (-1: never): power lost mid-flash.
   int unplug_at_block = -1;
   /// Plug back in (power cycle) this long after an unplug (-1: stay unplugged).
@@ -115,6 +117,7 @@ class BoardHost final : public DevicePort {
   int enumerated_generation_ = -1;  ///< -1: not on the bus
   std::uint8_t enumerated_address_ = 0;
   int requests_taken_ = 0;
+  int events_delivered_ = 0;
   bool unresponsive_ = false;
   bool swallowed_one_ = false;
   bool strobes_scheduled_ = false;

@@ -100,6 +100,8 @@ int main(int argc, char** argv) {
   app.add_option("--unresponsive-after", scenario.unresponsive_after,
                  "Stop answering after this many request reports");
   app.add_option("--unplug-after", scenario.unplug_after, "Unplug after this many request reports");
+  app.add_option("--unplug-after-events", scenario.unplug_after_events,
+                 "Unplug after this many exposure events reached the host");
   app.add_option("--unplug-at-block", scenario.unplug_at_block,
                  "Cut the power when DFU DNLOAD block N arrives");
   app.add_option("--replug-after-ms", scenario.replug_after_ms,

@@ -18,6 +18,9 @@ constexpr std::uint32_t kCapabilities = USBDEVFS_CAP_ZERO_PACKET | USBDEVFS_CAP_
                                         USBDEVFS_CAP_NO_PACKET_SIZE_LIM |
                                         USBDEVFS_CAP_REAP_AFTER_DISCONNECT;
 
+/// Max packet size of the interrupt/bulk endpoints (full speed; the HID endpoints).
+constexpr std::size_t kMaxPacket = 64;
+
 usbdevfs_urb* urb_of(UMockdevIoctlData* data) {
   return reinterpret_cast<usbdevfs_urb*>(data->data);
 }
@@ -226,15 +229,26 @@ void UsbdevfsHandler::progress_pending() {
         done = true;
       }
     } else {
-      const std::size_t n = static_cast<std::size_t>(urb->buffer_length);
-      const OutResult r = port_.interrupt_out(
-          generation_, ep, std::span<const std::uint8_t>(n > 0 ? it->buffer->data : nullptr, n));
-      if (r == OutResult::kGone) {
-        urb->status = -ENODEV;
-        done = true;
-      } else if (r == OutResult::kTaken) {
-        urb->actual_length = static_cast<int>(n);
-        done = true;
+      // The host controller splits a transfer into max-packet pieces (a short
+      // or zero-length one ends it).
+      const std::size_t total = static_cast<std::size_t>(urb->buffer_length);
+      for (;;) {
+        const std::size_t n = std::min(kMaxPacket, total - it->sent);
+        const OutResult r = port_.interrupt_out(
+            generation_, ep,
+            std::span<const std::uint8_t>(n > 0 ? it->buffer->data + it->sent : nullptr, n));
+        if (r == OutResult::kGone) {
+          urb->status = -ENODEV;
+          done = true;
+          break;
+        }
+        if (r == OutResult::kNak) break;
+        it->sent += n;
+        if (it->sent == total) {
+          urb->actual_length = static_cast<int>(total);
+          done = true;
+          break;
+        }
       }
     }
     if (done) {

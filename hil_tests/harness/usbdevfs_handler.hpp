@@ -37,6 +37,7 @@ class UsbdevfsHandler {
     UMockdevIoctlData* urb = nullptr;     ///< the client's struct usbdevfs_urb (a reference)
     UMockdevIoctlData* buffer = nullptr;  ///< its data buffer (owned by `urb`)
     unsigned long client_address = 0;
+    std::size_t sent = 0;  ///< OUT: bytes the device has taken so far
   };
 
   static gboolean on_ioctl(UMockdevIoctlBase* base, UMockdevIoctlClient* client, gpointer self);

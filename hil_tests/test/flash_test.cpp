@@ -1,0 +1,121 @@
+// Flashing through the mocked USB device: `flutterscan flash` and stock
+// dfu-util against the firmware's own DFU runtime and bootloader (detach,
+// re-enumeration as PID 0x0002, download, manifest, back to the application),
+// a download cut at a random block, and images refused before any write.
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "hil_run.hpp"
+
+namespace flutterscan::hil::test {
+namespace {
+
+constexpr std::size_t kImageSize = 24 * 1024;  // 24 blocks of 1 KiB
+
+std::string make_image(const std::string& dir, const std::string& name,
+                       std::vector<std::string> options = {}) {
+  const std::string path = dir + "/" + name;
+  std::vector<std::string> argv{HIL_MAKE_IMAGE, path, "--size", std::to_string(kImageSize)};
+  argv.insert(argv.end(), options.begin(), options.end());
+  const auto [code, output] = run_plain(argv);
+  EXPECT_EQ(code, 0) << output;
+  return path;
+}
+
+int count_requests(const nlohmann::json& record, const std::string& request) {
+  int n = 0;
+  for (const auto& r : record.at("dfu_requests")) n += r.at("request") == request;
+  return n;
+}
+
+/// The board runs the application again, now version 0.2.0 (bcdDevice 0x0020).
+void expect_flashed(const HarnessRun& run) {
+  const auto& final = run.record.at("final");
+  EXPECT_EQ(final.at("mode"), "application") << run.output;
+  EXPECT_EQ(final.at("bcd_device"), 0x0020) << run.output;
+  EXPECT_EQ(final.at("writes_below_app_region"), 0) << "the bootloader's sectors were touched";
+  // Detach -> bootloader with the same serial -> application again.
+  const auto& e = run.record.at("enumerations");
+  ASSERT_GE(e.size(), 3u) << e.dump();
+  EXPECT_EQ(e[1].at("mode"), "bootloader");
+  EXPECT_EQ(e[1].at("serial"), e[0].at("serial"));
+  EXPECT_EQ(e.back().at("mode"), "application");
+  EXPECT_EQ(count_requests(run.record, "DNLOAD"), static_cast<int>(kImageSize / 1024) + 1);
+}
+
+TEST(HilFlash, DfuUtilDownloadsThroughDetachAndManifest) {
+  const auto dir = make_work_dir("dfu_util");
+  const auto image = make_image(dir, "app020.bin");
+  const auto run = run_harness({"--timeout-s", "90"},
+                               {DFU_UTIL, "-d", "1209:0001,1209:0002", "-D", image, "-R"}, dir);
+  if (run.exit_code == 77) GTEST_SKIP() << run.output;
+  // dfu-util 0.11 returns libusb's LIBUSB_ERROR_NOT_FOUND (-5 -> 251) when the
+  // final reset makes the device re-enumerate as the application, as it does
+  // with real hardware; "Done!" says the download and manifest succeeded.
+  EXPECT_TRUE(run.exit_code == 0 || run.exit_code == 251) << run.output;
+  EXPECT_NE(run.output.find("Done!"), std::string::npos) << run.output;
+  expect_flashed(run);
+}
+
+TEST(HilFlash, FlutterscanFlashUpdatesTheApplication) {
+  const auto dir = make_work_dir("cli_flash");
+  const auto image = make_image(dir, "app020.bin");
+  const auto run = run_harness({"--timeout-s", "90"}, {FLUTTERSCAN_BINARY, "flash", image}, dir);
+  if (run.exit_code == 77) GTEST_SKIP() << run.output;
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  expect_flashed(run);
+}
+
+TEST(HilFlash, InterruptedFlashLeavesDfuModeAndASecondFlashSucceeds) {
+  const auto dir = make_work_dir("cli_flash_cut");
+  const auto image = make_image(dir, "app020.bin");
+  std::random_device rd;
+  const int block = std::uniform_int_distribution<int>(1, kImageSize / 1024 - 2)(rd);
+  std::cout << "power cut at DFU block " << block << "\n";
+  const std::string flash = std::string(FLUTTERSCAN_BINARY) + " flash " + image;
+  // The user plugs it back in (300 ms) and runs the same command again.
+  const std::string script =
+      flash + "; echo first_exit=$?; sleep 1; " + flash + "; echo second_exit=$?";
+  const auto run = run_harness({"--unplug-at-block", std::to_string(block), "--replug-after-ms",
+                                "300", "--timeout-s", "120"},
+                               {"/bin/sh", "-c", script}, dir);
+  if (run.exit_code == 77) GTEST_SKIP() << run.output;
+  EXPECT_NE(output_value(run.output, "first_exit"), "0") << run.output;
+  EXPECT_EQ(output_value(run.output, "second_exit"), "0") << run.output;
+  bool cut = false, back_in_dfu = false;
+  for (const auto& e : run.record.at("events")) {
+    const std::string what = e.at("what");
+    cut = cut || what == "power lost at DFU block " + std::to_string(block);
+    back_in_dfu = back_in_dfu || what == "plugged back in: bootloader mode";
+  }
+  EXPECT_TRUE(cut) << run.record.at("events").dump();
+  EXPECT_TRUE(back_in_dfu) << "the half-written image was started: "
+                           << run.record.at("events").dump();
+  EXPECT_EQ(run.record.at("final").at("mode"), "application");
+  EXPECT_EQ(run.record.at("final").at("bcd_device"), 0x0020);
+  EXPECT_EQ(run.record.at("final").at("writes_below_app_region"), 0);
+}
+
+class HilFlashRefused : public ::testing::TestWithParam<std::vector<std::string>> {};
+
+TEST_P(HilFlashRefused, BadImageIsRefusedBeforeAnyWrite) {
+  const auto dir = make_work_dir("cli_flash_refused");
+  const auto image = make_image(dir, "bad.bin", GetParam());
+  const auto run = run_harness({"--timeout-s", "60"}, {FLUTTERSCAN_BINARY, "flash", image}, dir);
+  if (run.exit_code == 77) GTEST_SKIP() << run.output;
+  EXPECT_EQ(run.exit_code, 2) << run.output;
+  EXPECT_NE(run.output.find(image), std::string::npos) << "the message names the file";
+  // Not even detached: no DFU request reached the board, it still runs 0.1.x.
+  EXPECT_TRUE(run.record.at("dfu_requests").empty()) << run.record.at("dfu_requests").dump();
+  EXPECT_EQ(run.record.at("enumerations").size(), 1u);
+  EXPECT_EQ(run.record.at("final").at("mode"), "application");
+}
+
+INSTANTIATE_TEST_SUITE_P(WrongBoardAndCorrupt, HilFlashRefused,
+                         ::testing::Values(std::vector<std::string>{"--board-id", "99"},
+                                           std::vector<std::string>{"--corrupt"}));
+
+}  // namespace
+}  // namespace flutterscan::hil::test
