@@ -3,7 +3,7 @@
 JOBS ?= $(shell nproc)
 WERROR ?= $(if $(FLUTTERSCAN_WERROR),$(FLUTTERSCAN_WERROR),OFF)
 
-.PHONY: all deps build test demo bench fuzz asan arm-common fw-qemu fw-stm32f405 format clean
+.PHONY: all deps build test demo bench fuzz asan arm-common fw-qemu fw-stm32f405 format clean install
 
 all: build
 
@@ -28,6 +28,12 @@ fw-stm32f405: deps
 
 test: build arm-common fw-qemu fw-stm32f405
 	ctest --preset host-release -j $(JOBS)
+
+# The binary, the controller firmware built with it (share/flutterscan/firmware)
+# and the udev rules (/etc/udev/rules.d). PREFIX=/usr/local by default; DESTDIR stages.
+PREFIX ?= /usr/local
+install: build fw-stm32f405
+	cmake --install build --prefix $(PREFIX)
 
 demo: build
 	tools/demo

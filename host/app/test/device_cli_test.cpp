@@ -55,10 +55,11 @@ class DeviceCli : public ::testing::Test {
   void TearDown() override { fs::remove_all(scratch_); }
 
   /// Runs the binary with `args`, stdout and stderr to files, bounded by a 30 s alarm.
-  RunResult run(const std::vector<std::string>& args) {
+  RunResult run(const std::vector<std::string>& args,
+                const std::string& binary = FLUTTERSCAN_BINARY) {
     const fs::path out = scratch_ / "stdout";
     const fs::path err = scratch_ / "stderr";
-    std::vector<std::string> storage{FLUTTERSCAN_BINARY};
+    std::vector<std::string> storage{binary};
     storage.insert(storage.end(), args.begin(), args.end());
     std::vector<char*> argv;
     for (auto& arg : storage) argv.push_back(arg.data());
@@ -70,8 +71,8 @@ class DeviceCli : public ::testing::Test {
     posix_spawn_file_actions_addopen(&actions, 2, err.c_str(), O_WRONLY | O_CREAT | O_TRUNC, 0600);
     pid_t pid = 0;
     RunResult result;
-    if (posix_spawn(&pid, FLUTTERSCAN_BINARY, &actions, nullptr, argv.data(), environ) != 0) {
-      ADD_FAILURE() << "cannot start " << FLUTTERSCAN_BINARY;
+    if (posix_spawn(&pid, binary.c_str(), &actions, nullptr, argv.data(), environ) != 0) {
+      ADD_FAILURE() << "cannot start " << binary;
       posix_spawn_file_actions_destroy(&actions);
       return result;
     }
@@ -244,6 +245,21 @@ TEST_F(DeviceCli, FlashAValidImageWithoutControllersIsARuntimeFailure) {
   const auto r = run({"flash", image.string()});
   EXPECT_EQ(r.exit_code, 1) << r;
   EXPECT_TRUE(contains(r.err, "no controller is connected")) << r;
+}
+
+TEST_F(DeviceCli, FlashWithoutAFileUsesTheFirmwareInstalledBesideTheBinary) {
+  const fs::path image = FLUTTERSCAN_FW_STM32F405_BIN;
+  if (!fs::exists(image)) GTEST_SKIP() << "no fw-stm32f405 image at " << image;
+  // An installed layout: PREFIX/bin/flutterscan, PREFIX/share/flutterscan/firmware/.
+  const fs::path prefix = scratch_ / "prefix";
+  fs::create_directories(prefix / "bin");
+  fs::create_directories(prefix / "share/flutterscan/firmware");
+  fs::copy_file(FLUTTERSCAN_BINARY, prefix / "bin/flutterscan");
+  fs::copy_file(image, prefix / "share/flutterscan/firmware/flutterscan-fw-stm32f405.bin");
+  const auto r = run({"flash"}, (prefix / "bin/flutterscan").string());
+  EXPECT_EQ(r.exit_code, 1) << r;  // no controller here, but the image was found and checked
+  EXPECT_TRUE(contains(r.err, (prefix / "share/flutterscan/firmware").string())) << r;
+  EXPECT_TRUE(contains(r.err, "for board 1")) << r;
 }
 
 TEST_F(DeviceCli, HelpListsTheDeviceCommands) {
