@@ -403,6 +403,13 @@ void real_sleep(std::chrono::milliseconds ms) {
   std::this_thread::sleep_for(ms);
 }
 
+/// The flasher's clients: the device is expected to go away, so no reconnecting.
+ClientOptions one_shot_client() {
+  ClientOptions options;
+  options.reconnect = false;
+  return options;
+}
+
 }  // namespace
 
 Expected<FlashReport> flash_controller(const FirmwareImage& image, const FlashOptions& options) {
@@ -436,7 +443,7 @@ Expected<FlashReport> flash_controller(const FirmwareImage& image, const FlashOp
 
   if (target.mode == DeviceMode::kApplication) {
     // Which board and firmware is it? A protocol mismatch is no reason not to flash.
-    auto client = ControllerClient::connect(hid_opener(serial), ClientOptions{});
+    auto client = ControllerClient::connect(hid_opener(serial), one_shot_client());
     if (client.ok()) {
       report.before = client.value()->info();
       if (report.before->board_id != image.header.board_id)
@@ -524,8 +531,18 @@ Expected<FlashReport> flash_controller(const FirmwareImage& image, const FlashOp
   if (auto waited = wait_for_mode(serial, DeviceMode::kApplication, options.enumerate_timeout);
       !waited.ok())
     return fail<FlashReport>(waited.error());
-  auto client = ControllerClient::connect(hid_opener(serial), ClientOptions{});
-  if (!client.ok()) return fail<FlashReport>(client.error());
+  // Its HID node may appear a moment after the device: retry until the deadline.
+  const auto connect_deadline = std::chrono::steady_clock::now() + options.enumerate_timeout;
+  auto client = ControllerClient::connect(hid_opener(serial), one_shot_client());
+  while (!client.ok() && client.error().kind != ErrorKind::kProtocolMismatch &&
+         std::chrono::steady_clock::now() < connect_deadline) {
+    std::this_thread::sleep_for(kEnumeratePoll);
+    client = ControllerClient::connect(hid_opener(serial), one_shot_client());
+  }
+  if (!client.ok())
+    return fail<FlashReport>(
+        client.error().kind,
+        "the new firmware of controller " + serial + " does not answer: " + client.error().message);
   report.after = client.value()->info();
   const auto& h = image.header;
   if (report.after.firmware_major != h.version_major ||
