@@ -1,20 +1,23 @@
 // The product application on the STM32F405 board: clocks, the Port, the
-// controller, the watchdog, and the main loop.
-//
-// Not yet: USB. The USB OTG FS device driver, the HID command interface and
-// DFU come with the USB issue (firmware/README.md); until then this image
-// boots, loads the saved configuration and runs it (e.g. a code saved with
-// SaveConfig, armed by the host once USB exists), but has no command input.
+// controller, the watchdog, USB (OTG_FS: HID commands and events, DFU
+// runtime), and the main loop. The main loop serves USB (the OTG_FS interrupt
+// only wakes it), the controller and the watchdog; DFU_DETACH and
+// EnterBootloader reset into the bootloader through the hand-off word.
 
 #include <cstddef>
 #include <new>
 
 #include "flutterscan/common/image_header.hpp"
+#include "flutterscan/firmware/command_handler.hpp"
 #include "flutterscan/firmware/controller.hpp"
+#include "flutterscan/firmware/stm32f4/otg_fs_device.hpp"
 #include "flutterscan/firmware/stm32f4/registers.hpp"
 #include "flutterscan/firmware/stm32f4/stm32f4_board.hpp"
+#include "flutterscan/firmware/stm32f4/stm32f4_flash.hpp"
 #include "flutterscan/firmware/stm32f4/stm32f4_port.hpp"
 #include "flutterscan/firmware/stm32f4/system.hpp"
+#include "flutterscan/firmware/usb/application_usb.hpp"
+#include "flutterscan/firmware/usb/usb_descriptors.hpp"
 
 namespace flutterscan::firmware::stm32f4 {
 
@@ -38,6 +41,8 @@ namespace flutterscan::firmware::stm32f4 {
 namespace {
 
 constexpr BoardConfig kBoard = stm32f4_board_config();
+constexpr auto kDeviceDescriptor = usb::application_device_descriptor(usb::bcd_device(
+    FLUTTERSCAN_VERSION_MAJOR, FLUTTERSCAN_VERSION_MINOR, FLUTTERSCAN_VERSION_PATCH));
 /// Longer than a 16 KiB sector erase (up to ~0.5 s) at the slowest LSI.
 constexpr std::uint32_t kWatchdogTimeoutMs = 2'000;
 /// Main loop wake-up period (SysTick): the loop kicks the watchdog on every pass.
@@ -47,6 +52,9 @@ constexpr std::uint32_t kMainLoopTickHz = 1'000;
 // controller), constructed in application_main; no heap.
 alignas(Stm32f4Port) std::byte g_port_storage[sizeof(Stm32f4Port)];
 alignas(Controller) std::byte g_controller_storage[sizeof(Controller)];
+alignas(CommandHandler) std::byte g_handler_storage[sizeof(CommandHandler)];
+alignas(usb::ApplicationUsb) std::byte g_usb_storage[sizeof(usb::ApplicationUsb)];
+OtgFsDevice g_otg_fs;
 
 void start_main_loop_tick(std::uint32_t hclk_hz) {
   reg::at(reg::systick::kLoad) = hclk_hz / kMainLoopTickHz - 1;
@@ -63,13 +71,25 @@ extern "C" void SysTick_Handler() {
   // Only wakes the main loop from `wfi`.
 }
 
+extern "C" void OTG_FS_IRQHandler() {
+  // Wakes the main loop, which serves USB (otg_fs_device.hpp).
+  flutterscan::firmware::stm32f4::OtgFsDevice::defer_interrupt();
+}
+
 [[noreturn]] void application_main() {
   using namespace flutterscan::firmware;
   using namespace flutterscan::firmware::stm32f4;
   const ClockResult clocks = init_clocks();
   auto* port = new (g_port_storage) Stm32f4Port(kBoard.pins, clocks.tree);
   port->init();
-  auto* controller = new (g_controller_storage) Controller(*port, kBoard);
+  BoardConfig board = kBoard;
+  // Stamped after the link, so read from flash, not folded from the initialiser.
+  board.build_id = *static_cast<const volatile std::uint32_t*>(&g_image_header.image_crc32);
+  auto* controller = new (g_controller_storage) Controller(*port, board);
+  auto* handler = new (g_handler_storage) CommandHandler(*controller);
+  auto* usb = new (g_usb_storage)
+      usb::ApplicationUsb(g_otg_fs, *controller, *handler, kDeviceDescriptor, unique_id());
+  g_otg_fs.set_events(usb);
   {
     InterruptLock lock;
     controller->start();  // LEDs off, config from flash, brightness
@@ -77,13 +97,14 @@ extern "C" void SysTick_Handler() {
   }
   port->start_watchdog(kWatchdogTimeoutMs);
   start_main_loop_tick(clocks.tree.hclk_hz);
+  g_otg_fs.init(clocks.tree.hclk_hz);
   for (;;) {
     {
       InterruptLock lock;  // controller.hpp: no port callbacks during controller calls
       if (port->take_fault()) controller->on_port_fault();
-      controller->poll();  // kicks the watchdog
-      // USB (HID commands, events, DFU detach) will be served here.
+      g_otg_fs.poll();  // USB events -> device core, HID interface, DFU runtime
+      usb->poll();      // commands, replies, events; Controller::poll: watchdog, bootloader
     }
-    asm volatile("wfi" ::: "memory");
+    if (!g_otg_fs.work_pending()) asm volatile("wfi" ::: "memory");
   }
 }

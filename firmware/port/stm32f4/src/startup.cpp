@@ -19,6 +19,7 @@ void Fault_Handler();
 void SysTick_Handler();
 void TIM2_IRQHandler();
 void DMA2_Stream5_IRQHandler();
+void OTG_FS_IRQHandler();
 
 /// Called by a pure virtual call: cannot happen in correct code.
 void __cxa_pure_virtual() {
@@ -58,6 +59,7 @@ constexpr VectorTable make_vector_table() {
   table.vectors[14] = SysTick_Handler;
   table.vectors[device_vector(irq::kTim2)] = TIM2_IRQHandler;
   table.vectors[device_vector(irq::kDma2Stream5)] = DMA2_Stream5_IRQHandler;
+  table.vectors[device_vector(irq::kOtgFs)] = OTG_FS_IRQHandler;
   return table;
 }
 

@@ -45,7 +45,8 @@ inline void modify(std::uintptr_t address, std::uint32_t mask, std::uint32_t val
 namespace scb {
 inline constexpr std::uintptr_t kVtor = 0xE000ED08;   ///< vector table offset
 inline constexpr std::uintptr_t kAircr = 0xE000ED0C;  ///< application interrupt and reset control
-inline constexpr std::uintptr_t kShpr3 = 0xE000ED20;  ///< priorities of PendSV (23:16), SysTick (31:24)
+inline constexpr std::uintptr_t kShpr3 =
+    0xE000ED20;  ///< priorities of PendSV (23:16), SysTick (31:24)
 inline constexpr std::uintptr_t kCpacr = 0xE000ED88;  ///< coprocessor access control (4.6.1)
 /// AIRCR write key (31:16) with SYSRESETREQ (bit 2): a system reset.
 inline constexpr std::uint32_t kAircrSystemReset = (0x05FAu << 16) | (1u << 2);
@@ -74,7 +75,9 @@ constexpr std::uintptr_t word_for(std::uintptr_t base, int irq) {
   return base + 4u * static_cast<std::uintptr_t>(irq / 32);
 }
 /// \brief The bit of interrupt `irq` in its ISER/ICER/ICPR word.
-constexpr std::uint32_t bit_for(int irq) { return 1u << (irq % 32); }
+constexpr std::uint32_t bit_for(int irq) {
+  return 1u << (irq % 32);
+}
 /// The F405 implements the top 4 priority bits (RM0090 12.1.1: 16 levels).
 inline constexpr int kPriorityBits = 4;
 }  // namespace nvic
@@ -83,7 +86,7 @@ inline constexpr int kPriorityBits = 4;
 namespace irq {
 inline constexpr int kTim2 = 28;
 inline constexpr int kDma2Stream5 = 68;
-inline constexpr int kOtgFs = 67;  ///< for the USB driver to come
+inline constexpr int kOtgFs = 67;  ///< OTG_FS global interrupt
 /// Maskable interrupts of the STM32F405/407 (positions 0..81).
 inline constexpr int kCount = 82;
 }  // namespace irq
@@ -142,6 +145,8 @@ inline constexpr std::uint32_t kAhb1EnrGpioA = 1u << 0;
 inline constexpr std::uint32_t kAhb1EnrGpioB = 1u << 1;
 inline constexpr std::uint32_t kAhb1EnrGpioC = 1u << 2;
 inline constexpr std::uint32_t kAhb1EnrDma2 = 1u << 22;
+// RCC_AHB2ENR
+inline constexpr std::uint32_t kAhb2EnrOtgFs = 1u << 7;
 // RCC_APB1ENR
 inline constexpr std::uint32_t kApb1EnrTim2 = 1u << 0;
 inline constexpr std::uint32_t kApb1EnrTim3 = 1u << 1;
@@ -193,8 +198,7 @@ inline constexpr std::uint32_t kSrPgaerr = 1u << 5;
 inline constexpr std::uint32_t kSrPgperr = 1u << 6;
 inline constexpr std::uint32_t kSrPgserr = 1u << 7;
 inline constexpr std::uint32_t kSrBsy = 1u << 16;
-inline constexpr std::uint32_t kSrErrors =
-    kSrOperr | kSrWrperr | kSrPgaerr | kSrPgperr | kSrPgserr;
+inline constexpr std::uint32_t kSrErrors = kSrOperr | kSrWrperr | kSrPgaerr | kSrPgperr | kSrPgserr;
 // FLASH_CR: PG 0, SER 1, SNB 6:3, PSIZE 9:8 (0b10: x32), STRT 16, LOCK 31.
 inline constexpr std::uint32_t kCrPg = 1u << 0;
 inline constexpr std::uint32_t kCrSer = 1u << 1;
@@ -246,8 +250,12 @@ inline constexpr std::uintptr_t kSxPar = 0x08;
 inline constexpr std::uintptr_t kSxM0ar = 0x0C;
 inline constexpr std::uintptr_t kSxFcr = 0x14;
 /// \brief Interrupt status / flag clear register (offset) holding stream `s`'s flags.
-constexpr std::uintptr_t status_register(int s) { return s < 4 ? kLisr : kHisr; }
-constexpr std::uintptr_t clear_register(int s) { return s < 4 ? kLifcr : kHifcr; }
+constexpr std::uintptr_t status_register(int s) {
+  return s < 4 ? kLisr : kHisr;
+}
+constexpr std::uintptr_t clear_register(int s) {
+  return s < 4 ? kLifcr : kHifcr;
+}
 /// \brief Position of stream `s`'s FEIF bit in its status word (RM0090 10.5.1/10.5.2):
 /// streams 0/4 at 0, 1/5 at 6, 2/6 at 16, 3/7 at 22.
 constexpr int flag_shift(int s) {
@@ -296,7 +304,9 @@ inline constexpr std::uintptr_t kCcr2 = 0x38;
 inline constexpr std::uintptr_t kCcr3 = 0x3C;
 inline constexpr std::uintptr_t kCcr4 = 0x40;
 /// \brief Offset of CCRn (channel 1..4).
-constexpr std::uintptr_t ccr(int channel) { return kCcr1 + 4u * static_cast<std::uintptr_t>(channel - 1); }
+constexpr std::uintptr_t ccr(int channel) {
+  return kCcr1 + 4u * static_cast<std::uintptr_t>(channel - 1);
+}
 inline constexpr std::uintptr_t kBdtr = 0x44;  ///< TIM1/TIM8 only
 // CR1
 inline constexpr std::uint32_t kCr1Cen = 1u << 0;
@@ -343,7 +353,9 @@ inline constexpr std::uint32_t kOcModePwm1 = 0b110;
 /// Input filter fSAMPLING = fCK_INT, N = 8 (ICxF = 0011): 8 equal samples.
 inline constexpr std::uint32_t kIcFilterN8 = 0b0011;
 // CCER: 4 bits per channel (CCxE, CCxP, -, CCxNP).
-constexpr int ccer_shift(int channel) { return 4 * (channel - 1); }
+constexpr int ccer_shift(int channel) {
+  return 4 * (channel - 1);
+}
 inline constexpr std::uint32_t kCcerE = 1u << 0;
 inline constexpr std::uint32_t kCcerP = 1u << 1;
 }  // namespace tim
@@ -360,5 +372,134 @@ inline constexpr std::uint32_t kKeyStart = 0xCCCC;
 inline constexpr std::uint32_t kSrPvu = 1u << 0;
 inline constexpr std::uint32_t kSrRvu = 1u << 1;
 }  // namespace iwdg
+
+// RM0090 34: USB on-the-go full-speed (OTG_FS) at 0x50000000, used in device
+// mode only. Core global registers 34.16.2, device registers 34.16.4.
+namespace otg {
+inline constexpr std::uintptr_t kBase = 0x50000000;
+// Core global registers.
+inline constexpr std::uintptr_t kGahbcfg = kBase + 0x008;
+inline constexpr std::uintptr_t kGusbcfg = kBase + 0x00C;
+inline constexpr std::uintptr_t kGrstctl = kBase + 0x010;
+inline constexpr std::uintptr_t kGintsts = kBase + 0x014;
+inline constexpr std::uintptr_t kGintmsk = kBase + 0x018;
+inline constexpr std::uintptr_t kGrxstsp = kBase + 0x020;  ///< receive status read and pop
+inline constexpr std::uintptr_t kGrxfsiz = kBase + 0x024;  ///< RX FIFO depth (words)
+inline constexpr std::uintptr_t kDieptxf0 =
+    kBase + 0x028;  ///< EP0 TX FIFO: start 15:0, depth 31:16
+inline constexpr std::uintptr_t kGccfg = kBase + 0x038;
+/// \brief OTG_FS_DIEPTXFx (x = 1..3): IN endpoint x's TX FIFO start and depth (words).
+constexpr std::uintptr_t dieptxf(int ep) {
+  return kBase + 0x104 + 4u * static_cast<std::uintptr_t>(ep - 1);
+}
+// Device registers.
+inline constexpr std::uintptr_t kDcfg = kBase + 0x800;
+inline constexpr std::uintptr_t kDctl = kBase + 0x804;
+inline constexpr std::uintptr_t kDsts = kBase + 0x808;
+inline constexpr std::uintptr_t kDiepmsk = kBase + 0x810;
+inline constexpr std::uintptr_t kDoepmsk = kBase + 0x814;
+inline constexpr std::uintptr_t kDaint = kBase + 0x818;
+inline constexpr std::uintptr_t kDaintmsk = kBase + 0x81C;
+constexpr std::uintptr_t diepctl(int ep) {
+  return kBase + 0x900 + 0x20u * static_cast<std::uintptr_t>(ep);
+}
+constexpr std::uintptr_t diepint(int ep) {
+  return kBase + 0x908 + 0x20u * static_cast<std::uintptr_t>(ep);
+}
+constexpr std::uintptr_t dieptsiz(int ep) {
+  return kBase + 0x910 + 0x20u * static_cast<std::uintptr_t>(ep);
+}
+constexpr std::uintptr_t dtxfsts(int ep) {
+  return kBase + 0x918 + 0x20u * static_cast<std::uintptr_t>(ep);
+}
+constexpr std::uintptr_t doepctl(int ep) {
+  return kBase + 0xB00 + 0x20u * static_cast<std::uintptr_t>(ep);
+}
+constexpr std::uintptr_t doepint(int ep) {
+  return kBase + 0xB08 + 0x20u * static_cast<std::uintptr_t>(ep);
+}
+constexpr std::uintptr_t doeptsiz(int ep) {
+  return kBase + 0xB10 + 0x20u * static_cast<std::uintptr_t>(ep);
+}
+inline constexpr std::uintptr_t kPcgcctl = kBase + 0xE00;
+/// \brief The data FIFO of endpoint `ep`: IN pushes here; reads from any of them pop the RX FIFO.
+constexpr std::uintptr_t fifo(int ep) {
+  return kBase + 0x1000 + 0x1000u * static_cast<std::uintptr_t>(ep);
+}
+/// Endpoints of the OTG_FS core (0..3 each way) and its FIFO RAM (1.25 KiB).
+inline constexpr int kEndpoints = 4;
+inline constexpr std::uint32_t kFifoRamWords = 320;
+
+// GAHBCFG
+inline constexpr std::uint32_t kGahbcfgGintmsk = 1u << 0;  ///< global interrupt enable
+// GUSBCFG: PHYSEL 6 (full-speed transceiver), TRDT 13:10, FDMOD 30.
+inline constexpr std::uint32_t kGusbcfgPhysel = 1u << 6;
+inline constexpr int kGusbcfgTrdtShift = 10;
+inline constexpr std::uint32_t kGusbcfgTrdtMask = 0xFu << 10;
+inline constexpr std::uint32_t kGusbcfgFhmod = 1u << 29;
+inline constexpr std::uint32_t kGusbcfgFdmod = 1u << 30;
+// GRSTCTL: CSRST 0, RXFFLSH 4, TXFFLSH 5, TXFNUM 10:6 (0x10: all), AHBIDL 31.
+inline constexpr std::uint32_t kGrstctlCsrst = 1u << 0;
+inline constexpr std::uint32_t kGrstctlRxfflsh = 1u << 4;
+inline constexpr std::uint32_t kGrstctlTxfflsh = 1u << 5;
+inline constexpr int kGrstctlTxfnumShift = 6;
+inline constexpr std::uint32_t kGrstctlTxfnumAll = 0x10;
+inline constexpr std::uint32_t kGrstctlAhbidl = 1u << 31;
+// GINTSTS / GINTMSK
+inline constexpr std::uint32_t kGintRxflvl = 1u << 4;
+inline constexpr std::uint32_t kGintUsbsusp = 1u << 11;
+inline constexpr std::uint32_t kGintUsbrst = 1u << 12;
+inline constexpr std::uint32_t kGintEnumdne = 1u << 13;
+inline constexpr std::uint32_t kGintIepint = 1u << 18;
+inline constexpr std::uint32_t kGintOepint = 1u << 19;
+inline constexpr std::uint32_t kGintWkupint = 1u << 31;
+// GRXSTSP: EPNUM 3:0, BCNT 14:4, DPID 16:15, PKTSTS 20:17.
+inline constexpr std::uint32_t kRxstsEpnumMask = 0xFu;
+inline constexpr int kRxstsBcntShift = 4;
+inline constexpr std::uint32_t kRxstsBcntMask = 0x7FFu << 4;
+inline constexpr int kRxstsPktstsShift = 17;
+inline constexpr std::uint32_t kRxstsPktstsMask = 0xFu << 17;
+inline constexpr std::uint32_t kPktstsOutData = 2;      ///< OUT data packet received
+inline constexpr std::uint32_t kPktstsOutComplete = 3;  ///< OUT transfer completed
+inline constexpr std::uint32_t kPktstsSetupDone = 4;    ///< SETUP transaction completed
+inline constexpr std::uint32_t kPktstsSetupData = 6;    ///< SETUP data packet received
+// GCCFG: PWRDWN 16 (transceiver on), VBUSASEN 18, VBUSBSEN 19, NOVBUSSENS 21.
+inline constexpr std::uint32_t kGccfgPwrdwn = 1u << 16;
+inline constexpr std::uint32_t kGccfgVbusasen = 1u << 18;
+inline constexpr std::uint32_t kGccfgVbusbsen = 1u << 19;
+inline constexpr std::uint32_t kGccfgNovbussens = 1u << 21;
+// DCFG: DSPD 1:0 (0b11: full speed), DAD 10:4.
+inline constexpr std::uint32_t kDcfgDspdFullSpeed = 0b11u;
+inline constexpr int kDcfgDadShift = 4;
+inline constexpr std::uint32_t kDcfgDadMask = 0x7Fu << 4;
+// DCTL: SDIS 1 (soft disconnect), CGINAK 8, CGONAK 10.
+inline constexpr std::uint32_t kDctlSdis = 1u << 1;
+inline constexpr std::uint32_t kDctlCginak = 1u << 8;
+inline constexpr std::uint32_t kDctlCgonak = 1u << 10;
+// DIEPCTLx / DOEPCTLx: MPSIZ 10:0 (EP0: 1:0, 0b00 = 64 bytes), USBAEP 15,
+// EPTYP 19:18, STALL 21, TXFNUM 25:22 (IN), CNAK 26, SNAK 27, SD0PID 28, EPDIS 30, EPENA 31.
+inline constexpr std::uint32_t kEpctlMpsizMask = 0x7FFu;
+inline constexpr std::uint32_t kEpctlUsbaep = 1u << 15;
+inline constexpr int kEpctlEptypShift = 18;
+inline constexpr std::uint32_t kEpctlStall = 1u << 21;
+inline constexpr int kEpctlTxfnumShift = 22;
+inline constexpr std::uint32_t kEpctlCnak = 1u << 26;
+inline constexpr std::uint32_t kEpctlSnak = 1u << 27;
+inline constexpr std::uint32_t kEpctlSd0pid = 1u << 28;
+inline constexpr std::uint32_t kEpctlEpdis = 1u << 30;
+inline constexpr std::uint32_t kEpctlEpena = 1u << 31;
+// DIEPINTx / DOEPINTx: XFRC 0, EPDISD 1, STUP 3 (OUT), TOC 3 (IN).
+inline constexpr std::uint32_t kEpintXfrc = 1u << 0;
+inline constexpr std::uint32_t kEpintEpdisd = 1u << 1;
+inline constexpr std::uint32_t kEpintStup = 1u << 3;
+inline constexpr std::uint32_t kEpintToc = 1u << 3;
+// DIEPTSIZx / DOEPTSIZx: XFRSIZ 18:0 (EP0: 6:0), PKTCNT 28:19 (EP0 IN: 20:19,
+// EP0 OUT: bit 19), STUPCNT 30:29 (EP0 OUT).
+inline constexpr int kTsizPktcntShift = 19;
+inline constexpr int kTsizStupcntShift = 29;
+}  // namespace otg
+
+// RM0090 39.1: the 96-bit unique device ID (12 bytes, read-only).
+inline constexpr std::uintptr_t kUniqueIdAddress = 0x1FFF7A10;
 
 }  // namespace flutterscan::firmware::stm32f4::reg
