@@ -187,7 +187,7 @@ int main(int argc, char** argv) {
   // Event rate: rising strobe rates until an event is missed.
   {
     std::string best = "0";
-    for (int period_us : {2000, 1000, 500, 250}) {
+    for (int period_us : {2000, 1500, 1250, 1000, 800}) {
       const int n = std::max(200, 2'000'000 / period_us);  // about 2 s of strobes
       auto [rc, out] = run({HIL_HARNESS, "--strobes", std::to_string(n), "--strobe-width-us",
                             std::to_string(period_us / 4), "--strobe-period-us",
