@@ -19,15 +19,16 @@ struct DemoOptions {
   bool no_progress = false;
 };
 
-}  // namespace
-
-/// \brief The demo's session: 960x360 frames at 60 fps of virtual time, a belt
+/// \brief The demo's session: 800x300 frames at 60 fps of virtual time, a belt
 /// moving 52 px per 5.2 ms exposure, the seed's max-min triplet in 100 us slots.
+/// The camera itself stops after `frames` exposures, so no exposure is left
+/// without its frame.
 session::SessionConfig demo_config(const std::string& out, std::uint64_t frames) {
   session::SessionConfig c;
   c.camera.spec = "sim";
-  c.camera.options = {{"width", "960"},
-                      {"height", "360"},
+  c.camera.options = {{"width", "800"},
+                      {"height", "300"},
+                      {"max_frames", std::to_string(frames)},
                       {"speed_px_per_s", "10000"},
                       {"frame_period_us", "16667"},
                       {"exposure_us", "6000"},
@@ -38,10 +39,11 @@ session::SessionConfig demo_config(const std::string& out, std::uint64_t frames)
   c.controller.code = "seed-maxmin-1";
   c.controller.slot_time_us = 100;
   c.optics.px_per_count = 0.5;
-  c.processing.max_frames = frames;
   c.output.dir = out;
   return c;
 }
+
+}  // namespace
 
 void add_demo(CLI::App& app) {
   auto o = std::make_shared<DemoOptions>();

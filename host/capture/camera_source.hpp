@@ -73,8 +73,12 @@ struct Frame {
   /// The capture descriptor (docs/formats.md) travelling with the frame, when
   /// the backend has one (files, sim); empty otherwise.
   std::string descriptor_json;
-  /// Ground-truth values of the labels in view (sim only; for tests and reports).
+  /// Ground-truth values of the labels a deblur can recover whole (sim only; for
+  /// tests and reports): each should be read.
   std::vector<std::string> truth;
+  /// Ground-truth values of every label at least partly in view (sim only): a
+  /// value read that is none of these is wrong.
+  std::vector<std::string> truth_in_view;
 };
 
 /// \brief Where exposures start.

@@ -145,6 +145,7 @@ class FilesCamera final : public CameraSource {
     frame.timestamp_ns =
         capture.value("timestamp_ns", static_cast<std::int64_t>(index) * kDefaultFramePeriodNs);
     frame.truth = capture.value("truth", std::vector<std::string>{});
+    frame.truth_in_view = capture.value("truth_in_view", std::vector<std::string>{});
     frame.host_arrival_ns = steady_now_ns();
     frame.descriptor_json = descriptor.dump();
     return true;

@@ -252,6 +252,7 @@ class SimCamera final : public CameraSource {
       const Frame& stored = ring_[job.sequence % ring_.size()];
       frame.data = stored.data;
       frame.truth = stored.truth;
+      frame.truth_in_view = stored.truth_in_view;
       frame.descriptor_json = stored.descriptor_json;
       return out;
     }
@@ -281,6 +282,7 @@ class SimCamera final : public CameraSource {
     imaging::Plane window(o_.width + pad, o_.height);
     const double pitch = o_.tile_width + o_.gap;
     frame.truth.clear();
+    frame.truth_in_view.clear();
     for (int x = 0; x < window.width; ++x) {
       const double u = (x - pad) - travel;
       float column_value = -1;
@@ -301,11 +303,15 @@ class SimCamera final : public CameraSource {
         window.at(x, y) =
             tile == nullptr ? column_value : tile->at(k0, y) * (1 - f) + tile->at(k0 + 1, y) * f;
     }
-    // Labels whose whole tile stays in view from the first slot to the last.
+    // Labels a deblur can recover whole: the tile stays in view from the first
+    // slot to the last, and starts at least one blur length from the upstream
+    // edge (whose latent depends on belt outside the frame).
     for (std::uint64_t i = 0;; ++i) {
       const double left = -(static_cast<double>(i) + 1) * pitch + travel;
-      if (left + o_.tile_width + blur <= o_.width && left >= 0)
+      if (left + o_.tile_width + blur <= o_.width && left >= blur)
         frame.truth.push_back(content_of(sim_label_scene(i)));
+      if (left < o_.width && left + o_.tile_width + blur > 0)
+        frame.truth_in_view.push_back(content_of(sim_label_scene(i)));
       if (left + o_.tile_width < 0) break;
     }
     imaging::Image dn;
@@ -333,6 +339,7 @@ class SimCamera final : public CameraSource {
     descriptor["capture"] = {{"sequence", frame.sequence},
                              {"timestamp_ns", frame.timestamp_ns},
                              {"truth", frame.truth},
+                             {"truth_in_view", frame.truth_in_view},
                              {"source", "sim"}};
     frame.descriptor_json = descriptor.dump();
     return true;

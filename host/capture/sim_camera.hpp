@@ -12,6 +12,10 @@
 // coordinate -(i + 1) * pitch and is `tile_width` wide; image column x shows
 // belt coordinate x - travel, travel being the belt's motion since start.
 //
+// Ground truth (Frame::truth): the labels a deblur can recover whole, whose
+// tile stays in view through the exposure and starts at least one blur
+// length from the upstream edge.
+//
 // Camera clock: timestamp_ns = offset_ns + controller_us * 1000 * (1 + drift_ppm
 // 1e-6) at the start of the strobe; sequence numbers count from 0 and include
 // frames lost on the way (drop_probability), as a V4L2 sequence does.

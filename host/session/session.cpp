@@ -76,6 +76,7 @@ struct FrameOutcome {
   imaging::Plane latent;
   nlohmann::json descriptor;
   std::vector<std::string> truth;
+  std::vector<std::string> truth_in_view;
 };
 
 /// A queue with a capacity: push never waits, it fails when full.
@@ -263,6 +264,7 @@ FrameOutcome process(const FrameJob& job, const SessionConfig& config) {
   out.travel_px = job.travel_px;
   out.arrival_ns = job.frame.host_arrival_ns;
   out.truth = job.frame.truth;
+  out.truth_in_view = job.frame.truth_in_view;
   const std::int64_t t0 = now_ns();
   nlohmann::json flags = nlohmann::json::array();
   nlohmann::json& log = out.log;
@@ -358,6 +360,8 @@ FrameOutcome process(const FrameJob& job, const SessionConfig& config) {
                                {"timestamp_ns", job.frame.timestamp_ns},
                                {"exposure_counter", job.event.frame_counter}};
   if (!job.frame.truth.empty()) out.descriptor["capture"]["truth"] = job.frame.truth;
+  if (!job.frame.truth_in_view.empty())
+    out.descriptor["capture"]["truth_in_view"] = job.frame.truth_in_view;
   return out;
 }
 
@@ -499,6 +503,7 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   std::vector<double> processed_at_s;
   std::vector<Preview> previews;
   std::set<std::string> truth_seen;
+  std::set<std::string> truth_in_view;
   std::uint64_t frames_saved = 0;
   std::uint64_t no_event_frames = 0;
   std::string save_error;
@@ -527,6 +532,7 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
           tracker.observe(f.index, f.sequence, f.travel_px, f.sightings);
           publish(tracker.take_finished());
           for (const auto& t : f.truth) truth_seen.insert(t);
+          for (const auto& t : f.truth_in_view) truth_in_view.insert(t);
           const bool keep = static_cast<int>(frames_saved) < config.output.keep_first_frames ||
                             (f.decode_failed && config.output.keep_failed_frames);
           if (keep) {
@@ -765,7 +771,7 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
     for (const auto& t : truth_seen)
       if (!values.count(t)) missed.push_back(t);
     for (const auto& v : values)
-      if (!truth_seen.count(v)) wrong.push_back(v);
+      if (!truth_in_view.count(v)) wrong.push_back(v);
     s["ground_truth"] = {{"labels_fully_in_view", truth_seen.size()},
                          {"labels_read", truth_seen.size() - missed.size()},
                          {"missed", missed},

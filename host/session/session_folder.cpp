@@ -4,6 +4,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 
 namespace flutterscan::session {
@@ -13,7 +14,11 @@ namespace fs = std::filesystem;
 
 /// Writes `mat` to `path` through a temporary name in the same folder.
 std::string write_png_atomically(const fs::path& path, const cv::Mat& mat) {
-  const fs::path temporary = path.parent_path() / ("." + path.filename().string() + ".tmp.png");
+  // Built by appending: GCC 12 at -O3 misreports "." + std::string as an overlapping memcpy.
+  std::string hidden = ".";
+  hidden += path.filename().string();
+  hidden += ".tmp.png";
+  const fs::path temporary = path.parent_path() / hidden;
   try {
     if (!cv::imwrite(temporary.string(), mat)) return "cannot write '" + path.string() + "'";
   } catch (const cv::Exception& e) {
@@ -49,7 +54,9 @@ std::string SessionFolder::save_frame(std::uint64_t sequence, const imaging::Ima
                                       const nlohmann::json& descriptor,
                                       const imaging::Plane* fused) {
   const fs::path frames = fs::path(path_) / "frames";
-  const std::string stem = "f" + std::to_string(1000000000ULL + sequence).substr(1);
+  char stem_text[32];
+  std::snprintf(stem_text, sizeof stem_text, "f%08llu", static_cast<unsigned long long>(sequence));
+  const std::string stem = stem_text;
   Saved saved{sequence, {}, 0};
   auto account = [&](const fs::path& file) {
     std::error_code ec;
@@ -120,7 +127,10 @@ void SessionFolder::rotate_locked() {
 
 std::string SessionFolder::write_file(const std::string& name, const std::string& text) const {
   const fs::path target = fs::path(path_) / name;
-  const fs::path temporary = target.parent_path() / ("." + target.filename().string() + ".tmp");
+  std::string hidden = ".";
+  hidden += target.filename().string();
+  hidden += ".tmp";
+  const fs::path temporary = target.parent_path() / hidden;
   {
     std::ofstream out(temporary, std::ios::binary);
     out << text;

@@ -1,0 +1,213 @@
+// End-to-end sim sessions: every label's decoded value equals its ground
+// truth at the nominal noise level; jitter and lost frames reported exactly;
+// drops under overload counted at the one place; rotation within the disk
+// budget; results over TCP read by a client.
+#include "session/session.hpp"
+
+#include <arpa/inet.h>
+#include <netinet/in.h>
+#include <sys/socket.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <thread>
+
+#include "session/test/session_test_support.hpp"
+
+namespace flutterscan::session {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace testing;
+
+SessionOutcome run(const SessionConfig& config, const SessionHooks& hooks = {}) {
+  std::atomic<bool> stop{false};
+  return run_session(config, stop, hooks);
+}
+
+TEST(SimSession, EveryLabelReadEqualsItsGroundTruthAtNominalNoise) {
+  const fs::path out = fresh_folder("nominal");
+  const SessionOutcome outcome = run(small_sim_config(out, 90));
+  ASSERT_EQ(outcome.error, "");
+  const auto& s = outcome.summary;
+  ASSERT_TRUE(s.contains("ground_truth"));
+  EXPECT_GE(s["ground_truth"]["labels_fully_in_view"].get<int>(), 10);
+  EXPECT_EQ(s["ground_truth"]["missed"], nlohmann::json::array()) << s.dump(2);
+  EXPECT_EQ(s["ground_truth"]["wrong_values"], nlohmann::json::array()) << s.dump(2);
+  EXPECT_EQ(s["frames_captured"], 90);
+  EXPECT_EQ(s["frames_processed"], 90);
+  EXPECT_EQ(s["frames_dropped"], 0);
+  EXPECT_EQ(s["frames_without_event"], 0);
+  EXPECT_EQ(s["events_without_frame"], 0);
+  EXPECT_NEAR(s["clock_drift_ppm"].get<double>(), 40.0, 1.0);  // the sim camera's clock
+  // Every object read, each as one object over several frames.
+  for (const auto& o : s["object_results"]) {
+    EXPECT_EQ(o["status"], "READ") << o.dump();
+    EXPECT_EQ(o.value("conflicting_values", nlohmann::json()).is_null(), true) << o.dump();
+  }
+  // The folder: one log line per frame, the first frames' files, summary, report.
+  int bad = 0;
+  const auto lines = read_jsonl(out / "session.jsonl", bad);
+  EXPECT_EQ(bad, 0);
+  EXPECT_EQ(lines.size(), 90u);
+  EXPECT_TRUE(fs::exists(out / "frames" / "f00000000.png"));
+  EXPECT_TRUE(fs::exists(out / "frames" / "f00000000.json"));
+  EXPECT_TRUE(fs::exists(out / "frames" / "f00000000.fused.png"));
+  EXPECT_TRUE(fs::exists(out / "summary.json"));
+  EXPECT_TRUE(fs::exists(out / "report.html"));
+}
+
+TEST(SimSession, JitterAndLostFramesAreReportedExactly) {
+  const fs::path out = fresh_folder("jitter");
+  SessionConfig config = small_sim_config(out, 80);
+  config.camera.options.push_back({"jitter", "0.05"});
+  config.camera.options.push_back({"drop_probability", "0.12"});
+  config.camera.options.push_back({"seed", "7"});
+  const SessionOutcome outcome = run(config);
+  ASSERT_EQ(outcome.error, "");
+  const auto& s = outcome.summary;
+  const int lost = s["camera_frames_lost"];
+  EXPECT_GT(lost, 0);
+  // Each lost frame left its exposure event behind, and nothing else did.
+  EXPECT_EQ(s["events_without_frame"], lost);
+  EXPECT_EQ(s["frames_without_event"], 0);
+  EXPECT_EQ(s["events_received"], 80);
+  EXPECT_EQ(s["frames_captured"].get<int>() + lost, 80);
+  int bad = 0;
+  const auto lines = read_jsonl(out / "session.jsonl", bad);
+  int orphan_lines = 0;
+  for (const auto& l : lines) orphan_lines += l.contains("event_without_frame") ? 1 : 0;
+  EXPECT_EQ(orphan_lines, lost);
+  // Blur follows the jittered speed (from the encoder), so what is read is right. (A
+  // label whose only good frame was lost may be missed: that is what drops cost.)
+  EXPECT_EQ(s["ground_truth"]["wrong_values"], nlohmann::json::array()) << s.dump(2);
+  EXPECT_GT(s["ground_truth"]["labels_read"].get<int>(), 8);
+}
+
+TEST(SimSession, OverloadDropsAtTheQueueAndCountsEveryDrop) {
+  const fs::path out = fresh_folder("overload");
+  SessionConfig config = small_sim_config(out, 40);
+  config.camera.options.push_back({"ring_frames", "4"});        // frames arrive as fast as copied
+  config.processing.method = imaging::Method::kTotalVariation;  // slow on purpose
+  config.processing.workers = 1;
+  config.processing.queue_depth = 1;
+  config.output.report = false;
+  const SessionOutcome outcome = run(config);
+  ASSERT_EQ(outcome.error, "");
+  const auto& s = outcome.summary;
+  const int dropped = s["frames_dropped"];
+  EXPECT_GT(dropped, 0);
+  EXPECT_EQ(s["frames_processed"].get<int>() + dropped, s["frames_captured"].get<int>());
+  int bad = 0;
+  const auto lines = read_jsonl(out / "session.jsonl", bad);
+  EXPECT_EQ(count_flag(lines, "dropped"), dropped);
+  EXPECT_EQ(lines.size(), 40u);
+}
+
+TEST(SimSession, FrameFilesRotateWithinTheDiskBudgetAndTheLogNever) {
+  const fs::path out = fresh_folder("rotation");
+  SessionConfig config = small_sim_config(out, 24);
+  config.output.keep_first_frames = 24;  // every frame's files
+  config.output.disk_budget_mb = 2.5;    // a raw 640x240 frame is ~0.6 MB
+  config.output.report = false;
+  const SessionOutcome outcome = run(config);
+  ASSERT_EQ(outcome.error, "");
+  const auto& rotation = outcome.summary["rotation"];
+  EXPECT_GT(rotation["frames_rotated"].get<int>(), 0);
+  EXPECT_EQ(rotation["frames_rotated"].get<int>() + rotation["frames_kept"].get<int>(), 24);
+  std::uintmax_t bytes = 0;
+  int pngs = 0;
+  for (const auto& entry : fs::directory_iterator(out / "frames")) {
+    bytes += entry.file_size();
+    pngs += entry.path().extension() == ".png" &&
+            entry.path().string().find(".fused") == std::string::npos;
+  }
+  EXPECT_LE(bytes, static_cast<std::uintmax_t>(2.5 * 1024 * 1024));
+  EXPECT_EQ(pngs, rotation["frames_kept"].get<int>());
+  // The oldest went first: frame 0 is gone, the last frame is there.
+  EXPECT_FALSE(fs::exists(out / "frames" / "f00000000.png"));
+  EXPECT_TRUE(fs::exists(out / "frames" / "f00000023.png"));
+  EXPECT_EQ(rotation["first_sequence_rotated"], 0);
+  int bad = 0;
+  EXPECT_EQ(read_jsonl(out / "session.jsonl", bad).size(), 24u);
+}
+
+/// Reads lines from a TCP connection until the server closes it.
+std::vector<std::string> read_lines_until_closed(int fd) {
+  std::string buffer;
+  char chunk[4096];
+  for (;;) {
+    const ssize_t n = ::recv(fd, chunk, sizeof chunk, 0);
+    if (n <= 0) break;
+    buffer.append(chunk, static_cast<std::size_t>(n));
+  }
+  std::vector<std::string> lines;
+  std::size_t start = 0;
+  for (std::size_t end; (end = buffer.find('\n', start)) != std::string::npos; start = end + 1)
+    lines.push_back(buffer.substr(start, end - start));
+  EXPECT_EQ(start, buffer.size()) << "a partial line at the end";
+  return lines;
+}
+
+TEST(SimSession, ATcpClientReadsOneLinePerObject) {
+  const fs::path out = fresh_folder("tcp");
+  SessionConfig config = small_sim_config(out, 50);
+  config.results.tcp_port = 0;
+  config.output.report = false;
+  int client = -1;
+  std::thread reader;
+  std::vector<std::string> received;
+  SessionHooks hooks;
+  hooks.listening = [&](int port) {
+    client = ::socket(AF_INET, SOCK_STREAM, 0);
+    sockaddr_in address{};
+    address.sin_family = AF_INET;
+    address.sin_port = htons(static_cast<std::uint16_t>(port));
+    address.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+    ASSERT_EQ(::connect(client, reinterpret_cast<sockaddr*>(&address), sizeof address), 0);
+    reader = std::thread([&] { received = read_lines_until_closed(client); });
+    std::this_thread::sleep_for(std::chrono::milliseconds(300));  // accepted before any result
+  };
+  const SessionOutcome outcome = run(config, hooks);
+  ASSERT_EQ(outcome.error, "");
+  ASSERT_TRUE(reader.joinable());
+  reader.join();
+  ::close(client);
+  ASSERT_GE(received.size(), 2u);
+  const auto greeting = nlohmann::json::parse(received[0]);
+  EXPECT_EQ(greeting["protocol"], "flutterscan-results");
+  EXPECT_EQ(greeting["version"], 1);
+  const auto& objects = outcome.summary["object_results"];
+  ASSERT_EQ(received.size() - 1, objects.size());
+  for (std::size_t i = 1; i < received.size(); ++i) {
+    const auto line = nlohmann::json::parse(received[i]);
+    EXPECT_EQ(line, objects[i - 1]);
+    EXPECT_TRUE(line["status"] == "READ" || line["status"] == "NO-READ");
+  }
+}
+
+TEST(SessionConfigFile, ReadsTheAnnotatedExampleAndNamesBadKeys) {
+  const auto example = load_config(FLUTTERSCAN_SOURCE_DIR "/docs/session-example.toml");
+  ASSERT_TRUE(example.ok()) << example.error();
+  SessionConfig config = example.value();
+  EXPECT_EQ(check_config(config), "");
+  EXPECT_EQ(config.controller.parsed_code.length(), 52);
+
+  const auto unknown = parse_config("[processing]\nworkers = 2\nspeed = 3\n", "line3.toml");
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_NE(unknown.error().find("line3.toml:3"), std::string::npos) << unknown.error();
+  EXPECT_NE(unknown.error().find("processing.speed"), std::string::npos) << unknown.error();
+
+  const auto wrong_type = parse_config("[optics]\npx_per_count = \"half\"\n", "line3.toml");
+  ASSERT_FALSE(wrong_type.ok());
+  EXPECT_NE(wrong_type.error().find("optics.px_per_count must be a number"), std::string::npos)
+      << wrong_type.error();
+
+  SessionConfig bad;
+  bad.controller.code = "1234";
+  EXPECT_NE(check_config(bad).find("controller.code"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace flutterscan::session

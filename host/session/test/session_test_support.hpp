@@ -1,0 +1,70 @@
+#pragma once
+// Helpers for the session tests: a small, fast sim session configuration and
+// reading a session folder back.
+
+#include <nlohmann/json.hpp>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <vector>
+
+#include "session/session_config.hpp"
+
+namespace flutterscan::session::testing {
+
+/// \brief A fresh, empty folder under the temp directory.
+inline std::filesystem::path fresh_folder(const std::string& name) {
+  const auto folder = std::filesystem::temp_directory_path() / ("flutterscan_session_" + name);
+  std::filesystem::remove_all(folder);
+  std::filesystem::create_directories(folder);
+  return folder;
+}
+
+/// \brief A sim session of `frames` exposures at 640x240 (a label every ~31 frames of belt),
+/// nominal noise (3000 e-, 4 e- read noise), written straight into `out`.
+inline SessionConfig small_sim_config(const std::filesystem::path& out, int frames) {
+  SessionConfig c;
+  c.camera.spec = "sim";
+  c.camera.options = {{"width", "640"},
+                      {"height", "240"},
+                      {"tile_width", "420"},
+                      {"gap", "100"},
+                      {"speed_px_per_s", "10000"},
+                      {"counts_per_px", "2"},
+                      {"max_frames", std::to_string(frames)}};
+  c.controller.spec = "sim";
+  c.optics.px_per_count = 0.5;
+  c.output.dir = out.string();
+  c.output.timestamped_subfolder = false;
+  c.output.keep_first_frames = 3;
+  return c;
+}
+
+/// \brief Every line of a JSON-lines file, parsed (a line that does not parse fails the caller's
+/// check through `bad_lines`).
+inline std::vector<nlohmann::json> read_jsonl(const std::filesystem::path& path, int& bad_lines) {
+  std::vector<nlohmann::json> lines;
+  std::ifstream in(path);
+  std::string line;
+  bad_lines = 0;
+  while (std::getline(in, line)) {
+    auto parsed = nlohmann::json::parse(line, nullptr, false);
+    if (parsed.is_discarded())
+      ++bad_lines;
+    else
+      lines.push_back(parsed);
+  }
+  return lines;
+}
+
+inline int count_flag(const std::vector<nlohmann::json>& lines, const std::string& flag) {
+  int n = 0;
+  for (const auto& l : lines)
+    if (l.contains("flags"))
+      for (const auto& f : l["flags"])
+        if (f == flag) ++n;
+  return n;
+}
+
+}  // namespace flutterscan::session::testing
