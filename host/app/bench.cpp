@@ -3,6 +3,8 @@
 // to fused grey, against the OpenCV way; optionally how the cost grows with
 // frame size and blur length.
 // `flutterscan bench seed --image PHOTO`: the seed's Section 6 experiment.
+// `flutterscan bench stability [--out DIR] [--seeds N] [--factors a,b]`: where
+// each method fails, one factor at a time (bench/stability_study.hpp).
 
 #include <algorithm>
 #include <chrono>
@@ -22,6 +24,7 @@
 #include "app/commands.hpp"
 #include "bench/seed_experiment.hpp"
 #include "bench/speed_frame.hpp"
+#include "bench/stability_study.hpp"
 #include "codes/library.hpp"
 #include "imaging/deblur.hpp"
 #include "imaging/joint_wiener.hpp"
@@ -228,6 +231,27 @@ void add_bench(CLI::App& app) {
       ->required();
   seed_command->add_option("--seed", seed->seed, "noise seed")->capture_default_str();
   seed_command->callback([seed] { run_seed(*seed); });
+  auto stability = std::make_shared<bench::StabilityOptions>();
+  CLI::App* stability_command = bench->add_subcommand(
+      "stability", "Where each method fails, one factor at a time (CSV, charts, Markdown report)");
+  stability_command->add_option("--out", stability->out_dir, "directory for CSV and PNG files")
+      ->capture_default_str();
+  stability_command->add_option("--seeds", stability->seeds, "noise seeds per scene")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  stability_command->add_option("--factors", stability->factors, "factors to run (default: all)")
+      ->delimiter(',')
+      ->check(CLI::IsMember(bench::stability_factor_names()));
+  stability_command->add_option("--threads", stability->threads, "frames solved at once")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  stability_command->callback([stability] {
+    std::error_code error;
+    std::filesystem::create_directories(stability->out_dir, error);
+    if (error) throw RuntimeFailure("cannot create '" + stability->out_dir + "': " + error.message());
+    if (const auto problem = bench::run_stability_study(*stability, stdout); !problem.empty())
+      throw RuntimeFailure("bench stability: " + problem);
+  });
 }
 
 }  // namespace flutterscan::app
