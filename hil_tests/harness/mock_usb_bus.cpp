@@ -58,7 +58,7 @@ std::vector<InterfaceInfo> interfaces_of(std::span<const std::uint8_t> config) {
 MockUsbBus::MockUsbBus(BoardHost& host) : host_(host), testbed_(umockdev_testbed_new()) {}
 
 MockUsbBus::~MockUsbBus() {
-  g_object_unref(testbed_);
+  if (testbed_ != nullptr) g_object_unref(testbed_);
 }
 
 bool MockUsbBus::sync() {

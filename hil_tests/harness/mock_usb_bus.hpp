@@ -29,6 +29,8 @@ class MockUsbBus {
   MockUsbBus(const MockUsbBus&) = delete;
   MockUsbBus& operator=(const MockUsbBus&) = delete;
 
+  /// \brief Whether umockdev made a testbed.
+  bool ok() const { return testbed_ != nullptr; }
   /// \brief Makes the testbed match the board (add, replace or remove the device).
   /// Returns false if an enumeration failed (the message is on stderr).
   bool sync();

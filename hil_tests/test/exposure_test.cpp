@@ -113,6 +113,43 @@ TEST(HilExposure, HundredStrobesPlayTheCodeAndReachTheHost) {
   EXPECT_EQ(output_value(run.output, "frames_missing"), "0");
 }
 
+TEST(HilExposure, FlutterscanMonitorReceivesEveryExposure) {
+  const auto dir = make_work_dir("cli_monitor");
+  const std::string cli = FLUTTERSCAN_BINARY;
+  const std::string script = cli + " device set-code " + kCodeB + " --select && " + cli +
+                             " device set-timing --slot-us " + std::to_string(kSlotUs) + " && " +
+                             cli + " device monitor --arm --count " + std::to_string(kStrobes);
+  const auto run =
+      run_harness({"--strobes", std::to_string(kStrobes), "--encoder-in-exposure",
+                   std::to_string(kEncoderBase), "--encoder-between", "500", "--timeout-s", "60"},
+                  {"/bin/sh", "-c", script}, dir);
+  if (run.exit_code == 77) GTEST_SKIP() << run.output;
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("100 events, 0 exposures without an event"), std::string::npos)
+      << run.output;
+  // Frame i's line carries its encoder delta (+10 + i - 1).
+  for (int frame : {1, 50, 100}) {
+    std::ostringstream delta;
+    delta << "+" << kEncoderBase + frame - 1;
+    std::istringstream in(run.output);
+    std::string line;
+    bool seen = false;
+    while (std::getline(in, line)) {
+      std::istringstream fields(line);
+      int f = 0;
+      if ((fields >> f) && f == frame) seen = line.find(delta.str()) != std::string::npos;
+    }
+    EXPECT_TRUE(seen) << "frame " << frame << " without delta " << delta.str();
+  }
+  const auto& strobes = run.record.at("strobes");
+  ASSERT_EQ(strobes.size(), static_cast<std::size_t>(kStrobes));
+  const auto timeline = led_timeline(run.record);
+  for (int i = 0; i < kStrobes; ++i)
+    expect_exposure_plays(timeline, strobes[i].at("start_us").get<std::uint64_t>(), kCodeB, i);
+  EXPECT_EQ(run.record.at("final").at("led_mask"), 0);
+  EXPECT_EQ(run.record.at("out_reports").back().at("command"), 0x08) << "not disarmed at the end";
+}
+
 TEST(HilExposure, CodeSwitchBetweenExposuresWhileArmed) {
   const auto dir = make_work_dir("switch");
   const int strobes_n = 40;
