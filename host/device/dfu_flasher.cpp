@@ -556,6 +556,21 @@ Expected<FlashReport> flash_controller(const FirmwareImage& image, const FlashOp
             " on board " + std::to_string(report.after.board_id) + ", but the image is " +
             version_text(h.version_major, h.version_minor, h.version_patch) + " for board " +
             std::to_string(h.board_id));
+  // The product application reports its stamped image CRC-32 as build_id; 0 means
+  // a firmware that does not (then the UPLOAD read-back above is the CRC check).
+  if (report.after.build_id != 0 && report.after.build_id != h.image_crc32) {
+    char text[96];
+    std::snprintf(text, sizeof text, "reports image CRC-32 %08X, the image has %08X",
+                  report.after.build_id, h.image_crc32);
+    return fail<FlashReport>(ErrorKind::kRejected,
+                             "after flashing, controller " + serial + " " + text);
+  }
+  char crc_text[16];
+  std::snprintf(crc_text, sizeof crc_text, "%08X", h.image_crc32);
+  say(options, report.after.build_id != 0
+                   ? std::string("the application confirms image CRC-32 ") + crc_text
+                   : std::string("the application does not report its image CRC (build id 0); "
+                                 "the read-back matched"));
   return Expected<FlashReport>::success(report);
 }
 
