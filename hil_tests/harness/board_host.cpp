@@ -14,6 +14,9 @@ namespace {
 using firmware::sim::BoardMode;
 namespace fsim = firmware::sim;
 
+/// Longest virtual-time step of one service-loop tick (ticks come every 0.5 ms).
+constexpr std::uint64_t kMaxStepUs = 1000;
+
 const char* mode_text(BoardMode mode) {
   return mode == BoardMode::kApplication ? "application" : "bootloader";
 }
@@ -263,7 +266,11 @@ void BoardHost::tick() {
     }
     return;
   }
-  const std::uint64_t now = std::max(real_now_us(), board_.port().now_us());
+  // The board's clock follows real time, but at most kMaxStepUs per tick: if the
+  // harness was not scheduled for a while, virtual time slows down instead of
+  // jumping, so stimuli never bunch up (the host gets its usual time to read).
+  const std::uint64_t board_now = board_.port().now_us();
+  const std::uint64_t now = std::clamp(real_now_us(), board_now, board_now + kMaxStepUs);
   while (next_stimulus_ < stimuli_.size() && stimuli_[next_stimulus_].time_us <= now) {
     const Stimulus& s = stimuli_[next_stimulus_++];
     board_.run_until(s.time_us);

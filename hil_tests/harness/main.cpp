@@ -39,6 +39,13 @@ bool preloaded() {
 
 /// Re-runs this program under umockdev-wrapper; returns only if that is impossible.
 void reexec_wrapped(char** argv) {
+  // The preload library comes before the sanitizer runtime in sanitizer builds,
+  // which ASan refuses by default (the programs under test inherit this too).
+  std::string asan = std::getenv("ASAN_OPTIONS") ? std::getenv("ASAN_OPTIONS") : "";
+  if (asan.find("verify_asan_link_order") == std::string::npos) {
+    asan += std::string(asan.empty() ? "" : ":") + "verify_asan_link_order=0";
+    setenv("ASAN_OPTIONS", asan.c_str(), 1);
+  }
   std::vector<char*> args;
   static char wrapper[] = "umockdev-wrapper";
   args.push_back(wrapper);
