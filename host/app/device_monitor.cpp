@@ -43,7 +43,14 @@ std::string flag_names(std::uint16_t flags) {
 void run(const MonitorOptions& options) {
   DeviceSession session(options.target);
   auto& client = session.client();
-  if (options.arm) value_or_throw(client.arm());
+  if (options.arm) {
+    value_or_throw(client.arm());
+  } else if (value_or_throw(client.status()).state ==
+             static_cast<std::uint8_t>(protocol::ControllerState::kIdle)) {
+    std::fprintf(stderr,
+                 "flutterscan: the controller is idle: no events until it is armed "
+                 "(device arm, or monitor --arm)\n");
+  }
   if (session.sim() != nullptr)
     session.sim()->set_camera(options.sim_rate_hz, options.sim_exposure_us);
   g_interrupted = 0;

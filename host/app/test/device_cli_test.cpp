@@ -55,8 +55,9 @@ class DeviceCli : public ::testing::Test {
   void TearDown() override { fs::remove_all(scratch_); }
 
   /// Runs the binary with `args`, stdout and stderr to files, bounded by a 30 s alarm.
+  /// With `interrupt_after_ms` >= 0, sends SIGINT (Ctrl-C) after that long.
   RunResult run(const std::vector<std::string>& args,
-                const std::string& binary = FLUTTERSCAN_BINARY) {
+                const std::string& binary = FLUTTERSCAN_BINARY, int interrupt_after_ms = -1) {
     const fs::path out = scratch_ / "stdout";
     const fs::path err = scratch_ / "stderr";
     std::vector<std::string> storage{binary};
@@ -81,6 +82,7 @@ class DeviceCli : public ::testing::Test {
     for (int waited_ms = 0;; waited_ms += 10) {
       const pid_t done = ::waitpid(pid, &status, WNOHANG);
       if (done == pid) break;
+      if (waited_ms == interrupt_after_ms) ::kill(pid, SIGINT);
       if (waited_ms > 30'000) {
         ::kill(pid, SIGKILL);
         ::waitpid(pid, &status, 0);
@@ -139,6 +141,19 @@ TEST_F(DeviceCli, SetCodeSelectSaveThenMonitorArmedEvents) {
     EXPECT_TRUE(contains(r.out, frame)) << r;
   EXPECT_FALSE(contains(r.out, "lost before")) << r;
   EXPECT_TRUE(contains(r.err, "5 events, 0 exposures without an event")) << r;
+}
+
+TEST_F(DeviceCli, MonitorStopsCleanlyOnCtrlC) {
+  ASSERT_EQ(run(sim({"device", "set-code", kCode, "--select", "--save"})).exit_code, 0);
+  const auto r = run(sim({"device", "monitor", "--arm"}), FLUTTERSCAN_BINARY, 700);
+  EXPECT_EQ(r.exit_code, 0) << r;
+  EXPECT_TRUE(contains(r.out, "\n         1 ")) << r;
+  EXPECT_TRUE(contains(r.err, "0 exposures without an event")) << r;
+  // Disarmed at the end: the next power-on of the sim is idle anyway, so ask a
+  // monitor without --arm, which says the controller is idle.
+  const auto idle = run(sim({"device", "monitor", "--seconds", "0.2"}));
+  EXPECT_EQ(idle.exit_code, 0) << idle;
+  EXPECT_TRUE(contains(idle.err, "the controller is idle")) << idle;
 }
 
 TEST_F(DeviceCli, SetCodeRejectsBadInputWithExit2) {
