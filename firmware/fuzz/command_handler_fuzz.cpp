@@ -14,6 +14,17 @@
 //   or free-run mode, and otherwise every LED is off;
 // - no LED stays on longer than the thermal guard's max_on_time_us (a run that
 //   ends and restarts in the same microsecond counts as one run);
+// - USB (ops kSetup..kDfuDownload, through the USB device core on a
+//   SimUsbController): every control transfer gets exactly one answer of the
+//   right direction and no more data than wLength; every report on the HID IN
+//   endpoint is well-formed: an exposure event in sequence, or the reply to
+//   the oldest request the OUT endpoint accepted (command and sequence
+//   echoed), and once the IN endpoint is empty, free and the device holds no
+//   request, every accepted request has been answered (no reply dropped); a
+//   bus reset disarms the controller (every LED off);
+// - DFU mode (a bootloader on a SimFlash): sectors 0 and 1 (bootloader,
+//   config) are never erased or written, GETSTATUS is well-formed, and a
+//   device ready to start the application holds an image the checker accepts;
 // then the input ends with a Disarm report and the clock runs on: every LED
 // must be off, the last recorded LED write included.
 //
@@ -22,12 +33,15 @@
 
 #include <algorithm>
 #include <array>
+#include <bitset>
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <deque>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <span>
 
@@ -35,7 +49,14 @@
 #include "flutterscan/firmware/command_handler.hpp"
 #include "flutterscan/firmware/config_store.hpp"
 #include "flutterscan/firmware/controller.hpp"
+#include "flutterscan/firmware/boot_decision.hpp"
+#include "flutterscan/firmware/sim/sim_board.hpp"
+#include "flutterscan/firmware/sim/sim_flash.hpp"
 #include "flutterscan/firmware/sim/sim_port.hpp"
+#include "flutterscan/firmware/sim/sim_usb_controller.hpp"
+#include "flutterscan/firmware/usb/application_usb.hpp"
+#include "flutterscan/firmware/usb/bootloader_usb.hpp"
+#include "flutterscan/firmware/usb/dfu.hpp"
 #include "fuzz_input.hpp"
 
 namespace {
@@ -58,6 +79,11 @@ constexpr std::uint64_t kFrameStepUs = proto::kMinFramePeriodUs;
 constexpr std::uint64_t kReportGapUs = 1;
 // After the final Disarm: longer than the longest exposure (256 slots x 10 ms).
 constexpr std::uint64_t kSettleUs = 3'000'000;
+// USB: the devices' descriptors and unique ID, and the bounds of one DFU download op.
+constexpr auto kAppDevice = fw::usb::application_device_descriptor(0x0123);
+constexpr auto kBootDevice = fw::usb::bootloader_device_descriptor(0x0100);
+constexpr std::array<std::uint8_t, 12> kUniqueId{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12};
+constexpr std::size_t kMaxDfuImage = 20 * 1024;
 
 [[noreturn]] void fail(const char* what, int line) {
   std::fprintf(stderr, "command_handler_fuzz: invariant violated (line %d): %s\n", line, what);
@@ -268,6 +294,8 @@ class Harness {
  private:
   // Setup ------------------------------------------------------------------
   void boot() {
+    app_usb_.reset();
+    usb_.reset();
     handler_.reset();
     controller_.reset();
     controller_.emplace(port_, board_);
@@ -276,6 +304,12 @@ class Harness {
     handler_.emplace(*controller_);
     controller_->start();
     event_sequence_ = 0;
+    last_usb_event_sequence_ = 0;
+    events_seen_.reset();
+    usb_.emplace();
+    app_usb_.emplace(*usb_, *controller_, *handler_, kAppDevice, kUniqueId);
+    usb_->attach(&*app_usb_);
+    pending_replies_.clear();
   }
 
   // Operations ---------------------------------------------------------------
@@ -356,8 +390,205 @@ class Harness {
         port_.flash_page()[offset] = in.u8();
         break;
       }
+      case Op::kSetup:
+        control_transfer(*usb_, in);
+        usb_main_loop();
+        break;
+      case Op::kHidOut: {
+        const std::size_t length = in.u8() % (proto::kReportSize + 2);
+        hid_out(in.take(length));
+        break;
+      }
+      case Op::kHidIn:
+        hid_in(1 + in.u8() % 8);
+        break;
+      case Op::kBusReset:
+        bus_reset();
+        break;
+      case Op::kEnumerate: {
+        bus_reset();
+        const auto address = static_cast<std::uint16_t>(1 + in.u8() % 127);
+        FUZZ_CHECK(!usb_->control_transfer(0x00, 5, address, 0, 0).stalled);
+        FUZZ_CHECK(!usb_->control_transfer(0x00, 9, 1, 0, 0).stalled);
+        usb_main_loop();
+        break;
+      }
+      case Op::kDfuSetup:
+        control_transfer(dfu().usb, in);
+        check_dfu();
+        break;
+      case Op::kDfuDownload:
+        dfu_download(in);
+        check_dfu();
+        break;
       case Op::kCount:
         break;
+    }
+  }
+
+  // USB ----------------------------------------------------------------------
+  /// One main-loop pass of the application image.
+  void usb_main_loop() {
+    app_usb_->poll();
+    FUZZ_CHECK(usb_->ep0_protocol_errors() == 0);
+  }
+
+  /// A SETUP from the input (8 bytes, then the OUT data stage) on `usb`.
+  void control_transfer(fw::sim::SimUsbController& usb, Reader& in) {
+    std::array<std::uint8_t, 8> setup{};
+    const auto bytes = in.take(8);
+    std::copy(bytes.begin(), bytes.end(), setup.begin());
+    const auto packet = fw::usb::SetupPacket::parse(setup);
+    const auto data = packet.is_in() ? std::span<const std::uint8_t>()
+                                     : in.take(std::min<std::size_t>(packet.length, 1024));
+    const int errors_before = usb.ep0_protocol_errors();
+    const fw::sim::ControlResult r = usb.control_transfer(setup, data);
+    if (g_trace)
+      std::fprintf(stderr, "SETUP %02x %02x %04x %04x %04x -> %s %zu bytes\n", packet.request_type,
+                   packet.request, packet.value, packet.index, packet.length,
+                   r.stalled ? "STALL" : "ok", r.data.size());
+    FUZZ_CHECK(usb.ep0_protocol_errors() == errors_before);
+    FUZZ_CHECK(r.data.size() <= packet.length);
+    if (!packet.is_in()) FUZZ_CHECK(r.data.empty());
+  }
+
+  void hid_out(std::span<const std::uint8_t> report) {
+    advance(kReportGapUs);
+    const fw::sim::OutResult r = usb_->interrupt_out(fw::usb::kHidOutEndpoint.address, report);
+    if (r == fw::sim::OutResult::kAck)
+      pending_replies_.push_back({report.size() > 0 ? report[0] : std::uint8_t{0},
+                                  report.size() > 1 ? report[1] : std::uint8_t{0}});
+    usb_main_loop();
+  }
+
+  void hid_in(int count) {
+    constexpr std::uint8_t kIn = fw::usb::kHidInEndpoint.address;
+    for (int i = 0; i < count; ++i) {
+      usb_main_loop();
+      const auto packet = usb_->interrupt_in(kIn);
+      if (!packet) {
+        // Nothing on a free, unhalted endpoint of a configured device that holds
+        // no request: every accepted request has had its reply.
+        if (app_usb_->device().configured() && !usb_->endpoint_halted(kIn) &&
+            !app_usb_->hid().request_pending()) {
+          FUZZ_CHECK(!app_usb_->hid().replies_pending());
+          FUZZ_CHECK(pending_replies_.empty());
+        }
+        return;
+      }
+      FUZZ_CHECK(packet->size() == proto::kReportSize);
+      const proto::MessageHeader h = proto::peek_header(*packet);
+      // An event has status 0; a reply to a request whose command byte is
+      // 0x80 (not a request) always carries an error status.
+      if (h.command == static_cast<std::uint8_t>(proto::Command::kExposureEvent) &&
+          h.status == 0) {
+        check_event_report(*packet, true);
+        continue;
+      }
+      FUZZ_CHECK(!pending_replies_.empty());
+      FUZZ_CHECK(h.command == pending_replies_.front()[0]);
+      FUZZ_CHECK(h.sequence == pending_replies_.front()[1]);
+      FUZZ_CHECK(h.status <= static_cast<std::uint8_t>(proto::Status::kHardwareError));
+      FUZZ_CHECK(h.payload_length <= proto::kMaxPayloadSize);
+      for (std::size_t k = proto::kHeaderSize + h.payload_length; k < proto::kReportSize; ++k)
+        FUZZ_CHECK((*packet)[k] == 0);
+      pending_replies_.pop_front();
+    }
+  }
+
+  void bus_reset() {
+    if (g_trace) std::fprintf(stderr, "bus reset\n");
+    usb_->bus_reset();
+    pending_replies_.clear();  // the host's transfers are void
+    FUZZ_CHECK(controller_->state() == proto::ControllerState::kIdle);
+    FUZZ_CHECK((controller_->status().flags & proto::kStatusUploadInProgress) == 0);
+    FUZZ_CHECK(port_.led_mask() == 0);
+    usb_main_loop();
+  }
+
+  // DFU mode -------------------------------------------------------------------
+  // The F405's first 128 KiB (sectors 0..4: bootloader, config, the whole
+  // application region), so each input's flash is cheap to make.
+  static constexpr fw::FlashLayout kDfuFlash{
+      std::span<const fw::FlashSector>(fw::kStm32f405FlashSectors).first(5), 5};
+  struct DfuDevice {
+    fw::sim::SimFlash flash{kDfuFlash};
+    fw::sim::SimUsbController usb;
+    fw::usb::BootloaderUsb boot{usb, flash, kDfuFlash, flutterscan::kStm32f405AppRegion,
+                                kBootDevice, kUniqueId};
+    DfuDevice() {
+      usb.attach(&boot);
+      usb.bus_reset();
+      usb.control_transfer(0x00, 5, 1, 0, 0);
+      usb.control_transfer(0x00, 9, 1, 0, 0);
+    }
+  };
+
+  /// The bootloader, made at its first use.
+  DfuDevice& dfu() {
+    if (!dfu_) dfu_ = std::make_unique<DfuDevice>();
+    return *dfu_;
+  }
+
+  fw::sim::ControlResult dfu_request(fw::usb::DfuRequest request, std::uint16_t value,
+                                     std::span<const std::uint8_t> data = {}) {
+    const bool in = request == fw::usb::DfuRequest::kGetStatus ||
+                    request == fw::usb::DfuRequest::kGetState ||
+                    request == fw::usb::DfuRequest::kUpload;
+    return dfu().usb.control_transfer(
+        in ? fw::usb::kDfuRequestIn : fw::usb::kDfuRequestOut, static_cast<std::uint8_t>(request),
+        value, 0,
+        static_cast<std::uint16_t>(request == fw::usb::DfuRequest::kGetStatus ? 6 : data.size()),
+        data);
+  }
+
+  /// dfu-util's download of a generated image, optionally spoilt.
+  void dfu_download(Reader& in) {
+    const std::uint8_t seed = in.u8();
+    const std::size_t size = 600 + in.u16() % (kMaxDfuImage - 600);
+    const std::uint8_t spoil = in.u8();
+    auto image = fw::sim::make_application_image(
+        (spoil & 1) ? flutterscan::kBoardIdQemuNetduinoplus2 : flutterscan::kBoardIdStm32f405, 1,
+        2, 3, size, seed);
+    if (spoil & 2) image[size / 2 + 1] ^= 0x10;
+    // Out of dfuERROR first, as dfu-util does.
+    const auto status = dfu_request(fw::usb::DfuRequest::kGetStatus, 0);
+    if (!status.stalled && status.data.size() == 6 &&
+        status.data[4] == static_cast<std::uint8_t>(fw::usb::DfuState::kError))
+      dfu_request(fw::usb::DfuRequest::kClrStatus, 0);
+    else
+      dfu_request(fw::usb::DfuRequest::kAbort, 0);
+    std::uint16_t block = 0;
+    for (std::size_t at = 0; at <= image.size(); at += 1024) {
+      if ((spoil & 4) && block == 2) ++block;
+      const auto chunk = std::span<const std::uint8_t>(image).subspan(
+          at, std::min<std::size_t>(1024, image.size() - at));
+      if (dfu_request(fw::usb::DfuRequest::kDnload, block++, chunk).stalled) return;
+      if (spoil & 8) continue;
+      for (int polls = 0; polls < 3; ++polls) {
+        const auto s = dfu_request(fw::usb::DfuRequest::kGetStatus, 0);
+        FUZZ_CHECK(!s.stalled && s.data.size() == 6);
+        const auto state = static_cast<fw::usb::DfuState>(s.data[4]);
+        if (state == fw::usb::DfuState::kError) return;
+        if (state == fw::usb::DfuState::kDnloadIdle || state == fw::usb::DfuState::kDfuIdle) break;
+      }
+    }
+  }
+
+  void check_dfu() {
+    DfuDevice& d = dfu();
+    for (int sector = 0; sector < 2; ++sector) {
+      FUZZ_CHECK(d.flash.erase_count(sector) == 0);
+      FUZZ_CHECK(d.flash.program_count(sector) == 0);
+    }
+    FUZZ_CHECK(d.usb.ep0_protocol_errors() == 0);
+    const auto status = dfu_request(fw::usb::DfuRequest::kGetStatus, 0);
+    if (!status.stalled) FUZZ_CHECK(status.data.size() == 6 && status.data[4] <= 10);
+    if (d.boot.leave_requested()) {
+      const auto region = d.flash.read(flutterscan::kStm32f405AppRegion.load_address,
+                                       flutterscan::kStm32f405AppRegion.max_size);
+      FUZZ_CHECK(fw::choose_boot_target(false, region, flutterscan::kStm32f405AppRegion) ==
+                 fw::BootTarget::kApplication);
     }
   }
 
@@ -530,30 +761,45 @@ class Harness {
       const std::size_t size = handler_->next_event_report(report);
       if (size == 0) return;
       FUZZ_CHECK(size == proto::kReportSize);
-      const proto::MessageHeader h = proto::peek_header(report);
-      FUZZ_CHECK(h.command == static_cast<std::uint8_t>(proto::Command::kExposureEvent));
-      FUZZ_CHECK(h.status == 0);
-      FUZZ_CHECK(h.sequence == event_sequence_++);
-      FUZZ_CHECK(h.payload_length == sizeof(proto::ExposureEvent));
-      for (std::size_t k = proto::kHeaderSize + h.payload_length; k < proto::kReportSize; ++k)
-        FUZZ_CHECK(report[k] == 0);
-      const auto e = proto::decode_payload<proto::ExposureEvent>(
-                         std::span<const std::uint8_t>(report).subspan(proto::kHeaderSize,
-                                                                       h.payload_length))
-                         .value();
-      if (g_trace)
-        std::fprintf(stderr, "%10llu us: event frame %u start %llu slot %u us flags 0x%x code %u\n",
-                     static_cast<unsigned long long>(port_.now_us()), e.frame_counter,
-                     static_cast<unsigned long long>(e.start_time_us), e.slot_time_us, e.flags,
-                     e.code_id);
-      FUZZ_CHECK(e.frame_counter >= 1);
-      FUZZ_CHECK(e.slot_time_us >= proto::kMinSlotTimeUs && e.slot_time_us <= proto::kMaxSlotTimeUs);
-      FUZZ_CHECK(e.start_time_us <= port_.now_us());
-      FUZZ_CHECK((e.flags & ~0x1Fu) == 0);
-      FUZZ_CHECK(e.code_id < proto::kMaxCodes);
-      FUZZ_CHECK(e.slot_count >= 1 && e.slot_count <= flutterscan::kMaxSlots);
-      FUZZ_CHECK(e.reserved0 == 0 && e.reserved1 == 0);
+      check_event_report(report, false);
     }
+  }
+
+  /// An exposure event report (from read_events or the HID IN endpoint).
+  void check_event_report(std::span<const std::uint8_t> report, bool via_usb) {
+    const proto::MessageHeader h = proto::peek_header(report);
+    FUZZ_CHECK(h.command == static_cast<std::uint8_t>(proto::Command::kExposureEvent));
+    FUZZ_CHECK(h.status == 0);
+    if (g_trace)
+      std::fprintf(stderr, "event report sequence %u (%s)\n", h.sequence,
+                   via_usb ? "HID IN endpoint" : "direct");
+    // Two readers (read_events and the HID interface) take events from one
+    // queue: each sees its sequences ascend, and no sequence comes twice.
+    std::uint8_t& last = via_usb ? last_usb_event_sequence_ : event_sequence_;
+    FUZZ_CHECK(static_cast<std::uint8_t>(h.sequence - last) < 128);
+    last = static_cast<std::uint8_t>(h.sequence + 1);
+    FUZZ_CHECK(!events_seen_[h.sequence]);
+    events_seen_.set(h.sequence);
+    events_seen_.reset(static_cast<std::uint8_t>(h.sequence + 128));
+    FUZZ_CHECK(h.payload_length == sizeof(proto::ExposureEvent));
+    for (std::size_t k = proto::kHeaderSize + h.payload_length; k < proto::kReportSize; ++k)
+      FUZZ_CHECK(report[k] == 0);
+    const auto e = proto::decode_payload<proto::ExposureEvent>(
+                       std::span<const std::uint8_t>(report).subspan(proto::kHeaderSize,
+                                                                     h.payload_length))
+                       .value();
+    if (g_trace)
+      std::fprintf(stderr, "%10llu us: event frame %u start %llu slot %u us flags 0x%x code %u\n",
+                   static_cast<unsigned long long>(port_.now_us()), e.frame_counter,
+                   static_cast<unsigned long long>(e.start_time_us), e.slot_time_us, e.flags,
+                   e.code_id);
+    FUZZ_CHECK(e.frame_counter >= 1);
+    FUZZ_CHECK(e.slot_time_us >= proto::kMinSlotTimeUs && e.slot_time_us <= proto::kMaxSlotTimeUs);
+    FUZZ_CHECK(e.start_time_us <= port_.now_us());
+    FUZZ_CHECK((e.flags & ~0x1Fu) == 0);
+    FUZZ_CHECK(e.code_id < proto::kMaxCodes);
+    FUZZ_CHECK(e.slot_count >= 1 && e.slot_count <= flutterscan::kMaxSlots);
+    FUZZ_CHECK(e.reserved0 == 0 && e.reserved1 == 0);
   }
 
   // Time -----------------------------------------------------------------------
@@ -680,9 +926,16 @@ class Harness {
   fw::sim::SimPort port_;
   std::optional<fw::Controller> controller_;
   std::optional<fw::CommandHandler> handler_;
+  std::optional<fw::sim::SimUsbController> usb_;
+  std::optional<fw::usb::ApplicationUsb> app_usb_;
+  /// (command, sequence) of every request the HID OUT endpoint accepted and not yet answered.
+  std::deque<std::array<std::uint8_t, 2>> pending_replies_;
+  std::unique_ptr<DfuDevice> dfu_;
   Interposer interposer_;
   std::uint8_t sequence_ = 0;
-  std::uint8_t event_sequence_ = 0;
+  std::uint8_t event_sequence_ = 0;  ///< the next event sequence read_events expects at least
+  std::uint8_t last_usb_event_sequence_ = 0;  ///< ... the HID IN endpoint
+  std::bitset<256> events_seen_;              ///< event sequences seen in the last 128
   int strobe_pulses_ = 0;
   std::size_t seen_writes_ = 0;
   std::array<LedRun, flutterscan::kMaxLeds> runs_{};

@@ -8,10 +8,11 @@
 // a little-endian u16 and a shift byte (value = u16 << (shift % 8)), so exact
 // small values and seconds are both a few bytes away.
 //
-// Adding the USB core: give SETUP packets (8 bytes plus a data stage) and the
-// HID interrupt OUT endpoint their own ops, appended at the end of Op so the
-// existing corpus keeps its meaning, and route kRawReport/kReport through the
-// endpoint instead of straight into the CommandHandler.
+// The USB ops (kSetup and after) go through the USB device core on a
+// SimUsbController: the application's (HID + DFU runtime around the same
+// Controller) and, for the kDfu* ops, a bootloader's (DFU mode over a SimFlash).
+// kRawReport/kReport still go straight into the CommandHandler, where their
+// replies are checked in full.
 
 #include <array>
 #include <cstdint>
@@ -41,7 +42,15 @@ enum class Op : std::uint8_t {
   kPortFailures = 10,  ///< byte: bit 0 slot timer fails, bit 1 flash fails
   kReboot = 11,        ///< reset cause (byte % 3), then a new Controller on the same port
   kFlashPoke = 12,     ///< u16 offset into the config image, byte: one flash byte overwritten
-  kCount = 13,
+  kSetup = 13,         ///< 8 SETUP bytes, then min(wLength, 1024) OUT data bytes (OUT requests)
+  kHidOut = 14,        ///< length byte (% 66), then that many bytes to interrupt OUT 0x01
+  kHidIn = 15,         ///< up to 1 + byte % 8 packets read from interrupt IN 0x81
+  kBusReset = 16,      ///< USB bus reset
+  kEnumerate = 17,     ///< bus reset, SET_ADDRESS (1 + byte % 127), SET_CONFIGURATION 1
+  kDfuSetup = 18,      ///< as kSetup, to the bootloader's DFU mode device
+  kDfuDownload = 19,   ///< seed byte, size u16, byte: bit 0 wrong board, bit 1 bad CRC,
+                       ///< bit 2 skip a block, bit 3 no GETSTATUS; dfu-util's download
+  kCount = 20,
 };
 
 inline constexpr std::uint8_t kOpCount = static_cast<std::uint8_t>(Op::kCount);
@@ -97,6 +106,17 @@ class InputWriter {
   InputWriter& read_events(std::uint8_t count) {
     return op(Op::kReadEvents).u8(static_cast<std::uint8_t>(count - 1));
   }
+  InputWriter& setup(std::uint8_t type, std::uint8_t request, std::uint16_t value,
+                     std::uint16_t index, std::uint16_t length) {
+    return op(Op::kSetup).u8(type).u8(request).u16(value).u16(index).u16(length);
+  }
+  InputWriter& hid_out(std::span<const std::uint8_t> report) {
+    return op(Op::kHidOut).u8(static_cast<std::uint8_t>(report.size())).bytes(report);
+  }
+  InputWriter& hid_in(std::uint8_t count) {
+    return op(Op::kHidIn).u8(static_cast<std::uint8_t>(count - 1));
+  }
+  InputWriter& enumerate() { return op(Op::kEnumerate).u8(1); }
 
   const std::vector<std::uint8_t>& data() const { return bytes_; }
 

@@ -246,5 +246,55 @@ int main(int argc, char** argv) {
     w.op(Op::kReport).u8(3).u8(9).u8(0).u8(0).u8(0).u8(0);
     ok &= write(dir, "malformed", w);
   }
+  {  // USB: Linux's enumeration requests, then HID requests and replies, a halt, a reset.
+    InputWriter w(kBoard3);
+    w.op(Op::kBusReset);
+    w.setup(0x80, 6, 0x0100, 0, 64);
+    w.enumerate();
+    w.setup(0x80, 6, 0x0200, 0, 9);
+    w.setup(0x80, 6, 0x0200, 0, 59);
+    w.setup(0x80, 6, 0x0303, 0x0409, 255);
+    w.setup(0x21, 0x0A, 0, 0, 0);
+    w.setup(0x81, 6, 0x2200, 0, 25);
+    w.hid_out(request(proto::Command::kGetInfo));
+    w.hid_out(request(proto::Command::kGetStatus));
+    w.hid_in(2);
+    w.setup(0x02, 3, 0, 0x81, 0);  // SET_FEATURE(ENDPOINT_HALT) on the IN endpoint
+    w.hid_out(request(proto::Command::kGetStatus));
+    w.hid_in(1);
+    w.setup(0x02, 1, 0, 0x81, 0);
+    w.hid_in(2);
+    w.setup(0xA1, 3, 0, 1, 6);  // DFU runtime GETSTATUS
+    w.op(Op::kBusReset);
+    ok &= write(dir, "usb_enumerate_hid", w);
+  }
+  {  // USB: armed in free-run, events on the IN endpoint between replies, then DFU_DETACH.
+    InputWriter w(kBoard4Permissive);
+    w.enumerate();
+    upload(w, 0, 3, code52());
+    select(w, 0);
+    w.raw_report(request(proto::Command::kSetTiming,
+                         proto::SetTimingRequest{100, 10'000, 0, {}}));
+    w.raw_report(request(proto::Command::kSetMode,
+                         proto::SetModeRequest{static_cast<std::uint8_t>(proto::SyncMode::kFreeRun),
+                                               0, {}}));
+    w.hid_out(request(proto::Command::kArm));
+    w.advance(35'000);
+    w.hid_out(request(proto::Command::kGetStatus));
+    w.hid_in(8);
+    w.setup(0x21, 0, 1000, 1, 0);  // DFU_DETACH
+    w.hid_in(2);
+    ok &= write(dir, "usb_events_detach", w);
+  }
+  {  // DFU mode: a good download, a corrupt one, then requests of every kind.
+    InputWriter w(kBoard3);
+    w.op(Op::kDfuDownload).u8(1).u16(9000).u8(0);
+    w.op(Op::kDfuDownload).u8(2).u16(3000).u8(2);
+    w.op(Op::kDfuSetup).u8(0x21).u8(4).u16(0).u16(0).u16(0);     // CLRSTATUS
+    w.op(Op::kDfuSetup).u8(0xA1).u8(2).u16(0).u16(0).u16(1024);  // UPLOAD
+    w.op(Op::kDfuSetup).u8(0x21).u8(6).u16(0).u16(0).u16(0);     // ABORT
+    w.op(Op::kDfuDownload).u8(3).u16(5000).u8(4);
+    ok &= write(dir, "dfu_sessions", w);
+  }
   return ok ? 0 : 1;
 }

@@ -221,6 +221,26 @@ TEST_F(UsbDeviceTest, EndpointHaltStallsTrafficUntilCleared) {
   EXPECT_EQ(proto::peek_header(*reply).status, static_cast<std::uint8_t>(proto::Status::kOk));
 }
 
+// Found by the fuzz target: CLEAR_FEATURE(HALT) on an IN endpoint that was not
+// halted dropped the queued reply in the controller while the HID interface
+// still waited for it to be taken, and SET_INTERFACE left OUT un-armed.
+TEST_F(UsbDeviceTest, UnhaltingAnEndpointThatWasNotHaltedLosesNothing) {
+  enumerate_or_fail(board_);
+  ASSERT_EQ(send_request(board_, proto::Command::kGetInfo, 7), OutResult::kAck);
+  ASSERT_TRUE(board_.usb().in_packet_waiting(0x81));
+  EXPECT_FALSE(request(0x02, 1, 0, 0x81, 0).stalled);  // CLEAR_FEATURE(halt), not halted
+  auto reply = read_report(board_);
+  ASSERT_TRUE(reply.has_value());
+  EXPECT_EQ(proto::peek_header(*reply).sequence, 7);
+  ASSERT_EQ(send_request(board_, proto::Command::kGetInfo, 8), OutResult::kAck);
+  EXPECT_FALSE(request(0x01, 11, 0, 0, 0).stalled);  // SET_INTERFACE(0, alt 0)
+  reply = read_report(board_);
+  ASSERT_TRUE(reply.has_value());
+  EXPECT_EQ(proto::peek_header(*reply).sequence, 8);
+  EXPECT_EQ(send_request(board_, proto::Command::kGetInfo, 9), OutResult::kAck);
+  EXPECT_EQ(proto::peek_header(*read_report(board_)).sequence, 9);
+}
+
 TEST_F(UsbDeviceTest, BusResetUnconfiguresAndTurnsLedsOff) {
   enumerate_or_fail(board_);
   Controller& c = *board_.controller();

@@ -48,13 +48,15 @@ void HidInterface::set_configured(bool configured) {
 }
 
 void HidInterface::bus_reset() {
-  // The host reset the bus: its transfers are void, and so are replies to them.
+  // The host reset the bus: its transfers are void, and so are replies to
+  // them. An exposure event taken from the queue is kept for the next
+  // configuration (events are not answers to anything).
   request_size_ = 0;
   reply_head_ = 0;
   reply_count_ = 0;
-  in_flight_valid_ = false;
+  if (reply_in_flight_) in_flight_valid_ = false;
   reply_in_flight_ = false;
-  resend_in_flight_ = false;
+  resend_in_flight_ = in_flight_valid_;
   idle_rate_ = 0;
 }
 
@@ -81,8 +83,9 @@ void HidInterface::in_complete(std::uint8_t address) {
 void HidInterface::endpoint_halt_changed(std::uint8_t address, bool halted) {
   if (address == in_address_) {
     in_halted_ = halted;
-    if (halted && in_busy_) {
-      // The controller dropped the packet: send it again after the halt.
+    if (in_busy_) {
+      // Halting and un-halting both drop the queued packet (set_stall): send
+      // it again once the endpoint is free.
       in_busy_ = false;
       resend_in_flight_ = in_flight_valid_;
     }

@@ -313,12 +313,10 @@ ControlReply UsbDevice::interface_request(const SetupPacket& setup) {
   if (!no_data(setup) || setup.value != 0) return ControlReply::stall();
   for (const EndpointConfig& ep : descriptors_.endpoints) {
     if (ep.interface != setup.index) continue;
-    const bool was_halted = endpoint_halted(ep.address);
-    controller_.set_stall(ep.address, false);
+    controller_.set_stall(ep.address, false);  // drops a queued packet, OUT left un-armed
     set_halt_flag(ep.address, false);
-    if (was_halted)
-      if (UsbFunction* f = function_of_endpoint(ep.address))
-        f->endpoint_halt_changed(ep.address, false);
+    if (UsbFunction* f = function_of_endpoint(ep.address))
+      f->endpoint_halt_changed(ep.address, false);
   }
   return ControlReply::status();
 }

@@ -59,7 +59,10 @@ class UsbFunction {
   }
   /// \brief The host took the packet on one of this interface's IN endpoints.
   virtual void in_complete(std::uint8_t address) { (void)address; }
-  /// \brief The host halted (`halted`) or un-halted one of this interface's endpoints.
+  /// \brief The host halted (`halted`) or un-halted one of this interface's
+  /// endpoints (CLEAR_FEATURE and SET_INTERFACE un-halt even an endpoint that
+  /// was not halted). Either way the controller dropped a packet queued on it
+  /// and left an OUT endpoint un-armed.
   virtual void endpoint_halt_changed(std::uint8_t address, bool halted) {
     (void)address;
     (void)halted;
