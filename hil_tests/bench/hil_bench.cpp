@@ -187,7 +187,7 @@ int main(int argc, char** argv) {
   // Event rate: rising strobe rates until an event is missed.
   {
     std::string best = "0";
-    for (int period_us : {2000, 1500, 1250, 1000, 800}) {
+    for (int period_us : {2000, 1000, 800, 600, 500, 400, 300, 200}) {
       const int n = std::max(200, 2'000'000 / period_us);  // about 2 s of strobes
       auto [rc, out] = run({HIL_HARNESS, "--strobes", std::to_string(n), "--strobe-width-us",
                             std::to_string(period_us / 4), "--strobe-period-us",
@@ -199,9 +199,10 @@ int main(int argc, char** argv) {
       std::cout << "strobes every " << period_us << " us: " << got << "/" << n
                 << " events, missing " << missing << ", " << rate << " events/s\n";
       if (rc != 0 || got != std::to_string(n) || missing != "0") break;
-      best = rate;
+      best = std::to_string(1'000'000 / period_us);  // the strobe rate, on the board's clock
     }
-    std::cout << "exposure events per second sustained without a gap: " << best << "\n";
+    std::cout << "exposure events per second sustained without a gap (strobe rate): " << best
+              << "\n";
     rows.push_back({"events_per_s_no_gap", best});
   }
 
