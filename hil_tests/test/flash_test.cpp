@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+#include <fstream>
 #include <random>
 
 #include "hil_run.hpp"
@@ -96,6 +98,31 @@ TEST(HilFlash, InterruptedFlashLeavesDfuModeAndASecondFlashSucceeds) {
   EXPECT_EQ(run.record.at("final").at("mode"), "application");
   EXPECT_EQ(run.record.at("final").at("bcd_device"), 0x0020);
   EXPECT_EQ(run.record.at("final").at("writes_below_app_region"), 0);
+}
+
+TEST(HilFlash, FlutterscanFlashWithoutAFileFlashesTheBuiltProductImage) {
+  // `flutterscan flash` with no file flashes the fw-stm32f405 image built with
+  // it; the board (running 0.0.9) ends up holding exactly that image's bytes.
+  const std::string bin = FLUTTERSCAN_FW_STM32F405_BIN;
+  if (!std::filesystem::exists(bin))
+    GTEST_SKIP() << "no fw-stm32f405 build at " << bin << " (make fw-stm32f405; make test does)";
+  const auto dir = make_work_dir("cli_flash_default");
+  const auto run = run_harness({"--firmware-version", "0.0.9", "--timeout-s", "120"},
+                               {FLUTTERSCAN_BINARY, "flash"}, dir);
+  if (run.exit_code == 77) GTEST_SKIP() << run.output;
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  std::ifstream in(bin, std::ios::binary);
+  std::vector<unsigned char> head(64);
+  in.read(reinterpret_cast<char*>(head.data()), 64);
+  std::string hex;
+  char b[3];
+  for (unsigned char v : head) {
+    std::snprintf(b, sizeof b, "%02x", v);
+    hex += b;
+  }
+  EXPECT_EQ(run.record.at("final").at("app_region_head"), hex);
+  EXPECT_EQ(run.record.at("final").at("mode"), "application");
+  EXPECT_NE(run.record.at("final").at("bcd_device"), 0x0009);
 }
 
 class HilFlashRefused : public ::testing::TestWithParam<std::vector<std::string>> {};
