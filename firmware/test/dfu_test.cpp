@@ -31,6 +31,8 @@ class DfuTest : public ::testing::Test {
       EXPECT_EQ(board_.flash().erase_count(sector), 0) << "sector " << sector;
       EXPECT_EQ(board_.flash().program_count(sector), 0) << "sector " << sector;
     }
+    // Every control transfer since the last reset was answered as the seam requires.
+    EXPECT_EQ(board_.usb().ep0_protocol_errors(), 0);
   }
 
   std::vector<std::uint8_t> region(std::size_t size) {

@@ -43,6 +43,11 @@ ControlResult SimUsbController::control_transfer(std::span<const std::uint8_t, 8
       return result;
     case Ep0Answer::kTransmit:
       if (!setup.is_in()) ++ep0_protocol_errors_;
+      // A zero-length packet must end a data stage shorter than wLength that
+      // is a multiple of the packet size (the host would wait for more), and only then.
+      if (ep0_zero_length_end_ !=
+          (ep0_in_.size() < setup.length && ep0_in_.size() % usb::kEp0MaxPacket == 0))
+        ++ep0_protocol_errors_;
       result.data.assign(ep0_in_.begin(),
                          ep0_in_.begin() + static_cast<std::ptrdiff_t>(std::min<std::size_t>(
                                                ep0_in_.size(), setup.length)));
@@ -171,7 +176,7 @@ void SimUsbController::answer(Ep0Answer answer) {
 }
 
 void SimUsbController::ep0_transmit(std::span<const std::uint8_t> data, bool zero_length_end) {
-  (void)zero_length_end;  // packetising is invisible at this level
+  ep0_zero_length_end_ = zero_length_end;
   ep0_in_.assign(data.begin(), data.end());
   answer(Ep0Answer::kTransmit);
 }

@@ -63,7 +63,8 @@ class SimUsbController final : public usb::UsbDeviceController {
   /// \brief A packet is waiting on IN endpoint `address`.
   bool in_packet_waiting(std::uint8_t address) const;
   /// \brief Control transfers the device answered in a way the seam forbids
-  /// (no answer, two answers, wrong direction): should stay 0.
+  /// (no answer, two answers, wrong direction, a wrong zero-length-packet
+  /// decision): should stay 0.
   int ep0_protocol_errors() const { return ep0_protocol_errors_; }
 
   // UsbDeviceController ---------------------------------------------------------
@@ -99,6 +100,7 @@ class SimUsbController final : public usb::UsbDeviceController {
   Ep0Answer ep0_answer_ = Ep0Answer::kNone;
   int ep0_answers_ = 0;
   std::vector<std::uint8_t> ep0_in_;
+  bool ep0_zero_length_end_ = false;
   std::span<std::uint8_t> ep0_out_buffer_;
   int ep0_protocol_errors_ = 0;
 };
