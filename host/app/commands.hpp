@@ -17,6 +17,8 @@ void add_simulate(CLI::App& app);
 void add_deblur(CLI::App& app);
 /// \brief `flutterscan bench` (bench.cpp).
 void add_bench(CLI::App& app);
+/// \brief `flutterscan calibrate ...` (calibrate.cpp).
+void add_calibrate(CLI::App& app);
 /// \brief `flutterscan devices` (devices.cpp).
 void add_devices(CLI::App& app);
 /// \brief `flutterscan device ...` (device.cpp, device_*.cpp).

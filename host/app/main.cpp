@@ -18,6 +18,7 @@ int main(int argc, char** argv) {
   add_simulate(app);
   add_deblur(app);
   add_bench(app);
+  add_calibrate(app);
   add_scan(app);
   add_demo(app);
   add_cameras(app);

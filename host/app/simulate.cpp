@@ -20,6 +20,7 @@ namespace {
 struct SimulateOptions {
   std::string scene;
   std::string code;
+  int leds = 0;  ///< 0: from the code (0s and 1s: one LED, else three)
   double blur = 52;
   std::string direction = "+x";
   double electrons = 3000;
@@ -46,8 +47,12 @@ void require(bool ok, const std::string& message) {
 
 imaging::CaptureModel capture_model(const SimulateOptions& o) {
   imaging::CaptureModel m;
-  const LedCode code = parse_code_argument(o.code, 0, false);
-  require(std::isfinite(o.electrons) && o.electrons > 0, "--electrons must be a finite number > 0");
+  const LedCode code = parse_code_argument(o.code, o.leds, false);
+  require(code.leds() == 1 || code.leds() == 3,
+          "the simulated cameras are mono (one LED) or RGB (three LEDs), not " +
+              std::to_string(code.leds()) + " LEDs");
+  require(std::isfinite(o.electrons) && o.electrons >= 0,
+          "--electrons must be a finite number >= 0 (0: a dark frame)");
   require(std::isfinite(o.cap) && o.cap > 0, "--cap must be a finite number > 0");
   require(std::isfinite(o.ambient) && o.ambient >= 0, "--ambient must be a finite number >= 0");
   m.code = code;
@@ -128,6 +133,11 @@ void add_simulate(CLI::App& app) {
           "flat:REFLECTANCE (a calibration target)")
       ->required();
   command->add_option("--code", o->code, "LED code: digits or a library name")->required();
+  command
+      ->add_option("--leds", o->leds,
+                   "LEDs the code drives, 1 (mono camera) or 3 (RGB); default: 1 for codes of 0s "
+                   "and 1s, else 3 (give 3 for one LED alone on an RGB camera: 1111...)")
+      ->check(CLI::IsMember({1, 3}));
   command->add_option("--blur", o->blur, "motion during the exposure, pixels")
       ->capture_default_str();
   command->add_option("--direction", o->direction, "+x, -x, +y or -y")->capture_default_str();

@@ -648,4 +648,124 @@ TEST_F(ImagingCliTest, BenchSpeedHasHelp) {
   EXPECT_TRUE(contains(result.out, "--json")) << result;
 }
 
+// -- flutterscan calibrate ----------------------------------------------------
+
+class CalibrateCliTest : public CliTest {
+ protected:
+  /// Simulates a 200x120 frame of `scene` under `code` into dir_/NAME.png (+ .json).
+  std::string simulate(const std::string& name, const std::string& scene, const std::string& code,
+                       const std::string& electrons, const std::string& blur, int seed,
+                       const std::string& width = "200") {
+    const std::string path = (dir_ / (name + ".png")).string();
+    const RunResult result = run({"simulate",
+                                  "--scene",
+                                  scene,
+                                  "--code",
+                                  code,
+                                  "--leds",
+                                  "3",
+                                  "--electrons",
+                                  electrons,
+                                  "--blur",
+                                  blur,
+                                  "--crosstalk",
+                                  kCrosstalk,
+                                  "--width",
+                                  width,
+                                  "--height",
+                                  "120",
+                                  "--seed",
+                                  std::to_string(seed),
+                                  "-o",
+                                  path});
+    EXPECT_EQ(result.exit_code, 0) << result;
+    return path;
+  }
+  std::string config() const { return (dir_ / "line3.toml").string(); }
+  void write_config() const {
+    std::ofstream(config()) << "# line 3\n[optics]\npx_per_count = 0.5 # from the drawing\n";
+  }
+};
+
+TEST_F(CalibrateCliTest, CrosstalkRecoversTheMatrixAndWritesTheConfig) {
+  const std::string dark = simulate("dark", "flat:0.9", std::string(52, '7'), "0", "1", 1);
+  std::vector<std::string> leds;
+  for (char digit : {'1', '2', '4'})
+    leds.push_back(simulate(std::string("led") + digit, "flat:0.9", std::string(52, digit), "3000",
+                            "1", digit));
+  write_config();
+  const RunResult result = run({"calibrate", "crosstalk", "--dark", dark, "--led", leds[0], leds[1],
+                                leds[2], "--config", config(), "--json"});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  const json report = json::parse(result.out.substr(0, result.out.find('\n')));
+  const double truth[3][3] = {{0.90, 0.08, 0.01}, {0.10, 0.85, 0.12}, {0.01, 0.07, 0.88}};
+  for (int k = 0; k < 3; ++k) {
+    const double column = truth[0][k] + truth[1][k] + truth[2][k];
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(report["crosstalk"][c][k].get<double>(), truth[c][k] / column, 0.01)
+          << c << "," << k;
+  }
+  EXPECT_LT(report["condition_number"].get<double>(), 2.0);
+  const std::string written = read_file(config());
+  EXPECT_TRUE(contains(written, "# line 3")) << written;
+  EXPECT_TRUE(contains(written, "px_per_count = 0.5 # from the drawing")) << written;
+  EXPECT_TRUE(contains(written, "crosstalk = [[0.89")) << written;
+  EXPECT_TRUE(contains(written, "black_level_dn = 64")) << written;
+  // Bad input: frames of different sizes, a missing file.
+  const std::string small = (dir_ / "small.png").string();
+  ASSERT_EQ(run({"simulate", "--scene", "flat:0.9", "--code", std::string(52, '1'), "--leds", "3",
+                 "--width", "100", "--height", "60", "-o", small})
+                .exit_code,
+            0);
+  expect_usage_error({"calibrate", "crosstalk", "--dark", dark, "--led", small},
+                     {"LED 0", "dark frame"});
+  expect_usage_error({"calibrate", "crosstalk", "--dark", dark, "--led", "missing.png"},
+                     {"missing.png"});
+}
+
+TEST_F(CalibrateCliTest, NoiseRecoversGainAndReadNoise) {
+  std::vector<std::string> args = {"calibrate",
+                                   "noise",
+                                   "--json",
+                                   "--dark",
+                                   simulate("d0", "flat:1", "rect-white", "0", "1", 11),
+                                   simulate("d1", "flat:1", "rect-white", "0", "1", 12)};
+  int seed = 20;
+  for (const char* level : {"500", "2000", "5000", "8000"}) {
+    args.emplace_back("--flat");
+    for (int i = 0; i < 2; ++i)
+      args.push_back(simulate(std::string("f") + level + std::to_string(i), "flat:1", "rect-white",
+                              level, "1", ++seed));
+  }
+  const RunResult result = run(args);
+  ASSERT_EQ(result.exit_code, 0) << result;
+  const json report = json::parse(result.out.substr(0, result.out.find('\n')));
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(report["gain_e_per_dn"][c].get<double>(), 12000.0 / 4095.0, 0.03 * 2.93) << c;
+    EXPECT_NEAR(report["read_noise_e"][c].get<double>(), 4.0, 0.4) << c;
+  }
+  expect_usage_error({"calibrate", "noise", "--dark", args[4], args[5], "--flat", args[7], args[8]},
+                     {"two or more --flat pairs"});
+}
+
+TEST_F(CalibrateCliTest, SpeedGivesPixelsPerEncoderCount) {
+  const std::string slow = simulate("slow", "code128:S1", "found-mse", "3000", "40", 3, "420");
+  const std::string fast = simulate("fast", "code128:S2", "found-mse", "3000", "52.5", 4, "420");
+  write_config();
+  const RunResult result =
+      run({"calibrate", "speed", slow, fast, "--encoder-counts", "80", "105", "--min-blur", "20",
+           "--max-blur", "80", "--config", config(), "--json"});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  const json report = json::parse(result.out.substr(0, result.out.find('\n')));
+  EXPECT_NEAR(report["frames"][0]["blur_px"].get<double>(), 40.0, 0.25);
+  EXPECT_NEAR(report["frames"][1]["blur_px"].get<double>(), 52.5, 0.25);
+  EXPECT_NEAR(report["px_per_count"].get<double>(), 0.5, 0.005);
+  EXPECT_TRUE(contains(read_file(config()), "px_per_count = 0.5")) << read_file(config());
+  EXPECT_FALSE(contains(read_file(config()), "from the drawing"));
+  expect_usage_error({"calibrate", "speed", slow, fast, "--encoder-counts", "80"},
+                     {"one count per frame"});
+  fs::remove(dir_ / "slow.json");
+  expect_usage_error({"calibrate", "speed", slow}, {"slow.png", "descriptor"});
+}
+
 }  // namespace

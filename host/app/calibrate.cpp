@@ -1,0 +1,315 @@
+// `flutterscan calibrate crosstalk | noise | speed`: the capture model's
+// calibrations from frames on disk (white target frames, flat pairs, coded
+// frames of a moving target), printed and optionally written into the [optics]
+// table of a session config (--config FILE, comments and other keys kept).
+// The algorithms live in host/imaging (crosstalk_calibration, photon_transfer,
+// blur_estimate); docs/calibration.md says how to take the frames.
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <memory>
+#include <sstream>
+
+#include "app/cli_errors.hpp"
+#include "app/commands.hpp"
+#include "app/config_patch.hpp"
+#include "app/image_io.hpp"
+#include "imaging/blur_estimate.hpp"
+#include "imaging/capture_descriptor.hpp"
+#include "imaging/crosstalk_calibration.hpp"
+#include "imaging/frame_conversion.hpp"
+#include "imaging/photon_transfer.hpp"
+
+namespace flutterscan::app {
+namespace {
+
+struct CommonFlags {
+  int bit_depth = 12;
+  std::string config;
+  bool json = false;
+};
+
+imaging::Image load(const std::string& path) {
+  auto frame = read_frame(path);
+  if (!frame.ok()) throw UsageError(frame.error());
+  return std::move(frame.value().dn);
+}
+
+double full_scale(const CommonFlags& f) {
+  return std::pow(2.0, f.bit_depth) - 1;
+}
+
+/// Writes `values` into the [optics] table of the config file, atomically.
+void update_config(const CommonFlags& f, const std::string& what,
+                   const std::vector<std::pair<std::string, std::string>>& values) {
+  if (f.config.empty()) return;
+  std::string text;
+  if (std::filesystem::exists(f.config)) {
+    std::ifstream in(f.config);
+    if (!in) throw UsageError("cannot read the config '" + f.config + "'");
+    std::stringstream buffer;
+    buffer << in.rdbuf();
+    text = buffer.str();
+  }
+  const std::string patched =
+      patch_toml_table(text, "optics", values, "flutterscan calibrate " + what);
+  if (auto error = write_text(f.config, patched); !error.empty()) throw RuntimeFailure(error);
+  if (!f.json) std::cout << "wrote [optics] of " << f.config << "\n";
+}
+
+void add_common(CLI::App* command, CommonFlags& f) {
+  command->add_option("--bit-depth", f.bit_depth, "significant bits per sample of the frames")
+      ->check(CLI::Range(8, 16))
+      ->capture_default_str();
+  command->add_option("--config", f.config,
+                      "session config (TOML) whose [optics] table receives the results");
+  command->add_flag("--json", f.json, "print one JSON object");
+}
+
+// -- crosstalk ---------------------------------------------------------------
+
+struct CrosstalkFlags : CommonFlags {
+  std::string dark;
+  std::vector<std::string> leds;
+};
+
+void run_crosstalk(const CrosstalkFlags& f) {
+  const imaging::Image dark = load(f.dark);
+  std::vector<imaging::Image> lit;
+  for (const auto& path : f.leds) lit.push_back(load(path));
+  const auto result = imaging::calibrate_crosstalk(dark, lit, full_scale(f));
+  if (!result.ok()) throw UsageError(result.error());
+  const auto& cal = result.value();
+  if (f.json) {
+    nlohmann::json matrix = nlohmann::json::array();
+    for (int c = 0; c < cal.channels; ++c) {
+      nlohmann::json row = nlohmann::json::array();
+      for (int k = 0; k < cal.leds; ++k)
+        row.push_back(cal.crosstalk[static_cast<std::size_t>(c * cal.leds + k)]);
+      matrix.push_back(row);
+    }
+    std::cout << nlohmann::json{{"crosstalk", matrix},
+                                {"led_strength_dn", cal.led_strength_dn},
+                                {"black_level_dn", cal.black_level_dn},
+                                {"channel_gain", cal.channel_gain},
+                                {"condition_number", cal.condition_number},
+                                {"warning", cal.warning}}
+                     .dump()
+              << "\n";
+  } else {
+    std::printf("crosstalk M (rows: camera channels, columns: LEDs; each column sums to 1)\n");
+    for (int c = 0; c < cal.channels; ++c) {
+      std::printf("  ");
+      for (int k = 0; k < cal.leds; ++k)
+        std::printf(" %7.4f", cal.crosstalk[static_cast<std::size_t>(c * cal.leds + k)]);
+      std::printf("\n");
+    }
+    std::printf("LED strengths (DN over all channels):");
+    for (double v : cal.led_strength_dn) std::printf(" %.1f", v);
+    std::printf("\nblack levels (DN):");
+    for (double v : cal.black_level_dn) std::printf(" %.2f", v);
+    std::printf("\nchannel gains (relative):");
+    for (double v : cal.channel_gain) std::printf(" %.3f", v);
+    std::printf("\ncondition number of M: %.2f\n", cal.condition_number);
+    if (!cal.warning.empty()) std::cerr << "warning: " << cal.warning << "\n";
+  }
+  double black = 0;
+  for (double v : cal.black_level_dn) black += v / static_cast<double>(cal.black_level_dn.size());
+  update_config(f, "crosstalk",
+                {{"crosstalk", toml_number_matrix(cal.crosstalk, cal.channels)},
+                 {"black_level_dn", toml_number(black)}});
+}
+
+// -- noise -------------------------------------------------------------------
+
+struct NoiseFlags : CommonFlags {
+  std::vector<std::string> dark;
+  std::vector<std::string> flats;  ///< pairs, in order
+};
+
+void run_noise(const NoiseFlags& f) {
+  if (f.dark.size() != 2) throw UsageError("--dark takes two frames (a pair without light)");
+  if (f.flats.size() < 4 || f.flats.size() % 2 != 0)
+    throw UsageError("give two or more --flat pairs (two frames each), at different light levels");
+  const imaging::FlatPair dark{load(f.dark[0]), load(f.dark[1])};
+  std::vector<imaging::FlatPair> flats;
+  for (std::size_t i = 0; i < f.flats.size(); i += 2)
+    flats.push_back({load(f.flats[i]), load(f.flats[i + 1])});
+  const auto result = imaging::photon_transfer(dark, flats, full_scale(f));
+  if (!result.ok()) throw UsageError(result.error());
+  const auto& ptc = result.value();
+  double gain = 0, read_noise = 0;
+  const auto channels = static_cast<double>(ptc.gain_e_per_dn.size());
+  for (std::size_t c = 0; c < ptc.gain_e_per_dn.size(); ++c) {
+    gain += ptc.gain_e_per_dn[c] / channels;
+    read_noise += ptc.read_noise_e[c] / channels;
+  }
+  if (f.json) {
+    nlohmann::json points = nlohmann::json::array();
+    for (const auto& channel : ptc.points) {
+      nlohmann::json list = nlohmann::json::array();
+      for (const auto& p : channel)
+        list.push_back(
+            {{"mean_dn", p.mean_dn}, {"variance_dn2", p.variance_dn2}, {"fitted", p.fitted}});
+      points.push_back(list);
+    }
+    std::cout << nlohmann::json{{"gain_e_per_dn", ptc.gain_e_per_dn},
+                                {"read_noise_e", ptc.read_noise_e},
+                                {"black_level_dn", ptc.black_level_dn},
+                                {"points", points}}
+                     .dump()
+              << "\n";
+  } else {
+    for (std::size_t c = 0; c < ptc.gain_e_per_dn.size(); ++c)
+      std::printf(
+          "channel %zu: gain %.4f e-/DN, read noise %.2f e-, black level %.2f DN (%d of %zu "
+          "levels fitted)\n",
+          c, ptc.gain_e_per_dn[c], ptc.read_noise_e[c], ptc.black_level_dn[c],
+          static_cast<int>(std::count_if(ptc.points[c].begin(), ptc.points[c].end(),
+                                         [](const auto& p) { return p.fitted; })),
+          ptc.points[c].size());
+  }
+  update_config(f, "noise",
+                {{"gain_e_per_dn", toml_number(gain)}, {"read_noise_e", toml_number(read_noise)}});
+}
+
+// -- speed -------------------------------------------------------------------
+
+struct SpeedFlags : CommonFlags {
+  std::vector<std::string> frames;
+  std::vector<double> encoder_counts;
+  double min_blur = 4, max_blur = 200;
+};
+
+void run_speed(const SpeedFlags& f) {
+  if (!f.encoder_counts.empty() && f.encoder_counts.size() != f.frames.size())
+    throw UsageError("--encoder-counts needs one count per frame (" +
+                     std::to_string(f.frames.size()) + " frames, " +
+                     std::to_string(f.encoder_counts.size()) + " counts)");
+  if (!(f.max_blur > f.min_blur)) throw UsageError("--max-blur must exceed --min-blur");
+  nlohmann::json per_frame = nlohmann::json::array();
+  double weighted_ratio = 0, weights = 0, blur_sum = 0, blur_weights = 0;
+  for (std::size_t i = 0; i < f.frames.size(); ++i) {
+    const std::string descriptor_path = sibling_path(f.frames[i], "", ".json");
+    const auto descriptor = read_json(descriptor_path);
+    if (!descriptor.ok())
+      throw UsageError("frame '" + f.frames[i] +
+                       "' needs its capture descriptor: " + descriptor.error());
+    auto model = imaging::from_descriptor(descriptor.value());
+    if (!model.ok()) throw UsageError("descriptor '" + descriptor_path + "': " + model.error());
+    const auto frame = read_frame(f.frames[i]);
+    if (!frame.ok()) throw UsageError(frame.error());
+    const auto electrons = imaging::dn_to_electrons(frame.value().dn, model.value());
+    const auto estimate = imaging::estimate_blur(electrons, model.value(), f.min_blur, f.max_blur);
+    if (!estimate.ok()) throw UsageError("'" + f.frames[i] + "': " + estimate.error());
+    const auto& e = estimate.value();
+    nlohmann::json entry = {{"frame", f.frames[i]}, {"blur_px", e.blur_px}};
+    const bool confident = std::isfinite(e.standard_error_px);
+    entry["standard_error_px"] = confident ? nlohmann::json(e.standard_error_px) : nlohmann::json();
+    if (confident) {
+      const double w = 1.0 / std::max(1e-6, e.standard_error_px * e.standard_error_px);
+      blur_sum += w * e.blur_px;
+      blur_weights += w;
+      if (!f.encoder_counts.empty() && f.encoder_counts[i] != 0) {
+        // px per count = blur / counts; its variance (se / counts)^2.
+        const double counts = f.encoder_counts[i];
+        const double wr = counts * counts * w;
+        weighted_ratio += wr * e.blur_px / counts;
+        weights += wr;
+      }
+    }
+    per_frame.push_back(entry);
+    if (!f.json) {
+      if (confident)
+        std::printf("%s: blur %.3f px +- %.3f (residual %.2f of the noise)\n", f.frames[i].c_str(),
+                    e.blur_px, e.standard_error_px, e.residual_per_sample);
+      else
+        std::printf("%s: no estimate (the frame has too few edges along the motion)\n",
+                    f.frames[i].c_str());
+    }
+  }
+  if (blur_weights == 0)
+    throw UsageError(
+        "no frame gave a confident blur estimate: use frames of a textured target "
+        "(a label) moving along the belt");
+  nlohmann::json report = {{"frames", per_frame},
+                           {"blur_px", blur_sum / blur_weights},
+                           {"blur_standard_error_px", 1 / std::sqrt(blur_weights)}};
+  if (weights > 0) {
+    report["px_per_count"] = weighted_ratio / weights;
+    report["px_per_count_standard_error"] = 1 / std::sqrt(weights);
+  }
+  if (f.json) {
+    std::cout << report.dump() << "\n";
+  } else {
+    std::printf("blur %.3f px +- %.3f over %zu frames\n", blur_sum / blur_weights,
+                1 / std::sqrt(blur_weights), f.frames.size());
+    if (weights > 0)
+      std::printf("pixels per encoder count %.5f +- %.5f\n", weighted_ratio / weights,
+                  1 / std::sqrt(weights));
+  }
+  if (weights > 0)
+    update_config(f, "speed", {{"px_per_count", toml_number(weighted_ratio / weights)}});
+  else if (!f.config.empty())
+    throw UsageError(
+        "--config needs --encoder-counts: without them there is no px_per_count to write");
+}
+
+}  // namespace
+
+void add_calibrate(CLI::App& app) {
+  CLI::App* calibrate = app.add_subcommand(
+      "calibrate", "Measure the capture model: crosstalk, noise, speed (docs/calibration.md)");
+  calibrate->require_subcommand(1);
+
+  auto xf = std::make_shared<CrosstalkFlags>();
+  CLI::App* crosstalk = calibrate->add_subcommand(
+      "crosstalk", "LED-to-channel matrix, black levels and channel gains from a white target");
+  crosstalk->add_option("--dark", xf->dark, "frame of the white target with every LED off")
+      ->required()
+      ->check(CLI::ExistingFile);
+  crosstalk
+      ->add_option("--led", xf->leds, "one frame per LED lit alone (codes 1111.., 2222.., 4444..)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  add_common(crosstalk, *xf);
+  crosstalk->callback([xf] { run_crosstalk(*xf); });
+
+  auto nf = std::make_shared<NoiseFlags>();
+  CLI::App* noise = calibrate->add_subcommand(
+      "noise", "Gain (e-/DN) and read noise (e-) by photon transfer (EMVA 1288 style)");
+  noise->add_option("--dark", nf->dark, "two frames without light")
+      ->required()
+      ->expected(2)
+      ->check(CLI::ExistingFile);
+  noise
+      ->add_option("--flat", nf->flats,
+                   "two frames of a flat target at one light level; repeat per level")
+      ->required()
+      ->expected(2)
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
+      ->check(CLI::ExistingFile);
+  add_common(noise, *nf);
+  noise->callback([nf] { run_noise(*nf); });
+
+  auto sf = std::make_shared<SpeedFlags>();
+  CLI::App* speed = calibrate->add_subcommand(
+      "speed", "Blur length from coded frames of a moving target, and pixels per encoder count");
+  speed->add_option("frames", sf->frames, "coded frames, each with its descriptor (FRAME.json)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  speed->add_option("--encoder-counts", sf->encoder_counts,
+                    "encoder counts during each frame's exposure (one per frame)");
+  speed->add_option("--min-blur", sf->min_blur, "shortest blur searched, px")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  speed->add_option("--max-blur", sf->max_blur, "longest blur searched, px")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  add_common(speed, *sf);
+  speed->callback([sf] { run_speed(*sf); });
+}
+
+}  // namespace flutterscan::app
