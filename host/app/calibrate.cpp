@@ -19,6 +19,7 @@
 #include "imaging/blur_estimate.hpp"
 #include "imaging/capture_descriptor.hpp"
 #include "imaging/crosstalk_calibration.hpp"
+#include "imaging/flat_field.hpp"
 #include "imaging/frame_conversion.hpp"
 #include "imaging/photon_transfer.hpp"
 
@@ -120,6 +121,55 @@ void run_crosstalk(const CrosstalkFlags& f) {
   update_config(f, "crosstalk",
                 {{"crosstalk", toml_number_matrix(cal.crosstalk, cal.channels)},
                  {"black_level_dn", toml_number(black)}});
+}
+
+// -- flat --------------------------------------------------------------------
+
+struct FlatFlags : CommonFlags {
+  std::string dark;
+  std::vector<std::string> leds;
+  std::string grid = "8x6";
+  std::string output;
+};
+
+void run_flat(const FlatFlags& f) {
+  int tiles_x = 0, tiles_y = 0;
+  char separator = 0;
+  std::istringstream grid(f.grid);
+  if (!(grid >> tiles_x >> separator >> tiles_y) || separator != 'x' || !grid.eof())
+    throw UsageError("--grid must be COLUMNSxROWS, e.g. 8x6, not '" + f.grid + "'");
+  const imaging::Image dark = load(f.dark);
+  std::vector<imaging::Image> lit;
+  for (const auto& path : f.leds) lit.push_back(load(path));
+  const auto flat = imaging::measure_flat_field(dark, lit, tiles_x, tiles_y, full_scale(f));
+  if (!flat.ok()) throw UsageError(flat.error());
+  if (auto error = write_text(f.output, imaging::flat_field_to_json(flat.value()).dump(1) + "\n");
+      !error.empty())
+    throw RuntimeFailure(error);
+  const auto& v = flat.value();
+  if (f.json) {
+    std::cout << nlohmann::json{{"output", f.output},
+                                {"tiles", {v.tiles_x, v.tiles_y}},
+                                {"largest_deviation", v.largest_deviation}}
+                     .dump()
+              << "\n";
+  } else {
+    std::printf("wrote %s: %dx%d tiles; the light varies by up to %.1f%% across the field\n",
+                f.output.c_str(), v.tiles_x, v.tiles_y, 100 * v.largest_deviation);
+    for (int k = 0; k < v.leds; ++k) {
+      std::printf("LED %d, relative to its median (rows of tiles):\n", k);
+      const auto d = static_cast<std::size_t>(k * v.leds + k);
+      for (int ty = 0; ty < v.tiles_y; ++ty) {
+        std::printf("  ");
+        for (int tx = 0; tx < v.tiles_x; ++tx)
+          std::printf(" %5.3f", v.mixing[static_cast<std::size_t>(ty * v.tiles_x + tx) *
+                                             static_cast<std::size_t>(v.leds * v.leds) +
+                                         d] /
+                                    v.reference[d]);
+        std::printf("\n");
+      }
+    }
+  }
 }
 
 // -- noise -------------------------------------------------------------------
@@ -276,6 +326,23 @@ void add_calibrate(CLI::App& app) {
       ->check(CLI::ExistingFile);
   add_common(crosstalk, *xf);
   crosstalk->callback([xf] { run_crosstalk(*xf); });
+
+  auto ff = std::make_shared<FlatFlags>();
+  CLI::App* flat = calibrate->add_subcommand(
+      "flat", "Illumination and crosstalk per region of the field of view from a white target");
+  flat->add_option("--dark", ff->dark, "frame of the white target with every LED off")
+      ->required()
+      ->check(CLI::ExistingFile);
+  flat->add_option("--led", ff->leds, "one frame per LED lit alone (codes 1111.., 2222.., 4444..)")
+      ->required()
+      ->check(CLI::ExistingFile);
+  flat->add_option("--grid", ff->grid, "tiles across x down")->capture_default_str();
+  flat->add_option("-o,--output", ff->output, "flat-field file to write (JSON)")->required();
+  flat->add_option("--bit-depth", ff->bit_depth, "significant bits per sample of the frames")
+      ->check(CLI::Range(8, 16))
+      ->capture_default_str();
+  flat->add_flag("--json", ff->json, "print one JSON object");
+  flat->callback([ff] { run_flat(*ff); });
 
   auto nf = std::make_shared<NoiseFlags>();
   CLI::App* noise = calibrate->add_subcommand(

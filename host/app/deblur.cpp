@@ -18,6 +18,7 @@
 #include "imaging/bayer.hpp"
 #include "imaging/capture_descriptor.hpp"
 #include "imaging/deblur.hpp"
+#include "imaging/flat_field.hpp"
 #include "imaging/frame_conversion.hpp"
 #include "imaging/metrics.hpp"
 #include "sim/scene.hpp"
@@ -44,6 +45,7 @@ struct DeblurFlags {
   bool decode = false;
   bool json = false;
   std::string truth;  ///< ground truth (reflectance x 65535) to score against
+  std::string flat;   ///< flat-field file (calibrate flat)
 };
 
 double elapsed_ms(std::chrono::steady_clock::time_point since) {
@@ -194,7 +196,16 @@ void run(const DeblurFlags& f) {
   if (f.iterations > 0) options.iterations = f.iterations;
   if (f.edge_prior == "l0") options.edge_prior = imaging::EdgePrior::kL0Gradient;
   options.threads = f.threads;
-  const imaging::Image electrons = imaging::dn_to_electrons(frame.value().dn, model);
+  imaging::Image electrons = imaging::dn_to_electrons(frame.value().dn, model);
+  if (!f.flat.empty()) {
+    if (model.bayer_rggb) throw UsageError("--flat works on RGB frames, not raw Bayer mosaics");
+    const auto json = read_json(f.flat);
+    if (!json.ok()) throw UsageError(json.error());
+    const auto flat = imaging::flat_field_from_json(json.value());
+    if (!flat.ok()) throw UsageError("flat field '" + f.flat + "': " + flat.error());
+    if (auto error = imaging::apply_flat_field(electrons, flat.value()); !error.empty())
+      throw UsageError("flat field '" + f.flat + "': " + error);
+  }
   const auto result =
       model.bayer_rggb ? imaging::deblur_bayer(electrons.channels[0], model, options, *bayer_mode)
                        : imaging::deblur(electrons, model, options);
@@ -294,6 +305,9 @@ void add_deblur(CLI::App& app) {
       ->capture_default_str();
   command->add_option("-o,--output", f->output, "16-bit grey PNG to write")->required();
   command->add_flag("--decode", f->decode, "also decode the barcodes on the result");
+  command->add_option("--flat", f->flat,
+                      "flat-field file (`calibrate flat`): corrects light that varies across the "
+                      "field of view before deblurring");
   command->add_option("--truth", f->truth,
                       "ground truth to score against (16-bit grey PNG of reflectance, as "
                       "`simulate` writes): prints PSNR and SSIM over design.md's region");

@@ -723,6 +723,39 @@ TEST_F(CalibrateCliTest, CrosstalkRecoversTheMatrixAndWritesTheConfig) {
                      {"missing.png"});
 }
 
+TEST_F(CalibrateCliTest, FlatWritesAFlatFieldThatDeblurUses) {
+  const std::string dark = simulate("dark", "flat:0.9", std::string(52, '7'), "0", "1", 1);
+  std::vector<std::string> leds;
+  for (char digit : {'1', '2', '4'})
+    leds.push_back(simulate(std::string("led") + digit, "flat:0.9", std::string(52, digit), "3000",
+                            "1", digit));
+  const std::string flat = (dir_ / "flat.json").string();
+  const RunResult result = run({"calibrate", "flat", "--dark", dark, "--led", leds[0], leds[1],
+                                leds[2], "--grid", "4x3", "-o", flat, "--json"});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  const json file = json::parse(read_file(flat));
+  EXPECT_EQ(file["format"], "flutterscan-flat-field");
+  EXPECT_EQ(file["tiles"][0], 4);
+  EXPECT_LT(file["largest_deviation"].get<double>(), 0.02);  // the simulator's light is uniform
+  // A frame of the calibrated size deblurs with it; another size is refused by name.
+  const std::string frame = simulate("frame", "flat:0.5", "found-mse", "3000", "20", 2);
+  EXPECT_EQ(run({"deblur", frame, "--descriptor", (dir_ / "frame.json").string(), "--flat", flat,
+                 "-o", (dir_ / "sharp.png").string()})
+                .exit_code,
+            0);
+  const std::string big = (dir_ / "big.png").string();
+  ASSERT_EQ(run({"simulate", "--scene", "flat:0.5", "--code", "found-mse", "--width", "300",
+                 "--height", "120", "-o", big})
+                .exit_code,
+            0);
+  expect_usage_error({"deblur", big, "--descriptor", (dir_ / "big.json").string(), "--flat", flat,
+                      "-o", (dir_ / "sharp.png").string()},
+                     {"flat field", "200x120"});
+  expect_usage_error({"calibrate", "flat", "--dark", dark, "--led", leds[0], leds[1], leds[2],
+                      "--grid", "4by3", "-o", flat},
+                     {"--grid"});
+}
+
 TEST_F(CalibrateCliTest, NoiseRecoversGainAndReadNoise) {
   std::vector<std::string> args = {"calibrate",
                                    "noise",
