@@ -99,6 +99,7 @@ int main(int argc, char** argv) {
   std::vector<std::string> method_names = {"joint-wiener", "rl", "tv"};
   std::string csv_path, chart_path;
   double print_blur = 0, texture = 0;
+  double tv_kappa = imaging::DeblurOptions{}.tv_weight_per_noise;
   CLI::App app{"Accuracy of every capture scheme and method: PSNR, SSIM, barcode decode rate"};
   app.add_option("--electrons", light, "light levels E, e- per channel (comma-separated)")
       ->delimiter(',')
@@ -128,6 +129,9 @@ int main(int argc, char** argv) {
       ->check(CLI::NonNegativeNumber);
   app.add_option("--texture", texture, "weathered print: paper and toner texture (0..1)")
       ->check(CLI::Range(0.0, 1.0));
+  app.add_option("--tv-kappa", tv_kappa, "tv: prior weight per unit of noise (kappa)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
   app.add_flag("--quiet", quiet, "no Markdown tables");
   app.add_flag("--psnr-only", psnr_only, "skip SSIM and decoding");
   try {
@@ -173,6 +177,7 @@ int main(int argc, char** argv) {
         imaging::DeblurOptions options;
         options.method = methods[m];
         options.threads = 1;
+        options.tv_weight_per_noise = tv_kappa;
         const auto result = imaging::deblur(frame, model, options);
         if (!result.ok()) continue;
         Score& s = scores[i][m];

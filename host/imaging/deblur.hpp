@@ -43,6 +43,9 @@ struct DeblurOptions {
   double damping = 0;                                 ///< rl: deconvlucy's DAMPAR, in noise sigmas
   double gradient_variance = kLabelGradientVariance;  ///< Wiener prior (also tv's warm start)
   EdgePrior edge_prior = EdgePrior::kTotalVariation;  ///< tv: |gradient| or L0 (two-tone)
+  /// tv (|gradient| prior): kappa, the prior weight per unit of the estimate's noise
+  /// (TotalVariationSettings::weight_per_noise).
+  double tv_weight_per_noise = TotalVariationSettings{}.weight_per_noise;
   int threads = 2;
 };
 
