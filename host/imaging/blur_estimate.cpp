@@ -231,4 +231,16 @@ Result<BlurEstimate, std::string> estimate_blur(const Image& electrons, const Ca
   return Out::success(estimate);
 }
 
+Result<double, std::string> cross_channel_residual(const Image& electrons,
+                                                   const CaptureModel& model) {
+  using Out = Result<double, std::string>;
+  if (electrons.channel_count() < 2 || electrons.channel_count() != model.channels)
+    return Out::failure("the cross-channel residual needs two or more channels");
+  if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
+  ConsistencyCost cost(electrons, model, static_cast<int>(std::floor(model.blur_px)) + 2);
+  if (model.blur_px + 2 >= cost.width())
+    return Out::failure("the blur does not fit the frame along the motion");
+  return Out::success(cost(model.blur_px, 0, cost.height()).mean());
+}
+
 }  // namespace flutterscan::imaging

@@ -51,4 +51,11 @@ struct BlurEstimate {
 Result<BlurEstimate, std::string> estimate_blur(const Image& electrons, const CaptureModel& model,
                                                 double min_px, double max_px);
 
+/// \brief The cross-channel residual per sample (R / samples above) at the
+/// model's own blur: about 1 when the frame fits a grey scene under `model`;
+/// much more when it does not (colour objects, a wrong blur, a changed
+/// crosstalk). Fails as estimate_blur does.
+Result<double, std::string> cross_channel_residual(const Image& electrons,
+                                                   const CaptureModel& model);
+
 }  // namespace flutterscan::imaging
