@@ -378,7 +378,7 @@ std::string write_chart(const Factor& f,
                : m - first == 1 ? " dashed"
                                 : " thick") +
               (m + 1 < last ? ", " : "");
-  chart.notes.push_back(styles + (decode ? "; dotted 90% line: failure threshold"
+  chart.notes.push_back(styles + (decode ? "; grey dashed line: 90%, the failure threshold"
                                          : "; large dots: decode rate < 90% (fails)"));
   for (std::size_t m = first; m < last; ++m)
     for (std::size_t s = 0; s < kSchemeNames.size(); ++s) {
