@@ -414,13 +414,15 @@ std::string write_chart(const Factor& f,
   return plot::write_png(chart, path);
 }
 
-void cyclic_shift_table(const std::string& out_dir, std::FILE* report) {
+std::string cyclic_shift_table(const std::string& out_dir, std::FILE* report) {
   codes::MeritSettings with_crosstalk;  // the study's light model: 3000 e-, c 3, 4 e-
   with_crosstalk.light.crosstalk =
       codes::Crosstalk{3, 3, {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88}};
   const codes::MeritSettings plain;
-  std::FILE* csv = std::fopen((out_dir + "/stability-cyclic-shift.csv").c_str(), "w");
-  if (csv) std::fprintf(csv, "code,merit,unshifted,worst,worst_shift,mean,loss_db\n");
+  const std::string csv_path = out_dir + "/stability-cyclic-shift.csv";
+  std::FILE* csv = std::fopen(csv_path.c_str(), "w");
+  if (!csv) return "cannot write " + csv_path;
+  std::fprintf(csv, "code,merit,unshifted,worst,worst_shift,mean,loss_db\n");
   std::fprintf(
       report,
       "\n### Codes under every cyclic shift (rolling shutter)\n\n"
@@ -444,13 +446,13 @@ void cyclic_shift_table(const std::string& out_dir, std::FILE* report) {
                  std::string(entry.name).c_str(), joint.value().unshifted, joint.value().worst,
                  joint.value().worst_shift, joint_loss, mse.value().unshifted, mse.value().worst,
                  mse.value().worst_shift, mse_loss, good ? "yes" : "no");
-    if (csv)
-      for (const auto& [name, r, loss] : {std::tuple{"joint", joint.value(), joint_loss},
-                                          std::tuple{"mse", mse.value(), mse_loss}})
-        std::fprintf(csv, "%s,%s,%.6g,%.6g,%d,%.6g,%.3f\n", std::string(entry.name).c_str(), name,
-                     r.unshifted, r.worst, r.worst_shift, r.mean, loss);
+    for (const auto& [name, r, loss] :
+         {std::tuple{"joint", joint.value(), joint_loss}, std::tuple{"mse", mse.value(), mse_loss}})
+      std::fprintf(csv, "%s,%s,%.6g,%.6g,%d,%.6g,%.3f\n", std::string(entry.name).c_str(), name,
+                   r.unshifted, r.worst, r.worst_shift, r.mean, loss);
   }
-  if (csv) std::fclose(csv);
+  std::fclose(csv);
+  return {};
 }
 
 }  // namespace
@@ -609,7 +611,7 @@ std::string run_stability_study(const StabilityOptions& options, std::FILE* repo
         std::fprintf(report, " | %s |\n", threshold_text(factor, agg[f][m][s]).c_str());
       }
   }
-  if (cyclic) cyclic_shift_table(options.out_dir, report);
+  if (cyclic) return cyclic_shift_table(options.out_dir, report);
   return {};
 }
 
