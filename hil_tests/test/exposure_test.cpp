@@ -53,9 +53,11 @@ void expect_exposure_plays(const std::vector<std::pair<std::uint64_t, std::uint8
     ASSERT_EQ(std::popcount(m), 1) << "exposure " << i << " slot " << k;
   }
   EXPECT_EQ(mask_at(timeline, end), 0) << "LEDs still on after exposure " << i;
-  for (const auto& [t, m] : timeline)
-    if (t >= start && t <= end)
+  for (const auto& [t, m] : timeline) {
+    if (t >= start && t <= end) {
       ASSERT_EQ((t - start) % kSlotUs, 0u) << "write off the slot grid in exposure " << i;
+    }
+  }
 }
 
 /// No LED is on outside the exposures' windows.
