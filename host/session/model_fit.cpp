@@ -1,0 +1,104 @@
+#include "session/model_fit.hpp"
+
+#include <cmath>
+
+#include "imaging/blur_estimate.hpp"
+#include "imaging/model_choice.hpp"
+#include "imaging/model_guards.hpp"
+#include "imaging/per_channel_wiener.hpp"
+#include "imaging/row_phase_deblur.hpp"
+
+namespace flutterscan::session {
+namespace {
+
+double rounded(double v, double step) {
+  return std::round(v / step) * step;
+}
+
+/// The blur searched around a nominal one: half to twice it, inside the frame.
+std::pair<double, double> blur_range(double nominal, int along) {
+  return {std::max(2.0, 0.5 * nominal), std::min(2.0 * nominal, along / 2.0)};
+}
+
+}  // namespace
+
+Result<FittedFrame, std::string> deblur_fitting_model(const imaging::Image& dn,
+                                                      const imaging::Image& electrons,
+                                                      imaging::CaptureModel model,
+                                                      const imaging::DeblurOptions& options,
+                                                      const ModelFitConfig& config,
+                                                      std::uint64_t frame_index) {
+  using Out = Result<FittedFrame, std::string>;
+  FittedFrame out;
+  imaging::GuardReport guards;
+  const bool along_x = model.direction == imaging::Direction::kPlusX ||
+                       model.direction == imaging::Direction::kMinusX;
+  const int along = along_x ? electrons.width() : electrons.height();
+
+  // 1. The blur.
+  const bool check_blur = config.encoder && config.blur_check_every > 0 &&
+                          frame_index % static_cast<std::uint64_t>(config.blur_check_every) == 0;
+  if ((!config.encoder || check_blur) && electrons.channel_count() >= 2) {
+    const auto [lo, hi] = blur_range(model.blur_px, along);
+    const auto estimate = imaging::estimate_blur(electrons, model, lo, hi);
+    if (estimate.ok()) {
+      out.log["blur_estimate_px"] = rounded(estimate.value().blur_px, 0.01);
+      if (std::isfinite(estimate.value().standard_error_px))
+        out.log["blur_estimate_se_px"] = rounded(estimate.value().standard_error_px, 0.001);
+      if (!config.encoder) {
+        if (std::isfinite(estimate.value().standard_error_px))
+          model.blur_px = estimate.value().blur_px;
+        else
+          out.flags.emplace_back("blur-unknown");  // no edges: the nominal blur stays
+      } else {
+        guards.blur_checked = true;
+        guards.blur_disagrees = imaging::blur_disagrees(model.blur_px, estimate.value());
+      }
+    } else {
+      out.log["blur_estimate_error"] = estimate.error();
+    }
+  }
+
+  // 2. The model, and the deblur under it.
+  const auto choice =
+      config.choose_latent
+          ? imaging::choose_frame_model(electrons, model, config.line_time_us > 0, config.encoder)
+          : imaging::FrameModelChoice{imaging::LatentModel::kGrey, config.line_time_us > 0,
+                                      config.encoder, 0};
+  out.log["model"] = {{"chosen", choice.describe()},
+                      {"grey_residual", rounded(choice.grey_residual, 0.01)},
+                      {"blur_px", rounded(model.blur_px, 0.01)}};
+  if (choice.latent == imaging::LatentModel::kPerChannel && electrons.channel_count() == 3) {
+    auto result = imaging::deblur_per_channel(electrons, model, 1.0 / options.gradient_variance,
+                                              options.threads);
+    if (!result.ok()) return Out::failure(result.error());
+    out.latent = std::move(result.value().grey);
+  } else if (choice.per_row_phase) {
+    std::vector<double> phases(static_cast<std::size_t>(electrons.height()));
+    const double slots = model.code.length();
+    for (std::size_t r = 0; r < phases.size(); ++r)
+      phases[r] =
+          std::fmod(static_cast<double>(r) * config.line_time_us / config.slot_time_us, slots);
+    auto result = imaging::deblur_row_phases(electrons, model, phases, options);
+    if (!result.ok()) return Out::failure(result.error());
+    out.latent = std::move(result.value());
+  } else {
+    auto result = imaging::deblur(electrons, model, options);
+    if (!result.ok()) return Out::failure(result.error());
+    out.latent = std::move(result.value().latent);
+    // The residual check needs the grey global model the frame was deblurred with.
+    guards.residual_ratio = imaging::residual_ratio(
+        electrons, out.latent, model,
+        std::max(4, (along_x ? electrons.height() : electrons.width()) / 32));
+  }
+
+  // 3. Guards.
+  guards.saturated_share = imaging::saturated_share(dn, model);
+  out.log["guards"] = {{"saturated_share", rounded(guards.saturated_share, 1e-5)},
+                       {"residual_ratio", rounded(guards.residual_ratio, 0.01)}};
+  if (guards.blur_checked) out.log["guards"]["blur_disagrees"] = guards.blur_disagrees;
+  for (auto& flag : guards.flags()) out.flags.push_back(flag);
+  return Out::success(std::move(out));
+}
+
+}  // namespace flutterscan::session

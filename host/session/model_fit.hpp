@@ -1,0 +1,51 @@
+#pragma once
+// One frame through the simplest model that fits it (design.md, "Model no
+// more than a scene needs"; issue 7), and the guards that say when no model
+// fits: the session's worker calls this instead of deblurring directly.
+//
+// Per frame:
+// 1. blur: from the encoder when the line has one; otherwise estimated from
+//    the frame itself (imaging/blur_estimate.hpp) around the nominal blur;
+// 2. model: grey latent unless the cross-channel residual says colour print
+//    (imaging/model_choice.hpp), then per-channel latents (Wiener); a
+//    rolling-shutter camera gets a per-row code phase;
+// 3. guards (imaging/model_guards.hpp): saturated share, residual against
+//    the noise model (grey global model only), and every `blur_check_every`
+//    frames the estimated blur against the encoder's.
+// The frame's log gets "model" (what was chosen and why) and "guards"; the
+// guard names that fired are returned as flags for session.jsonl.
+
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "flutterscan/common/result.hpp"
+#include "imaging/capture_model.hpp"
+#include "imaging/deblur.hpp"
+#include "imaging/image.hpp"
+
+namespace flutterscan::session {
+
+/// \brief How a line is set up, as far as the model choice is concerned.
+struct ModelFitConfig {
+  bool encoder = true;        ///< the blur comes from the encoder
+  bool choose_latent = true;  ///< test each frame for colour print
+  double line_time_us = 0;    ///< > 0: rolling-shutter camera, per-row code phase
+  double slot_time_us = 100;  ///< the controller's slot time (for the row phases)
+  int blur_check_every = 0;   ///< > 0: estimate the blur every N frames and compare
+};
+
+struct FittedFrame {
+  imaging::Plane latent;           ///< grey reflectance
+  std::vector<std::string> flags;  ///< guards that fired
+  nlohmann::json log;              ///< {"model": ..., "guards": ...}
+};
+
+/// \brief Deblurs one frame (`dn` as recorded, `electrons` from it) under the
+/// simplest model that fits. `model.blur_px` is the nominal (encoder) blur;
+/// `frame_index` paces the blur check. Fails only when deblurring itself fails.
+Result<FittedFrame, std::string> deblur_fitting_model(
+    const imaging::Image& dn, const imaging::Image& electrons, imaging::CaptureModel model,
+    const imaging::DeblurOptions& options, const ModelFitConfig& config, std::uint64_t frame_index);
+
+}  // namespace flutterscan::session

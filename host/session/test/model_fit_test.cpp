@@ -1,0 +1,129 @@
+// The session's per-frame model choice and guards: a nominal grey frame keeps
+// the simplest model with quiet guards; colour print switches to per-channel
+// latents; a line without an encoder gets its blur from the frame; a wrong
+// encoder reading is caught by the blur check; saturation is flagged.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+
+#include "imaging/frame_conversion.hpp"
+#include "imaging/metrics.hpp"
+#include "session/model_fit.hpp"
+#include "sim/colour_scene.hpp"
+#include "sim/forward_model.hpp"
+#include "sim/scene.hpp"
+#include "sim/timeline_forward.hpp"
+
+namespace flutterscan::session {
+namespace {
+
+imaging::CaptureModel capture(double blur_px = 52, double electrons = 3000) {
+  imaging::CaptureModel m;
+  m.code = LedCode::parse("4242221144411121214241142422112112214412414144224412", 3).value();
+  m.blur_px = blur_px;
+  m.led_electrons = imaging::budgeted_led_electrons(m.code, electrons, 3);
+  m.crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
+  m.read_noise = 4;
+  m.full_well = 12000;
+  m.bit_depth = 12;
+  m.gain = 12000.0 / 4095.0;
+  m.black_level = 64;
+  return m;
+}
+
+sim::SceneSpec code128() {
+  sim::SceneSpec spec;
+  spec.kind = sim::SceneKind::kCode128;
+  spec.content = "FIT-0042";
+  return spec;
+}
+
+struct Frame {
+  imaging::Image dn, electrons;
+};
+
+Frame record(const imaging::Image& expected, const imaging::CaptureModel& m) {
+  Frame f;
+  f.dn = sim::record_frame(expected, m, 7);
+  f.electrons = imaging::dn_to_electrons(f.dn, m);
+  return f;
+}
+
+imaging::DeblurOptions tv() {
+  imaging::DeblurOptions options;
+  options.method = imaging::Method::kTotalVariation;
+  return options;
+}
+
+bool has(const std::vector<std::string>& flags, const std::string& name) {
+  return std::find(flags.begin(), flags.end(), name) != flags.end();
+}
+
+TEST(ModelFit, NominalGreyFrameKeepsTheSimplestModel) {
+  const auto m = capture();
+  const auto scene = sim::render_scene(code128()).value();
+  const Frame f = record(sim::expected_electrons(scene, m), m);
+  const auto fitted = deblur_fitting_model(f.dn, f.electrons, m, tv(), {}, 1);
+  ASSERT_TRUE(fitted.ok()) << fitted.error();
+  EXPECT_TRUE(fitted.value().flags.empty()) << fitted.value().log.dump();
+  EXPECT_EQ(fitted.value().log["model"]["chosen"],
+            "grey latent, global code phase, blur from the encoder");
+  EXPECT_LT(fitted.value().log["guards"]["residual_ratio"].get<double>(), 1.5);
+  EXPECT_EQ(sim::decode_barcodes(fitted.value().latent), std::vector<std::string>{"FIT-0042"});
+}
+
+TEST(ModelFit, ColourPrintGetsPerChannelLatents) {
+  const auto m = capture();
+  const auto bands = sim::render_colour_scene(code128(), sim::kRedInk).value();
+  const Frame f = record(sim::expected_colour_electrons(bands, m).value(), m);
+  const auto fitted = deblur_fitting_model(f.dn, f.electrons, m, tv(), {}, 1);
+  ASSERT_TRUE(fitted.ok()) << fitted.error();
+  EXPECT_EQ(fitted.value().log["model"]["chosen"],
+            "per-channel latents, global code phase, blur from the encoder");
+  EXPECT_EQ(sim::decode_barcodes(fitted.value().latent), std::vector<std::string>{"FIT-0042"});
+}
+
+TEST(ModelFit, WithoutAnEncoderTheBlurComesFromTheFrame) {
+  const auto truth = capture(47.5);
+  const auto scene = sim::render_scene(code128()).value();
+  const Frame f = record(sim::expected_electrons(scene, truth), truth);
+  ModelFitConfig config;
+  config.encoder = false;
+  // The nominal blur (from the configured belt speed) is 10% off.
+  const auto fitted = deblur_fitting_model(f.dn, f.electrons, capture(52), tv(), config, 1);
+  ASSERT_TRUE(fitted.ok()) << fitted.error();
+  EXPECT_NEAR(fitted.value().log["model"]["blur_px"].get<double>(), 47.5, 0.3);
+  EXPECT_EQ(fitted.value().log["model"]["chosen"],
+            "grey latent, global code phase, blur estimated from the frame");
+  EXPECT_EQ(sim::decode_barcodes(fitted.value().latent), std::vector<std::string>{"FIT-0042"});
+}
+
+TEST(ModelFit, TheBlurCheckCatchesAWrongEncoderReading) {
+  const auto truth = capture(52);
+  const auto scene = sim::render_scene(code128()).value();
+  const Frame f = record(sim::expected_electrons(scene, truth), truth);
+  ModelFitConfig config;
+  config.blur_check_every = 1;
+  const auto right = deblur_fitting_model(f.dn, f.electrons, capture(52), tv(), config, 1);
+  ASSERT_TRUE(right.ok());
+  EXPECT_FALSE(has(right.value().flags, "blur-disagrees")) << right.value().log.dump();
+  const auto wrong = deblur_fitting_model(f.dn, f.electrons, capture(57), tv(), config, 1);
+  ASSERT_TRUE(wrong.ok());
+  EXPECT_TRUE(has(wrong.value().flags, "blur-disagrees")) << wrong.value().log.dump();
+  EXPECT_TRUE(has(wrong.value().flags, "misfit")) << wrong.value().log.dump();
+}
+
+TEST(ModelFit, SaturationIsFlagged) {
+  const auto m = capture(52, 30000);
+  const auto scene = sim::render_scene(code128()).value();
+  const Frame f = record(sim::expected_electrons(scene, m), m);
+  ModelFitConfig config;
+  config.choose_latent = false;
+  const auto fitted = deblur_fitting_model(f.dn, f.electrons, m, tv(), config, 1);
+  ASSERT_TRUE(fitted.ok());
+  EXPECT_TRUE(has(fitted.value().flags, "saturated")) << fitted.value().log.dump();
+}
+
+}  // namespace
+}  // namespace flutterscan::session
