@@ -23,11 +23,20 @@ constexpr double kMinimumContrast = 0.1;
 /// The frame's rows (along the motion) as zero-padded spectra, and what the cost needs.
 class ConsistencyCost {
  public:
-  ConsistencyCost(const Image& electrons, const CaptureModel& model, int longest_psf)
+  /// Every `row_step`-th row of the frame (along the motion) takes part.
+  ConsistencyCost(const Image& electrons, const CaptureModel& model, int longest_psf,
+                  int row_step = 1)
       : model_(model) {
     std::vector<Plane> rows;
-    for (const auto& plane : electrons.channels)
-      rows.push_back(to_motion_frame(plane, model.direction));
+    for (const auto& plane : electrons.channels) {
+      const Plane along = to_motion_frame(plane, model.direction);
+      Plane kept(along.width, (along.height + row_step - 1) / row_step);
+      for (int y = 0; y < kept.height; ++y) {
+        const auto from = along.row(y * row_step);
+        std::copy(from.begin(), from.end(), kept.row(y).begin());
+      }
+      rows.push_back(std::move(kept));
+    }
     width_ = rows[0].width;
     height_ = rows[0].height;
     fft_ = std::make_unique<RowFft>(row_fft_length(width_ + longest_psf));
@@ -169,7 +178,7 @@ bool channels_share_one_code(const CaptureModel& model) {
 }  // namespace
 
 Result<BlurEstimate, std::string> estimate_blur(const Image& electrons, const CaptureModel& model,
-                                                double min_px, double max_px) {
+                                                double min_px, double max_px, int row_step) {
   using Out = Result<BlurEstimate, std::string>;
   if (!(min_px > 0) || !(max_px > min_px) || !std::isfinite(max_px))
     return Out::failure("the blur search range must satisfy 0 < min < max");
@@ -182,7 +191,8 @@ Result<BlurEstimate, std::string> estimate_blur(const Image& electrons, const Ca
     return Out::failure(
         "every channel sees the same code, so the frame carries no blur information this way: "
         "estimating the blur needs a multi-LED code such as a one-of-3 triplet");
-  ConsistencyCost cost(electrons, model, static_cast<int>(std::floor(max_px)) + 2);
+  if (row_step < 1) return Out::failure("the row step must be 1 or more");
+  ConsistencyCost cost(electrons, model, static_cast<int>(std::floor(max_px)) + 2, row_step);
   if (max_px + 2 >= cost.width())
     return Out::failure("the largest blur searched (" + std::to_string(max_px) +
                         " px) does not fit the frame along the motion (" +

@@ -45,11 +45,12 @@ struct BlurEstimate {
 };
 
 /// \brief Estimates the blur of `electrons` (one plane per channel, black level
-/// removed) between min_px and max_px; `model` gives everything else (its
-/// blur_px is ignored). Fails for fewer than two channels, channels that share
-/// one code, or a range that does not fit the frame.
+/// removed) between min_px and max_px from every `row_step`-th row along the
+/// motion; `model` gives everything else (its blur_px is ignored). Fails for
+/// fewer than two channels, channels that share one code, or a range that does
+/// not fit the frame.
 Result<BlurEstimate, std::string> estimate_blur(const Image& electrons, const CaptureModel& model,
-                                                double min_px, double max_px);
+                                                double min_px, double max_px, int row_step = 1);
 
 /// \brief The cross-channel residual per sample (R / samples above) at the
 /// model's own blur: about 1 when the frame fits a grey scene under `model`;

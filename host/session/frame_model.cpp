@@ -24,7 +24,7 @@ Result<imaging::CaptureModel, std::string> frame_model(const ExposureRecord& eve
   const OpticsConfig& o = config.optics;
   imaging::CaptureModel m;
   m.code = code;
-  m.blur_px = std::abs(event.encoder_delta) * o.px_per_count;
+  m.blur_px = o.encoder ? std::abs(event.encoder_delta) * o.px_per_count : o.nominal_blur_px;
   imaging::parse_direction(o.direction, m.direction);
   if (event.encoder_delta < 0) {
     switch (m.direction) {

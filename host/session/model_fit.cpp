@@ -15,9 +15,9 @@ double rounded(double v, double step) {
   return std::round(v / step) * step;
 }
 
-/// The blur searched around a nominal one: half to twice it, inside the frame.
+/// The blur searched around a nominal one: -20% to +25%, inside the frame.
 std::pair<double, double> blur_range(double nominal, int along) {
-  return {std::max(2.0, 0.5 * nominal), std::min(2.0 * nominal, along / 2.0)};
+  return {std::max(2.0, 0.8 * nominal), std::min(1.25 * nominal, along / 2.0)};
 }
 
 }  // namespace
@@ -40,16 +40,21 @@ Result<FittedFrame, std::string> deblur_fitting_model(const imaging::Image& dn,
                           frame_index % static_cast<std::uint64_t>(config.blur_check_every) == 0;
   if ((!config.encoder || check_blur) && electrons.channel_count() >= 2) {
     const auto [lo, hi] = blur_range(model.blur_px, along);
-    const auto estimate = imaging::estimate_blur(electrons, model, lo, hi);
+    const int across = along_x ? electrons.height() : electrons.width();
+    const auto estimate =
+        imaging::estimate_blur(electrons, model, lo, hi, std::max(1, across / 90));
     if (estimate.ok()) {
       out.log["blur_estimate_px"] = rounded(estimate.value().blur_px, 0.01);
       if (std::isfinite(estimate.value().standard_error_px))
         out.log["blur_estimate_se_px"] = rounded(estimate.value().standard_error_px, 0.001);
       if (!config.encoder) {
-        if (std::isfinite(estimate.value().standard_error_px))
+        if (std::isfinite(estimate.value().standard_error_px)) {
           model.blur_px = estimate.value().blur_px;
-        else
-          out.flags.emplace_back("blur-unknown");  // no edges: the nominal blur stays
+          out.estimated_blur_px = model.blur_px;
+        } else {
+          if (config.fallback_blur_px > 0) model.blur_px = config.fallback_blur_px;
+          out.flags.emplace_back("blur-unknown");  // no edges along the motion
+        }
       } else {
         guards.blur_checked = true;
         guards.blur_disagrees = imaging::blur_disagrees(model.blur_px, estimate.value());

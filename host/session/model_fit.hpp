@@ -5,7 +5,10 @@
 //
 // Per frame:
 // 1. blur: from the encoder when the line has one; otherwise estimated from
-//    the frame itself (imaging/blur_estimate.hpp) around the nominal blur;
+//    the frame itself (imaging/blur_estimate.hpp) within -20%..+25% of the
+//    nominal blur, from about 90 rows; a frame without edges along the motion
+//    keeps the fallback (the last confident estimate) and is flagged
+//    "blur-unknown";
 // 2. model: grey latent unless the cross-channel residual says colour print
 //    (imaging/model_choice.hpp), then per-channel latents (Wiener); a
 //    rolling-shutter camera gets a per-row code phase;
@@ -33,12 +36,16 @@ struct ModelFitConfig {
   double line_time_us = 0;    ///< > 0: rolling-shutter camera, per-row code phase
   double slot_time_us = 100;  ///< the controller's slot time (for the row phases)
   int blur_check_every = 0;   ///< > 0: estimate the blur every N frames and compare
+  /// Without an encoder: the blur to use when a frame gives no confident
+  /// estimate (the session passes the last confident one; 0: the nominal blur).
+  double fallback_blur_px = 0;
 };
 
 struct FittedFrame {
   imaging::Plane latent;           ///< grey reflectance
   std::vector<std::string> flags;  ///< guards that fired
   nlohmann::json log;              ///< {"model": ..., "guards": ...}
+  double estimated_blur_px = 0;    ///< a confident estimate from this frame (0: none)
 };
 
 /// \brief Deblurs one frame (`dn` as recorded, `electrons` from it) under the

@@ -25,6 +25,7 @@
 #include "imaging/bayer.hpp"
 #include "imaging/capture_descriptor.hpp"
 #include "imaging/deblur.hpp"
+#include "session/model_fit.hpp"
 #include "imaging/frame_conversion.hpp"
 #include "imaging/motion_frame.hpp"
 #include "session/barcode_reader.hpp"
@@ -257,7 +258,8 @@ struct Shared {
 };
 
 /// Worker: descriptor, deblur and fusion, decoding, sightings.
-FrameOutcome process(const FrameJob& job, const SessionConfig& config) {
+FrameOutcome process(const FrameJob& job, const SessionConfig& config,
+                     std::atomic<double>& last_blur_px) {
   FrameOutcome out;
   out.index = job.index;
   out.sequence = job.frame.sequence;
@@ -295,18 +297,42 @@ FrameOutcome process(const FrameJob& job, const SessionConfig& config) {
   options.method = config.processing.method;
   options.threads = config.processing.threads_per_worker;
   const imaging::Image electrons = imaging::dn_to_electrons(dn.value(), model.value());
-  auto deblurred = model.value().bayer_rggb
-                       ? imaging::deblur_bayer(electrons.channels[0], model.value(), options,
-                                               imaging::BayerMode::kRawPlanes)
-                       : imaging::deblur(electrons, model.value(), options);
+  // The simplest model that fits the frame, and the guards (model_fit.hpp); raw
+  // Bayer frames keep the grey global model on their raw planes.
+  imaging::Plane latent;
+  std::string deblur_error;
+  if (model.value().bayer_rggb) {
+    auto r = imaging::deblur_bayer(electrons.channels[0], model.value(), options,
+                                   imaging::BayerMode::kRawPlanes);
+    if (r.ok()) latent = std::move(r.value().latent);
+    else deblur_error = r.error();
+  } else {
+    ModelFitConfig fit;
+    fit.encoder = config.optics.encoder;
+    fit.choose_latent = config.processing.choose_model;
+    fit.line_time_us = config.optics.line_time_us;
+    fit.slot_time_us = job.event.slot_time_us;
+    fit.blur_check_every = config.processing.blur_check_every;
+    fit.fallback_blur_px = last_blur_px.load();
+    auto r = deblur_fitting_model(dn.value(), electrons, model.value(), options, fit, job.index);
+    if (r.ok()) {
+      if (r.value().estimated_blur_px > 0) last_blur_px.store(r.value().estimated_blur_px);
+      latent = std::move(r.value().latent);
+      for (const auto& flag : r.value().flags) flags.push_back(flag);
+      log.update(r.value().log);
+      if (r.value().log.contains("model"))
+        model.value().blur_px = r.value().log["model"]["blur_px"].get<double>();
+    } else {
+      deblur_error = r.error();
+    }
+  }
   const std::int64_t t2 = now_ns();
-  if (!deblurred.ok()) {
-    log["error"] = deblurred.error();
+  if (!deblur_error.empty()) {
+    log["error"] = deblur_error;
     flags.push_back("error");
     log["flags"] = flags;
     return out;
   }
-  imaging::Plane& latent = deblurred.value().latent;
   const auto codes = read_barcodes(latent);
   const imaging::Direction direction = model.value().direction;
   const imaging::Plane along = imaging::to_motion_frame(latent, direction);
@@ -480,17 +506,22 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   Shared shared(config);
   const std::int64_t start_ns = now_ns();
 
-  // Workers.
+  // Workers. Without an encoder, the last confident blur estimate stands in for
+  // frames without edges along the motion.
+  std::atomic<double> last_blur_px{config.optics.nominal_blur_px};
   std::vector<std::thread> workers;
   for (int w = 0; w < config.processing.workers; ++w)
     workers.emplace_back([&] {
       FrameJob job;
       while (shared.jobs.pop(job)) {
-        FrameOutcome o = process(job, config);
+        FrameOutcome o = process(job, config, last_blur_px);
         if (!o.processed) ++shared.processing_errors;
         shared.outcomes.push(std::move(o));
       }
     });
+
+  // Per-frame model choices and guard flags, counted for the summary (results thread).
+  std::map<std::string, std::uint64_t> model_counts, flag_counts;
 
   // Results thread: in capture order.
   imaging::Direction direction = imaging::Direction::kPlusX;
@@ -522,6 +553,9 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
       waiting.emplace(o.index, std::move(o));
       for (auto it = waiting.find(next); it != waiting.end(); it = waiting.find(next)) {
         FrameOutcome& f = it->second;
+        if (f.log.contains("model")) ++model_counts[f.log["model"]["chosen"].get<std::string>()];
+        if (f.log.contains("flags"))
+          for (const auto& flag : f.log["flags"]) ++flag_counts[flag.get<std::string>()];
         if (f.processed) {
           const std::int64_t done = now_ns();
           f.latency_ms = ms_between(f.arrival_ns, done);
@@ -749,6 +783,8 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   s["clock_fit_points"] = matcher.clocks().points;
   s["stopped_by"] = stopped_by;
   s["frames_saved"] = frames_saved;
+  s["models_chosen"] = model_counts;
+  s["frames_flagged"] = flag_counts;  // by flag: saturated, misfit, blur-disagrees, no-read, ...
   const RotationStats rotation = folder.rotation();
   s["rotation"] = {{"disk_budget_mb", config.output.disk_budget_mb},
                    {"frames_rotated", rotation.frames_rotated},

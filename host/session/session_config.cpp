@@ -163,11 +163,12 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     r.get("frame_period_us", c.controller.frame_period_us);
   }
   if (const toml::table* t = root["optics"].as_table()) {
-    if (auto p = known_keys_problem(
-            *t, "optics.",
-            {"px_per_count", "direction", "crosstalk", "electrons", "cap", "read_noise_e",
-             "full_well_e", "black_level_dn", "gain_e_per_dn", "bit_depth"},
-            origin);
+    if (auto p =
+            known_keys_problem(*t, "optics.",
+                               {"px_per_count", "direction", "crosstalk", "electrons", "cap",
+                                "read_noise_e", "full_well_e", "black_level_dn", "gain_e_per_dn",
+                                "bit_depth", "encoder", "nominal_blur_px", "line_time_us"},
+                               origin);
         !p.empty())
       return Out::failure(p);
     TableReader r(t, "optics.", origin, error);
@@ -180,6 +181,9 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     r.get("black_level_dn", c.optics.black_level_dn);
     r.get("gain_e_per_dn", c.optics.gain_e_per_dn);
     r.get("bit_depth", c.optics.bit_depth);
+    r.get("encoder", c.optics.encoder);
+    r.get("nominal_blur_px", c.optics.nominal_blur_px);
+    r.get("line_time_us", c.optics.line_time_us);
     if (const toml::node* node = t->get("crosstalk")) {
       const toml::array* rows = node->as_array();
       std::vector<double> values;
@@ -206,7 +210,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     if (auto p = known_keys_problem(
             *t, "processing.",
             {"method", "workers", "threads_per_worker", "queue_depth", "max_frames", "max_seconds",
-             "match_tolerance_us", "object_match_px"},
+             "match_tolerance_us", "object_match_px", "choose_model", "blur_check_every"},
             origin);
         !p.empty())
       return Out::failure(p);
@@ -227,6 +231,8 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     r.get("max_seconds", c.processing.max_seconds);
     r.get("match_tolerance_us", c.processing.match_tolerance_us);
     r.get("object_match_px", c.processing.object_match_px);
+    r.get("choose_model", c.processing.choose_model);
+    r.get("blur_check_every", c.processing.blur_check_every);
   }
   if (const toml::table* t = root["output"].as_table()) {
     if (auto p = known_keys_problem(*t, "output.",
@@ -292,6 +298,14 @@ std::string check_config(SessionConfig& c) {
   if (c.controller.sync == "master" && c.controller.frame_period_us == 0)
     return problem("controller.frame_period_us", "must be set (> 0) for master sync");
   if (!(c.optics.px_per_count > 0)) return problem("optics.px_per_count", "must be > 0");
+  if (!c.optics.encoder && !(c.optics.nominal_blur_px > 0))
+    return problem("optics.nominal_blur_px",
+                   "must be > 0 when optics.encoder = false (the blur at the line's speed; "
+                   "flutterscan calibrate speed measures it)");
+  if (!(c.optics.line_time_us >= 0 && c.optics.line_time_us < 1000))
+    return problem("optics.line_time_us", "must be 0 (global shutter) up to 1000 us");
+  if (c.processing.blur_check_every < 0)
+    return problem("processing.blur_check_every", "must be >= 0");
   imaging::Direction direction;
   if (!imaging::parse_direction(c.optics.direction, direction))
     return problem("optics.direction", "must be +x, -x, +y or -y");

@@ -35,6 +35,11 @@ struct ControllerConfig {
 /// \brief How the camera sees the LEDs (calibration), for the capture descriptor.
 struct OpticsConfig {
   double px_per_count = 0.5;  ///< belt motion in image pixels per encoder count
+  /// The line has an encoder: the blur is its counts x px_per_count. false: each
+  /// frame's blur is estimated from the frame, around nominal_blur_px.
+  bool encoder = true;
+  double nominal_blur_px = 0;  ///< without an encoder: the blur at the line's nominal speed
+  double line_time_us = 0;     ///< rolling-shutter line time (0: global shutter)
   std::string direction = "+x";
   std::vector<double> crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
   double electrons = 3000;  ///< E: white e- per channel under rect-white (sets I_k with cap)
@@ -56,6 +61,11 @@ struct ProcessingConfig {
   double max_seconds = 0;  ///< stop after this long (0: no limit)
   double match_tolerance_us = 2000;
   double object_match_px = 120;  ///< decodes this close on the belt are one object
+  /// Test each frame for colour print (per-channel latents when found); issue 7.
+  bool choose_model = true;
+  /// With an encoder: every N-th frame, estimate the blur from the frame and flag a
+  /// disagreement with the encoder (0: never; each check costs about one tv deblur).
+  int blur_check_every = 0;
 };
 
 struct OutputConfig {

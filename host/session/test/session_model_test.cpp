@@ -1,0 +1,44 @@
+// Model choice inside a whole sim session: a line without an encoder gets each
+// frame's blur from the frame (the configured nominal blur is 8% off), every
+// frame's log says which model it used and which guards fired, and the summary
+// counts both.
+#include <gtest/gtest.h>
+
+#include "session/session.hpp"
+#include "session/test/session_test_support.hpp"
+
+namespace flutterscan::session {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace testing;
+
+TEST(SimSessionModels, WithoutAnEncoderEachFrameEstimatesItsBlur) {
+  const fs::path out = fresh_folder("no_encoder");
+  SessionConfig config = small_sim_config(out, 40);
+  config.optics.encoder = false;
+  config.optics.nominal_blur_px = 48;  // the belt runs 52 px per exposure
+  std::atomic<bool> stop{false};
+  const SessionOutcome outcome = run_session(config, stop, {});
+  ASSERT_EQ(outcome.error, "");
+  const auto& s = outcome.summary;
+  EXPECT_EQ(s["ground_truth"]["missed"], nlohmann::json::array()) << s.dump(2);
+  EXPECT_EQ(s["models_chosen"]["grey latent, global code phase, blur estimated from the frame"],
+            s["frames_processed"])
+      << s.dump(2);
+  int bad = 0, estimated = 0;
+  for (const auto& line : read_jsonl(out / "session.jsonl", bad)) {
+    if (!line.contains("times_ms")) continue;  // dropped (processing behind): never deblurred
+    ASSERT_TRUE(line.contains("model")) << line.dump();
+    ASSERT_TRUE(line.contains("guards")) << line.dump();
+    if (line.contains("blur_estimate_se_px")) {
+      ++estimated;
+      EXPECT_NEAR(line["model"]["blur_px"].get<double>(), 52.0, 0.5) << line.dump();
+    }
+  }
+  EXPECT_EQ(bad, 0);
+  EXPECT_GT(estimated, 10);  // frames with a label in view; the rest keep the nominal blur
+}
+
+}  // namespace
+}  // namespace flutterscan::session
