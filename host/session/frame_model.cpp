@@ -6,10 +6,11 @@
 
 namespace flutterscan::session {
 
-double belt_speed_px_per_us(const ExposureRecord& event, double px_per_count) {
+double belt_speed_px_per_us(const ExposureRecord& event, const OpticsConfig& optics) {
   const double duration_us = static_cast<double>(event.slot_count) * event.slot_time_us;
   if (duration_us <= 0) return 0;
-  return std::abs(event.encoder_delta) * px_per_count / duration_us;
+  if (!optics.encoder) return optics.nominal_blur_px / duration_us;
+  return std::abs(event.encoder_delta) * optics.px_per_count / duration_us;
 }
 
 Result<imaging::CaptureModel, std::string> frame_model(const ExposureRecord& event,

@@ -22,7 +22,8 @@ Result<imaging::CaptureModel, std::string> frame_model(const ExposureRecord& eve
                                                        const SessionConfig& config,
                                                        const capture::FrameFormat& format);
 
-/// \brief Belt speed during the exposure, image pixels per controller microsecond.
-double belt_speed_px_per_us(const ExposureRecord& event, double px_per_count);
+/// \brief Belt speed during the exposure, image pixels per controller microsecond:
+/// from the encoder, or (optics.encoder = false) the nominal blur over the exposure.
+double belt_speed_px_per_us(const ExposureRecord& event, const OpticsConfig& optics);
 
 }  // namespace flutterscan::session

@@ -656,10 +656,10 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
         shared.outcomes.push(std::move(o));
         continue;
       }
-      const double speed = belt_speed_px_per_us(*m.event, config.optics.px_per_count);
+      const double speed = belt_speed_px_per_us(*m.event, config.optics);
       if (previous_event) {
         const double previous_speed =
-            belt_speed_px_per_us(*previous_event, config.optics.px_per_count);
+            belt_speed_px_per_us(*previous_event, config.optics);
         travel += 0.5 * (speed + previous_speed) *
                   static_cast<double>(m.event->start_us - previous_event->start_us);
       }
