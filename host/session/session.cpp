@@ -11,7 +11,9 @@
 #include <ctime>
 #include <deque>
 #include <filesystem>
+#include <bit>
 #include <map>
+#include <sstream>
 #include <mutex>
 #include <set>
 #include <thread>
@@ -231,7 +233,11 @@ std::string connect_controller(const SessionConfig& config, const SessionHooks& 
     return std::string("controller: ") + what + ": " + e.message;
   };
   if (auto r = link.client->disarm(); !r.ok()) return fail("Disarm", r.error());
-  if (auto r = link.client->set_code(0, config.controller.parsed_code, true); !r.ok())
+  // One-of-3 codes are checked as such on the controller; white strobes ("auto") are not.
+  const LedCode& code = config.controller.parsed_code;
+  bool one_of_n = true;
+  for (int t = 0; t < code.length(); ++t) one_of_n = one_of_n && std::popcount(code.mask(t)) == 1;
+  if (auto r = link.client->set_code(0, code, one_of_n); !r.ok())
     return fail("SetCode", r.error());
   if (auto r = link.client->select_code(0); !r.ok()) return fail("SelectCode", r.error());
   protocol::SetTimingRequest timing{};
@@ -403,6 +409,14 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
     outcome.error = "config: " + problem;
     outcome.bad_input = true;
     return outcome;
+  }
+  if (const auto& scheme = config.controller.scheme) {
+    std::ostringstream text;
+    text << "scheme auto: " << scheme->scheme << " (regime map cell " << scheme->cell_electrons
+         << " e-, read noise " << scheme->cell_read_noise << " e-, cap " << scheme->cell_cap
+         << ": best coded scheme " << (scheme->margin_db >= 0 ? "+" : "") << scheme->margin_db
+         << " dB against the best white strobe)";
+    say(text.str());
   }
   const bool sim_camera = config.camera.spec == "sim" || config.camera.spec.rfind("sim:", 0) == 0;
   if (sim_camera && config.controller.spec != "sim") {
@@ -759,6 +773,13 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   s["camera"] = camera->name();
   s["controller"] = link.description;
   s["code"] = config.controller.code;
+  if (const auto& scheme = config.controller.scheme)
+    s["scheme_choice"] = {{"scheme", scheme->scheme},
+                          {"expected_margin_db", scheme->margin_db},
+                          {"regime_cell",
+                           {{"electrons", scheme->cell_electrons},
+                            {"read_noise_e", scheme->cell_read_noise},
+                            {"cap", scheme->cell_cap}}}};
   s["method"] = imaging::method_name(config.processing.method);
   s["frame_size"] = std::to_string(format.width) + "x" + std::to_string(format.height) + " " +
                     capture::pixel_format_name(format.pixel_format);

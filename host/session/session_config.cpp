@@ -275,7 +275,16 @@ Result<SessionConfig, std::string> load_config(const std::string& path) {
 
 std::string check_config(SessionConfig& c) {
   auto problem = [](const std::string& key, const std::string& what) { return key + " " + what; };
-  if (auto entry = codes::find_library_code(c.controller.code)) {
+  c.controller.scheme.reset();
+  if (c.controller.code == "auto") {
+    if (!(c.optics.electrons > 0) || !(c.optics.read_noise_e > 0) || !(c.optics.cap >= 1))
+      return problem("controller.code",
+                     "auto needs optics.electrons > 0, optics.read_noise_e > 0 "
+                     "and optics.cap >= 1 (calibrate them first)");
+    c.controller.scheme =
+        codes::choose_scheme(c.optics.electrons, c.optics.read_noise_e, c.optics.cap);
+    c.controller.parsed_code = c.controller.scheme->code;
+  } else if (auto entry = codes::find_library_code(c.controller.code)) {
     c.controller.parsed_code = codes::to_code(*entry);
   } else {
     auto parsed = LedCode::parse(c.controller.code, 3, CodeRule::kOneOfN);

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "capture/camera_source.hpp"
+#include "codes/scheme_choice.hpp"
 #include "flutterscan/common/led_code.hpp"
 #include "flutterscan/common/result.hpp"
 #include "imaging/deblur.hpp"
@@ -24,9 +25,12 @@ struct CameraConfig {
 };
 
 struct ControllerConfig {
-  std::string spec = "sim";            ///< "sim", "auto" or a serial number
-  std::string code = "seed-maxmin-1";  ///< digits or a library name (docs/codes.md)
-  LedCode parsed_code;                 ///< filled by check_config
+  std::string spec = "sim";  ///< "sim", "auto" or a serial number
+  /// Digits, a library name (docs/codes.md), or "auto": the scheme the regime
+  /// map says wins at optics.electrons, optics.read_noise_e and optics.cap.
+  std::string code = "seed-maxmin-1";
+  LedCode parsed_code;                        ///< filled by check_config
+  std::optional<codes::SchemeChoice> scheme;  ///< check_config's choice for code "auto"
   std::uint32_t slot_time_us = 100;
   std::string sync = "slave";         ///< "slave" (camera strobe) or "master" (controller triggers)
   std::uint32_t frame_period_us = 0;  ///< master mode

@@ -40,5 +40,32 @@ TEST(SimSessionModels, WithoutAnEncoderEachFrameEstimatesItsBlur) {
   EXPECT_GT(estimated, 10);  // frames with a label in view; the rest keep the nominal blur
 }
 
+TEST(SimSessionModels, SchemeAutoFollowsTheRegimeMap) {
+  const fs::path out = fresh_folder("scheme_auto");
+  SessionConfig config = small_sim_config(out, 30);
+  config.controller.code = "auto";
+  config.optics.electrons = 3000;
+  config.optics.read_noise_e = 1;  // a quiet sensor: a 1-slot white strobe wins there
+  std::atomic<bool> stop{false};
+  std::vector<std::string> messages;
+  SessionHooks hooks;
+  hooks.message = [&](const std::string& m) { messages.push_back(m); };
+  const SessionOutcome outcome = run_session(config, stop, hooks);
+  ASSERT_EQ(outcome.error, "");
+  const auto& s = outcome.summary;
+  EXPECT_EQ(s["scheme_choice"]["scheme"], "snapshot-1") << s.dump(2);
+  EXPECT_LT(s["scheme_choice"]["expected_margin_db"].get<double>(), 0);
+  EXPECT_EQ(s["frames_processed"], 30);
+  EXPECT_EQ(s["ground_truth"]["missed"], nlohmann::json::array()) << s.dump(2);
+  ASSERT_FALSE(messages.empty());
+  EXPECT_NE(messages.front().find("scheme auto: snapshot-1"), std::string::npos)
+      << messages.front();
+  // A noisy sensor at the same light: the optimised triplet.
+  SessionConfig noisy = config;
+  noisy.optics.read_noise_e = 30;
+  ASSERT_EQ(check_config(noisy), "");
+  EXPECT_EQ(noisy.controller.scheme->scheme, "found-mse");
+}
+
 }  // namespace
 }  // namespace flutterscan::session
