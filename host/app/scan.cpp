@@ -20,6 +20,7 @@ struct ScanOptions {
   std::optional<std::string> controller;
   std::optional<std::string> out;
   std::optional<std::string> method;
+  std::optional<std::string> scheme;
   std::optional<std::uint64_t> frames;
   std::optional<double> seconds;
   std::optional<int> workers;
@@ -44,6 +45,7 @@ void run(const ScanOptions& o) {
     if (!method) throw UsageError("--method must be joint-wiener, wiener-avg, rl or tv");
     config.processing.method = *method;
   }
+  if (o.scheme) config.controller.code = *o.scheme;
   if (o.frames) config.processing.max_frames = *o.frames;
   if (o.seconds) config.processing.max_seconds = *o.seconds;
   if (o.workers) config.processing.workers = *o.workers;
@@ -72,6 +74,10 @@ void add_scan(CLI::App& app) {
                       "LED controller: auto (the only one attached), a serial number, or sim");
   command->add_option("--out", o->out, "folder for session folders");
   command->add_option("--method", o->method, "joint-wiener, wiener-avg, rl or tv");
+  command->add_option("--scheme", o->scheme,
+                      "LED pattern: a code (digits or library name), or auto: the capture scheme "
+                      "the regime map says wins at the calibrated light and noise "
+                      "(docs/algorithms.md)");
   command->add_option("--frames", o->frames, "stop after this many frames");
   command->add_option("--seconds", o->seconds, "stop after this long")->check(CLI::PositiveNumber);
   command->add_option("--workers", o->workers, "frames deblurred at once")
