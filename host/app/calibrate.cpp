@@ -157,7 +157,7 @@ void run_flat(const FlatFlags& f) {
     std::printf("wrote %s: %dx%d tiles; the light varies by up to %.1f%% across the field\n",
                 f.output.c_str(), v.tiles_x, v.tiles_y, 100 * v.largest_deviation);
     for (int k = 0; k < v.leds; ++k) {
-      std::printf("LED %d, relative to its median (rows of tiles):\n", k);
+      std::printf("LED %d, relative to the median over the tiles (rows of tiles):\n", k);
       const auto d = static_cast<std::size_t>(k * v.leds + k);
       for (int ty = 0; ty < v.tiles_y; ++ty) {
         std::printf("  ");
@@ -170,6 +170,10 @@ void run_flat(const FlatFlags& f) {
       }
     }
   }
+  // The path as the session will open it: absolute, in a TOML basic string.
+  std::string path = std::filesystem::absolute(f.output).string(), quoted = "\"";
+  for (char c : path) quoted += (c == '"' || c == '\\') ? std::string("\\") + c : std::string(1, c);
+  update_config(f, "flat", {{"flat_field", quoted + "\""}});
 }
 
 // -- noise -------------------------------------------------------------------
@@ -342,6 +346,8 @@ void add_calibrate(CLI::App& app) {
       ->check(CLI::Range(8, 16))
       ->capture_default_str();
   flat->add_flag("--json", ff->json, "print one JSON object");
+  flat->add_option("--config", ff->config,
+                   "session config (TOML) whose optics.flat_field receives the file's path");
   flat->callback([ff] { run_flat(*ff); });
 
   auto nf = std::make_shared<NoiseFlags>();

@@ -5,17 +5,19 @@
 #include <opencv2/imgproc.hpp>
 
 #include <algorithm>
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <condition_variable>
 #include <ctime>
 #include <deque>
 #include <filesystem>
-#include <bit>
+#include <fstream>
 #include <map>
-#include <sstream>
 #include <mutex>
+#include <optional>
 #include <set>
+#include <sstream>
 #include <thread>
 
 #include "capture/camera_source.hpp"
@@ -27,12 +29,13 @@
 #include "imaging/bayer.hpp"
 #include "imaging/capture_descriptor.hpp"
 #include "imaging/deblur.hpp"
-#include "session/model_fit.hpp"
+#include "imaging/flat_field.hpp"
 #include "imaging/frame_conversion.hpp"
 #include "imaging/motion_frame.hpp"
 #include "session/barcode_reader.hpp"
 #include "session/frame_matcher.hpp"
 #include "session/frame_model.hpp"
+#include "session/model_fit.hpp"
 #include "session/object_tracker.hpp"
 #include "session/results_server.hpp"
 #include "session/session_folder.hpp"
@@ -237,8 +240,7 @@ std::string connect_controller(const SessionConfig& config, const SessionHooks& 
   const LedCode& code = config.controller.parsed_code;
   bool one_of_n = true;
   for (int t = 0; t < code.length(); ++t) one_of_n = one_of_n && std::popcount(code.mask(t)) == 1;
-  if (auto r = link.client->set_code(0, code, one_of_n); !r.ok())
-    return fail("SetCode", r.error());
+  if (auto r = link.client->set_code(0, code, one_of_n); !r.ok()) return fail("SetCode", r.error());
   if (auto r = link.client->select_code(0); !r.ok()) return fail("SelectCode", r.error());
   protocol::SetTimingRequest timing{};
   timing.slot_time_us = config.controller.slot_time_us;
@@ -265,7 +267,7 @@ struct Shared {
 
 /// Worker: descriptor, deblur and fusion, decoding, sightings.
 FrameOutcome process(const FrameJob& job, const SessionConfig& config,
-                     std::atomic<double>& last_blur_px) {
+                     std::atomic<double>& last_blur_px, const imaging::FlatField* flat) {
   FrameOutcome out;
   out.index = job.index;
   out.sequence = job.frame.sequence;
@@ -302,7 +304,15 @@ FrameOutcome process(const FrameJob& job, const SessionConfig& config,
   imaging::DeblurOptions options;
   options.method = config.processing.method;
   options.threads = config.processing.threads_per_worker;
-  const imaging::Image electrons = imaging::dn_to_electrons(dn.value(), model.value());
+  imaging::Image electrons = imaging::dn_to_electrons(dn.value(), model.value());
+  if (flat != nullptr && !model.value().bayer_rggb) {
+    if (auto problem = imaging::apply_flat_field(electrons, *flat); !problem.empty()) {
+      log["error"] = "optics.flat_field: " + problem;
+      flags.push_back("error");
+      log["flags"] = flags;
+      return out;
+    }
+  }
   // The simplest model that fits the frame, and the guards (model_fit.hpp); raw
   // Bayer frames keep the grey global model on their raw planes.
   imaging::Plane latent;
@@ -310,8 +320,10 @@ FrameOutcome process(const FrameJob& job, const SessionConfig& config,
   if (model.value().bayer_rggb) {
     auto r = imaging::deblur_bayer(electrons.channels[0], model.value(), options,
                                    imaging::BayerMode::kRawPlanes);
-    if (r.ok()) latent = std::move(r.value().latent);
-    else deblur_error = r.error();
+    if (r.ok())
+      latent = std::move(r.value().latent);
+    else
+      deblur_error = r.error();
   } else {
     ModelFitConfig fit;
     fit.encoder = config.optics.encoder;
@@ -409,6 +421,22 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
     outcome.error = "config: " + problem;
     outcome.bad_input = true;
     return outcome;
+  }
+  // Light that varies across the field of view (calibrate flat): corrected per frame.
+  std::optional<imaging::FlatField> flat;
+  if (!config.optics.flat_field.empty()) {
+    std::ifstream in(config.optics.flat_field);
+    const auto json = nlohmann::json::parse(in, nullptr, false);
+    auto parsed = json.is_discarded()
+                      ? Result<imaging::FlatField, std::string>::failure("not readable JSON")
+                      : imaging::flat_field_from_json(json);
+    if (!parsed.ok()) {
+      outcome.error =
+          "config: optics.flat_field '" + config.optics.flat_field + "': " + parsed.error();
+      outcome.bad_input = true;
+      return outcome;
+    }
+    flat = std::move(parsed.value());
   }
   if (const auto& scheme = config.controller.scheme) {
     std::ostringstream text;
@@ -528,7 +556,7 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
     workers.emplace_back([&] {
       FrameJob job;
       while (shared.jobs.pop(job)) {
-        FrameOutcome o = process(job, config, last_blur_px);
+        FrameOutcome o = process(job, config, last_blur_px, flat ? &*flat : nullptr);
         if (!o.processed) ++shared.processing_errors;
         shared.outcomes.push(std::move(o));
       }
@@ -672,8 +700,7 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
       }
       const double speed = belt_speed_px_per_us(*m.event, config.optics);
       if (previous_event) {
-        const double previous_speed =
-            belt_speed_px_per_us(*previous_event, config.optics);
+        const double previous_speed = belt_speed_px_per_us(*previous_event, config.optics);
         travel += 0.5 * (speed + previous_speed) *
                   static_cast<double>(m.event->start_us - previous_event->start_us);
       }

@@ -163,12 +163,12 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     r.get("frame_period_us", c.controller.frame_period_us);
   }
   if (const toml::table* t = root["optics"].as_table()) {
-    if (auto p =
-            known_keys_problem(*t, "optics.",
-                               {"px_per_count", "direction", "crosstalk", "electrons", "cap",
-                                "read_noise_e", "full_well_e", "black_level_dn", "gain_e_per_dn",
-                                "bit_depth", "encoder", "nominal_blur_px", "line_time_us"},
-                               origin);
+    if (auto p = known_keys_problem(
+            *t, "optics.",
+            {"px_per_count", "direction", "crosstalk", "electrons", "cap", "read_noise_e",
+             "full_well_e", "black_level_dn", "gain_e_per_dn", "bit_depth", "encoder",
+             "nominal_blur_px", "line_time_us", "flat_field"},
+            origin);
         !p.empty())
       return Out::failure(p);
     TableReader r(t, "optics.", origin, error);
@@ -184,6 +184,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     r.get("encoder", c.optics.encoder);
     r.get("nominal_blur_px", c.optics.nominal_blur_px);
     r.get("line_time_us", c.optics.line_time_us);
+    r.get("flat_field", c.optics.flat_field);
     if (const toml::node* node = t->get("crosstalk")) {
       const toml::array* rows = node->as_array();
       std::vector<double> values;

@@ -44,6 +44,7 @@ struct OpticsConfig {
   bool encoder = true;
   double nominal_blur_px = 0;  ///< without an encoder: the blur at the line's nominal speed
   double line_time_us = 0;     ///< rolling-shutter line time (0: global shutter)
+  std::string flat_field;      ///< flat-field file (calibrate flat); empty: uniform light
   std::string direction = "+x";
   std::vector<double> crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
   double electrons = 3000;  ///< E: white e- per channel under rect-white (sets I_k with cap)

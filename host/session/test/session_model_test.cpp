@@ -4,6 +4,9 @@
 // counts both.
 #include <gtest/gtest.h>
 
+#include <fstream>
+
+#include "imaging/flat_field.hpp"
 #include "session/session.hpp"
 #include "session/test/session_test_support.hpp"
 
@@ -65,6 +68,35 @@ TEST(SimSessionModels, SchemeAutoFollowsTheRegimeMap) {
   noisy.optics.read_noise_e = 30;
   ASSERT_EQ(check_config(noisy), "");
   EXPECT_EQ(noisy.controller.scheme->scheme, "found-mse");
+}
+
+TEST(SimSessionModels, AFlatFieldIsAppliedAndABadOneRefusedBeforeStart) {
+  const fs::path out = fresh_folder("flat_field");
+  // A flat field of uniform light (every tile the same mixing): labels still read.
+  imaging::FlatField flat;
+  flat.width = 640;
+  flat.height = 240;
+  flat.tiles_x = 4;
+  flat.tiles_y = 2;
+  flat.channels = flat.leds = 3;
+  flat.reference = {900, 80, 10, 100, 850, 120, 10, 70, 880};
+  for (int t = 0; t < 8; ++t)
+    flat.mixing.insert(flat.mixing.end(), flat.reference.begin(), flat.reference.end());
+  const fs::path file = out / "flat.json";
+  std::ofstream(file) << imaging::flat_field_to_json(flat).dump();
+  SessionConfig config = small_sim_config(out, 30);
+  config.optics.flat_field = file.string();
+  std::atomic<bool> stop{false};
+  const SessionOutcome outcome = run_session(config, stop, {});
+  ASSERT_EQ(outcome.error, "");
+  EXPECT_EQ(outcome.summary["ground_truth"]["missed"], nlohmann::json::array());
+  EXPECT_EQ(outcome.summary["frames_failed"], 0);
+  // A broken file: refused as bad input, before any controller or camera is touched.
+  std::ofstream(file) << "{\"format\": \"flutterscan-flat-field\"}";
+  const SessionOutcome refused = run_session(config, stop, {});
+  EXPECT_TRUE(refused.bad_input);
+  EXPECT_NE(refused.error.find("optics.flat_field"), std::string::npos) << refused.error;
+  EXPECT_TRUE(refused.folder.empty());
 }
 
 }  // namespace
