@@ -370,7 +370,7 @@ Expected<std::unique_ptr<ClaimedInterface>> open_dfu_interface(UsbContext& usb,
     }
     claimed = std::make_unique<ClaimedInterface>(handle, interface_number);
   }
-  if (count > 0) libusb_free_device_list(list, 1);
+  if (count >= 0) libusb_free_device_list(list, 1);  // an empty list is allocated too
   if (!claimed)
     return fail<std::unique_ptr<ClaimedInterface>>(
         ErrorKind::kNotFound,

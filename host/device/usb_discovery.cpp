@@ -78,7 +78,7 @@ Expected<std::vector<FoundDevice>> find_bootloader_devices() {
     }
     found.push_back(device);
   }
-  if (count > 0) libusb_free_device_list(list, 1);
+  if (count >= 0) libusb_free_device_list(list, 1);  // an empty list is allocated too
   libusb_exit(context);
   return Out::success(found);
 }
