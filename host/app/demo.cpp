@@ -15,7 +15,7 @@ namespace {
 
 struct DemoOptions {
   std::string out = "flutterscan-demo";
-  std::uint64_t frames = 300;
+  std::uint64_t frames = 240;
   bool no_progress = false;
 };
 

@@ -162,11 +162,15 @@ double along_motion(double x, double y, int width, int height, imaging::Directio
   return x;
 }
 
-/// PNG bytes for the report: the raw frame scaled to 8 bits (display only) and the latent.
-Preview make_preview(const FrameOutcome& o, int bit_depth) {
+/// PNG bytes for the report: the raw frame stretched to 8 bits (display only) and the latent.
+Preview make_preview(const FrameOutcome& o) {
   Preview p;
   p.sequence = o.sequence;
-  const double scale = 255.0 / (std::pow(2.0, bit_depth) - 1);
+  // Display only: the brightest sample maps to white.
+  float brightest = 1;
+  for (const auto& plane : o.dn.channels)
+    for (float v : plane.pixels) brightest = std::max(brightest, v);
+  const double scale = 255.0 / brightest;
   const int width = o.dn.width(), height = o.dn.height();
   const int out_width = std::min(width, 960);
   const double shrink = static_cast<double>(out_width) / width;
@@ -575,6 +579,7 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   std::vector<double> latencies;
   std::vector<double> processed_at_s;
   std::vector<Preview> previews;
+  int previews_read = 0, previews_failed = 0;
   std::set<std::string> truth_seen;
   std::set<std::string> truth_in_view;
   std::uint64_t frames_saved = 0;
@@ -618,12 +623,16 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
               ++frames_saved;
               f.log["files_saved"] = true;
             }
-            if (previews.size() < 3 || (f.decode_failed && previews.size() < 6)) {
-              Preview p = make_preview(f, format.bit_depth);
-              p.caption = "frame " + std::to_string(f.sequence) +
-                          (f.decode_failed ? " (a label without a read)" : "");
-              previews.push_back(std::move(p));
-            }
+          }
+          // The report shows the first frames with a read label, and failures.
+          const bool read_something = std::any_of(f.sightings.begin(), f.sightings.end(),
+                                                  [](const Sighting& x) { return x.decoded; });
+          if ((read_something && previews_read < 3) || (f.decode_failed && previews_failed < 3)) {
+            Preview p = make_preview(f);
+            p.caption = "frame " + std::to_string(f.sequence) +
+                        (f.decode_failed ? ": a label without a read" : ": labels read");
+            previews.push_back(std::move(p));
+            (f.decode_failed ? previews_failed : previews_read) += 1;
           }
         } else if (!f.log.contains("flags")) {
           f.log["flags"] = nlohmann::json::array({"error"});
