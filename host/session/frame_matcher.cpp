@@ -45,15 +45,16 @@ void FrameMatcher::add_event(const ExposureRecord& event) {
 
 std::vector<FrameMatch> FrameMatcher::add_frame(const FrameStamp& frame) {
   pending_.push_back(frame);
-  std::vector<FrameMatch> out;
-  while (!pending_.empty() && decide_front(pending_.size() > o_.hold_frames, out)) {
-  }
-  return out;
+  return decide(frame.arrival_ns);
 }
 
-std::vector<FrameMatch> FrameMatcher::decide_waiting() {
+std::vector<FrameMatch> FrameMatcher::decide_waiting(std::int64_t now_ns) { return decide(now_ns); }
+
+std::vector<FrameMatch> FrameMatcher::decide(std::int64_t now_ns) {
   std::vector<FrameMatch> out;
-  while (!pending_.empty() && decide_front(pending_.size() > o_.hold_frames, out)) {
+  while (!pending_.empty()) {
+    const bool waited_enough = now_ns - pending_.front().arrival_ns > o_.max_wait_ns;
+    if (!decide_front(waited_enough || pending_.size() > o_.hold_limit, out)) break;
   }
   return out;
 }

@@ -34,7 +34,8 @@ struct ExposureRecord {
 /// \brief A frame's identity on the camera's side.
 struct FrameStamp {
   std::uint64_t sequence = 0;
-  std::int64_t timestamp_ns = 0;
+  std::int64_t timestamp_ns = 0;  ///< camera clock
+  std::int64_t arrival_ns = 0;    ///< host steady clock, when the frame reached the host
 };
 
 /// \brief controller_us = offset_us + slope * (camera_ns - reference_ns).
@@ -58,7 +59,12 @@ ClockRelation fit_clocks(const std::deque<std::pair<std::int64_t, std::uint64_t>
 struct MatcherOptions {
   std::size_t window = 32;      ///< matches in the clock fit
   double tolerance_us = 2000;   ///< largest |event start - predicted| accepted
-  std::size_t hold_frames = 8;  ///< frames kept waiting for a late event
+  /// How long (host clock) a frame waits for a late event before it is
+  /// declared without one. Time, not a frame count: a fast camera (or the
+  /// simulator replaying frames) can deliver many frames while the event
+  /// reader is merely not scheduled yet.
+  std::int64_t max_wait_ns = 1'000'000'000;
+  std::size_t hold_limit = 256;  ///< frames held at most (memory), whatever their age
 };
 
 /// \brief What became of one frame.
@@ -81,11 +87,13 @@ class FrameMatcher {
 
   /// \brief An event arrived (any order; duplicates ignored).
   void add_event(const ExposureRecord& event);
-  /// \brief A frame arrived (increasing sequence). Returns the frames decided
-  /// now, in order: this one and earlier ones that waited for their event.
+  /// \brief A frame arrived (increasing sequence; its arrival_ns is "now").
+  /// Returns the frames decided now, in order: this one and earlier ones that
+  /// waited for their event.
   std::vector<FrameMatch> add_frame(const FrameStamp& frame);
-  /// \brief Decides the waiting frames whose events have arrived since.
-  std::vector<FrameMatch> decide_waiting();
+  /// \brief Decides the waiting frames whose events have arrived since, and
+  /// those that have waited longer than max_wait_ns at host time `now_ns`.
+  std::vector<FrameMatch> decide_waiting(std::int64_t now_ns);
   /// \brief Decides every waiting frame (end of session).
   std::vector<FrameMatch> flush();
   /// \brief Events left behind by matches since the last call (after flush(): all unclaimed).
@@ -95,6 +103,8 @@ class FrameMatcher {
   std::size_t pending_frames() const { return pending_.size(); }
 
  private:
+  /// Decides the waiting frames in order until one must wait longer.
+  std::vector<FrameMatch> decide(std::int64_t now_ns);
   /// Decides the front frame if possible (or if `force`); false if it must wait.
   bool decide_front(bool force, std::vector<FrameMatch>& out);
   void accept(const FrameStamp& frame, const ExposureRecord& event, std::vector<FrameMatch>& out,

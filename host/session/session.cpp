@@ -767,12 +767,12 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
     }
     drain_events();
     if (got == capture::FrameWait::kTimeout) {
-      dispatch(matcher.decide_waiting());  // late events may settle waiting frames
+      dispatch(matcher.decide_waiting(now_ns()));  // late events may settle waiting frames
       continue;
     }
     ++shared.frames_captured;
     if (frame.host_arrival_ns == 0) frame.host_arrival_ns = now_ns();
-    const FrameStamp stamp{frame.sequence, frame.timestamp_ns};
+    const FrameStamp stamp{frame.sequence, frame.timestamp_ns, frame.host_arrival_ns};
     held.emplace(frame.sequence, std::move(frame));
     dispatch(matcher.add_frame(stamp));
   }

@@ -117,6 +117,46 @@ TEST(FrameMatcher, WaitsForALateEvent) {
   EXPECT_EQ(decided[1].event->frame_counter, 7u);
 }
 
+TEST(FrameMatcher, AFastBurstOfFramesWaitsOnTheHostClockNotAFrameCount) {
+  // 40 frames reach the host 0.1 ms apart (a replaying simulator, a camera's
+  // backlog) while the event reader is not scheduled: none may be given up.
+  FrameMatcher matcher;
+  matcher.add_event(event_of(0));
+  const std::int64_t t0 = 1'000'000'000;
+  auto arriving = [&](int k) {
+    FrameStamp f = frame_of(k);
+    f.arrival_ns = t0 + k * 100'000;
+    return f;
+  };
+  ASSERT_EQ(matcher.add_frame(arriving(0)).size(), 1u);
+  for (int k = 1; k < 40; ++k) EXPECT_TRUE(matcher.add_frame(arriving(k)).empty()) << k;
+  for (int k = 1; k < 40; ++k) matcher.add_event(event_of(k));
+  const auto decided = matcher.decide_waiting(t0 + 5'000'000);
+  ASSERT_EQ(decided.size(), 39u);
+  for (const auto& m : decided) {
+    ASSERT_TRUE(m.event.has_value()) << m.why;
+    EXPECT_EQ(m.event->frame_counter, m.frame.sequence - 2);
+  }
+}
+
+TEST(FrameMatcher, AFrameWhoseEventNeverComesIsGivenUpAfterTheWait) {
+  MatcherOptions options;
+  options.max_wait_ns = 200'000'000;
+  FrameMatcher matcher(options);
+  matcher.add_event(event_of(0));
+  FrameStamp first = frame_of(0);
+  first.arrival_ns = 1'000'000'000;
+  ASSERT_EQ(matcher.add_frame(first).size(), 1u);
+  FrameStamp second = frame_of(1);
+  second.arrival_ns = 1'020'000'000;
+  EXPECT_TRUE(matcher.add_frame(second).empty());
+  EXPECT_TRUE(matcher.decide_waiting(1'200'000'000).empty());  // 180 ms: still waiting
+  const auto decided = matcher.decide_waiting(1'230'000'000);
+  ASSERT_EQ(decided.size(), 1u);
+  EXPECT_FALSE(decided[0].event.has_value());
+  EXPECT_NE(decided[0].why.find("no exposure event"), std::string::npos) << decided[0].why;
+}
+
 TEST(FrameMatcher, ACounterJumpIsResolvedByTheClocksAndSaidSo) {
   FrameMatcher matcher;
   for (int k = 0; k < 10; ++k) {

@@ -103,6 +103,12 @@ TEST(SimSession, OverloadDropsAtTheQueueAndCountsEveryDrop) {
   const auto lines = read_jsonl(out / "session.jsonl", bad);
   EXPECT_EQ(count_flag(lines, "dropped"), dropped);
   EXPECT_EQ(lines.size(), 40u);
+  if (HasFailure()) {
+    // What went otherwise than processed or dropped, for the record.
+    for (const auto& l : lines)
+      if (count_flag({l}, "dropped") == 0 && !l.contains("latency_ms")) ADD_FAILURE() << l.dump();
+    ADD_FAILURE() << s.dump();
+  }
 }
 
 TEST(SimSession, FrameFilesRotateWithinTheDiskBudgetAndTheLogNever) {
