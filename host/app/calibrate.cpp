@@ -1,9 +1,11 @@
-// `flutterscan calibrate crosstalk | noise | speed`: the capture model's
-// calibrations from frames on disk (white target frames, flat pairs, coded
-// frames of a moving target), printed and optionally written into the [optics]
-// table of a session config (--config FILE, comments and other keys kept).
-// The algorithms live in host/imaging (crosstalk_calibration, photon_transfer,
-// blur_estimate); docs/calibration.md says how to take the frames.
+// `flutterscan calibrate crosstalk | flat | noise | speed`: the capture model's
+// calibrations, printed and optionally written into the [optics] table of a
+// session config (--config FILE, comments and other keys kept). Each takes its
+// frames either from files on disk (white target frames, flat pairs, coded
+// frames of a moving target) or, with --camera, live from the session's camera
+// and controller (calibrate_live.hpp). The algorithms live in host/imaging
+// (crosstalk_calibration, flat_field, photon_transfer, blur_estimate);
+// docs/calibration.md says how to take the frames.
 
 #include <cmath>
 #include <filesystem>
@@ -12,6 +14,7 @@
 #include <memory>
 #include <sstream>
 
+#include "app/calibrate_live.hpp"
 #include "app/cli_errors.hpp"
 #include "app/commands.hpp"
 #include "app/config_patch.hpp"
@@ -22,6 +25,7 @@
 #include "imaging/flat_field.hpp"
 #include "imaging/frame_conversion.hpp"
 #include "imaging/photon_transfer.hpp"
+#include "session/frame_model.hpp"
 
 namespace flutterscan::app {
 namespace {
@@ -30,6 +34,7 @@ struct CommonFlags {
   int bit_depth = 12;
   std::string config;
   bool json = false;
+  LiveFlags live;
 };
 
 imaging::Image load(const std::string& path) {
@@ -61,7 +66,8 @@ void update_config(const CommonFlags& f, const std::string& what,
 }
 
 void add_common(CLI::App* command, CommonFlags& f) {
-  command->add_option("--bit-depth", f.bit_depth, "significant bits per sample of the frames")
+  command->add_option("--bit-depth", f.bit_depth,
+                      "significant bits per sample of frames from files (live: the camera's)")
       ->check(CLI::Range(8, 16))
       ->capture_default_str();
   command->add_option("--config", f.config,
@@ -76,11 +82,28 @@ struct CrosstalkFlags : CommonFlags {
   std::vector<std::string> leds;
 };
 
+/// The white-target frames of `calibrate crosstalk` and `calibrate flat`: from
+/// --dark and --led, or captured live.
+WhiteFrames white_frames(const CommonFlags& f, const std::string& dark,
+                         const std::vector<std::string>& leds) {
+  check_live_or_files(f.live, !dark.empty() || !leds.empty(), "--dark and --led");
+  if (!f.live.camera.empty()) {
+    LiveFlags live = f.live;
+    live.config = f.config;
+    return capture_white_frames(live);
+  }
+  if (dark.empty()) throw UsageError("--dark is required with --led (the frame with every LED off)");
+  if (leds.empty()) throw UsageError("--led is required with --dark (one frame per LED lit alone)");
+  WhiteFrames frames;
+  frames.dark = load(dark);
+  for (const auto& path : leds) frames.lit.push_back(load(path));
+  frames.full_scale_dn = full_scale(f);
+  return frames;
+}
+
 void run_crosstalk(const CrosstalkFlags& f) {
-  const imaging::Image dark = load(f.dark);
-  std::vector<imaging::Image> lit;
-  for (const auto& path : f.leds) lit.push_back(load(path));
-  const auto result = imaging::calibrate_crosstalk(dark, lit, full_scale(f));
+  const WhiteFrames frames = white_frames(f, f.dark, f.leds);
+  const auto result = imaging::calibrate_crosstalk(frames.dark, frames.lit, frames.full_scale_dn);
   if (!result.ok()) throw UsageError(result.error());
   const auto& cal = result.value();
   if (f.json) {
@@ -138,10 +161,9 @@ void run_flat(const FlatFlags& f) {
   std::istringstream grid(f.grid);
   if (!(grid >> tiles_x >> separator >> tiles_y) || separator != 'x' || !grid.eof())
     throw UsageError("--grid must be COLUMNSxROWS, e.g. 8x6, not '" + f.grid + "'");
-  const imaging::Image dark = load(f.dark);
-  std::vector<imaging::Image> lit;
-  for (const auto& path : f.leds) lit.push_back(load(path));
-  const auto flat = imaging::measure_flat_field(dark, lit, tiles_x, tiles_y, full_scale(f));
+  const WhiteFrames frames = white_frames(f, f.dark, f.leds);
+  const auto flat = imaging::measure_flat_field(frames.dark, frames.lit, tiles_x, tiles_y,
+                                                frames.full_scale_dn);
   if (!flat.ok()) throw UsageError(flat.error());
   if (auto error = write_text(f.output, imaging::flat_field_to_json(flat.value()).dump(1) + "\n");
       !error.empty())
@@ -181,17 +203,33 @@ void run_flat(const FlatFlags& f) {
 struct NoiseFlags : CommonFlags {
   std::vector<std::string> dark;
   std::vector<std::string> flats;  ///< pairs, in order
+  std::vector<int> lit_slots = {2, 4, 8, 16};
 };
 
-void run_noise(const NoiseFlags& f) {
+/// The photon transfer frames: from --dark and --flat, or captured live.
+NoiseFrames noise_frames(const NoiseFlags& f) {
+  check_live_or_files(f.live, !f.dark.empty() || !f.flats.empty(), "--dark and --flat");
+  if (!f.live.camera.empty()) {
+    if (f.lit_slots.size() < 2)
+      throw UsageError("--lit-slots needs two or more light levels");
+    LiveFlags live = f.live;
+    live.config = f.config;
+    return capture_noise_frames(live, f.lit_slots);
+  }
   if (f.dark.size() != 2) throw UsageError("--dark takes two frames (a pair without light)");
   if (f.flats.size() < 4 || f.flats.size() % 2 != 0)
     throw UsageError("give two or more --flat pairs (two frames each), at different light levels");
-  const imaging::FlatPair dark{load(f.dark[0]), load(f.dark[1])};
-  std::vector<imaging::FlatPair> flats;
+  NoiseFrames frames;
+  frames.dark = {load(f.dark[0]), load(f.dark[1])};
   for (std::size_t i = 0; i < f.flats.size(); i += 2)
-    flats.push_back({load(f.flats[i]), load(f.flats[i + 1])});
-  const auto result = imaging::photon_transfer(dark, flats, full_scale(f));
+    frames.flats.push_back({load(f.flats[i]), load(f.flats[i + 1])});
+  frames.full_scale_dn = full_scale(f);
+  return frames;
+}
+
+void run_noise(const NoiseFlags& f) {
+  const NoiseFrames frames = noise_frames(f);
+  const auto result = imaging::photon_transfer(frames.dark, frames.flats, frames.full_scale_dn);
   if (!result.ok()) throw UsageError(result.error());
   const auto& ptc = result.value();
   double gain = 0, read_noise = 0;
@@ -237,14 +275,22 @@ struct SpeedFlags : CommonFlags {
   double min_blur = 4, max_blur = 200;
 };
 
-void run_speed(const SpeedFlags& f) {
+/// One coded frame to estimate the blur of: electrons (black level removed),
+/// its model, and the encoder counts during its exposure (0: none).
+struct SpeedSample {
+  std::string label;
+  imaging::Image electrons;
+  imaging::CaptureModel model;
+  double counts = 0;
+};
+
+/// Frames from files, each with its capture descriptor (FRAME.json).
+std::vector<SpeedSample> speed_samples_from_files(const SpeedFlags& f) {
   if (!f.encoder_counts.empty() && f.encoder_counts.size() != f.frames.size())
     throw UsageError("--encoder-counts needs one count per frame (" +
                      std::to_string(f.frames.size()) + " frames, " +
                      std::to_string(f.encoder_counts.size()) + " counts)");
-  if (!(f.max_blur > f.min_blur)) throw UsageError("--max-blur must exceed --min-blur");
-  nlohmann::json per_frame = nlohmann::json::array();
-  double weighted_ratio = 0, weights = 0, blur_sum = 0, blur_weights = 0;
+  std::vector<SpeedSample> samples;
   for (std::size_t i = 0; i < f.frames.size(); ++i) {
     const std::string descriptor_path = sibling_path(f.frames[i], "", ".json");
     const auto descriptor = read_json(descriptor_path);
@@ -255,20 +301,58 @@ void run_speed(const SpeedFlags& f) {
     if (!model.ok()) throw UsageError("descriptor '" + descriptor_path + "': " + model.error());
     const auto frame = read_frame(f.frames[i]);
     if (!frame.ok()) throw UsageError(frame.error());
-    const auto electrons = imaging::dn_to_electrons(frame.value().dn, model.value());
-    const auto estimate = imaging::estimate_blur(electrons, model.value(), f.min_blur, f.max_blur);
-    if (!estimate.ok()) throw UsageError("'" + f.frames[i] + "': " + estimate.error());
+    samples.push_back({f.frames[i], imaging::dn_to_electrons(frame.value().dn, model.value()),
+                       model.value(), f.encoder_counts.empty() ? 0.0 : f.encoder_counts[i]});
+  }
+  return samples;
+}
+
+/// Frames captured live under the session's code, modelled from their exposure
+/// events and the config's optics; the counts are the events' encoder deltas.
+std::vector<SpeedSample> speed_samples_live(const SpeedFlags& f) {
+  LiveFlags live = f.live;
+  live.config = f.config;
+  const SpeedFrames captured = capture_speed_frames(live);
+  std::vector<SpeedSample> samples;
+  for (const auto& frame : captured.frames) {
+    const std::string label = "frame " + std::to_string(frame.sequence) + " (exposure " +
+                              std::to_string(frame.event.frame_counter) + ")";
+    auto model = session::frame_model(frame.event, captured.config.controller.parsed_code,
+                                      captured.config, frame.format);
+    if (!model.ok()) throw RuntimeFailure(label + ": " + model.error());
+    samples.push_back({label, imaging::dn_to_electrons(frame.dn, model.value()), model.value(),
+                       std::abs(static_cast<double>(frame.event.encoder_delta))});
+  }
+  return samples;
+}
+
+void run_speed(const SpeedFlags& f) {
+  check_live_or_files(f.live, !f.frames.empty(), "frame files");
+  if (!f.live.camera.empty() && !f.encoder_counts.empty())
+    throw UsageError("--encoder-counts is for frames from files: live, the counts come from the "
+                     "controller's exposure events");
+  if (!(f.max_blur > f.min_blur)) throw UsageError("--max-blur must exceed --min-blur");
+  const bool live = !f.live.camera.empty();
+  const std::vector<SpeedSample> samples =
+      live ? speed_samples_live(f) : speed_samples_from_files(f);
+  nlohmann::json per_frame = nlohmann::json::array();
+  double weighted_ratio = 0, weights = 0, blur_sum = 0, blur_weights = 0;
+  for (const auto& sample : samples) {
+    const auto estimate =
+        imaging::estimate_blur(sample.electrons, sample.model, f.min_blur, f.max_blur);
+    if (!estimate.ok()) throw UsageError("'" + sample.label + "': " + estimate.error());
     const auto& e = estimate.value();
-    nlohmann::json entry = {{"frame", f.frames[i]}, {"blur_px", e.blur_px}};
+    nlohmann::json entry = {{"frame", sample.label}, {"blur_px", e.blur_px}};
+    if (live) entry["encoder_counts"] = sample.counts;
     const bool confident = std::isfinite(e.standard_error_px);
     entry["standard_error_px"] = confident ? nlohmann::json(e.standard_error_px) : nlohmann::json();
     if (confident) {
       const double w = 1.0 / std::max(1e-6, e.standard_error_px * e.standard_error_px);
       blur_sum += w * e.blur_px;
       blur_weights += w;
-      if (!f.encoder_counts.empty() && f.encoder_counts[i] != 0) {
+      if (sample.counts != 0) {
         // px per count = blur / counts; its variance (se / counts)^2.
-        const double counts = f.encoder_counts[i];
+        const double counts = sample.counts;
         const double wr = counts * counts * w;
         weighted_ratio += wr * e.blur_px / counts;
         weights += wr;
@@ -277,11 +361,11 @@ void run_speed(const SpeedFlags& f) {
     per_frame.push_back(entry);
     if (!f.json) {
       if (confident)
-        std::printf("%s: blur %.3f px +- %.3f (residual %.2f of the noise)\n", f.frames[i].c_str(),
+        std::printf("%s: blur %.3f px +- %.3f (residual %.2f of the noise)\n", sample.label.c_str(),
                     e.blur_px, e.standard_error_px, e.residual_per_sample);
       else
         std::printf("%s: no estimate (the frame has too few edges along the motion)\n",
-                    f.frames[i].c_str());
+                    sample.label.c_str());
     }
   }
   if (blur_weights == 0)
@@ -299,7 +383,7 @@ void run_speed(const SpeedFlags& f) {
     std::cout << report.dump() << "\n";
   } else {
     std::printf("blur %.3f px +- %.3f over %zu frames\n", blur_sum / blur_weights,
-                1 / std::sqrt(blur_weights), f.frames.size());
+                1 / std::sqrt(blur_weights), samples.size());
     if (weights > 0)
       std::printf("pixels per encoder count %.5f +- %.5f\n", weighted_ratio / weights,
                   1 / std::sqrt(weights));
@@ -307,74 +391,95 @@ void run_speed(const SpeedFlags& f) {
   if (weights > 0)
     update_config(f, "speed", {{"px_per_count", toml_number(weighted_ratio / weights)}});
   else if (!f.config.empty())
-    throw UsageError(
-        "--config needs --encoder-counts: without them there is no px_per_count to write");
+    throw UsageError(live ? "--config: no exposure event carried encoder counts (is the encoder "
+                            "connected, and the belt moving?), so there is no px_per_count"
+                          : "--config needs --encoder-counts: without them there is no "
+                            "px_per_count to write");
 }
 
 }  // namespace
 
 void add_calibrate(CLI::App& app) {
   CLI::App* calibrate = app.add_subcommand(
-      "calibrate", "Measure the capture model: crosstalk, noise, speed (docs/calibration.md)");
+      "calibrate",
+      "Measure the capture model: crosstalk, flat field, noise, speed; from frames on disk or "
+      "live with --camera (docs/calibration.md)");
   calibrate->require_subcommand(1);
+  const std::string white_frames_help =
+      "live: frames averaged for the dark frame and for each LED";
 
   auto xf = std::make_shared<CrosstalkFlags>();
   CLI::App* crosstalk = calibrate->add_subcommand(
-      "crosstalk", "LED-to-channel matrix, black levels and channel gains from a white target");
+      "crosstalk",
+      "LED-to-channel matrix, black levels and channel gains from a white target. Live (--camera): "
+      "disarms the controller for dark frames, then uploads 1111.., 2222.., 4444.. (52 slots) as "
+      "code 7, arms, averages --frames frames per LED, and leaves it disarmed");
   crosstalk->add_option("--dark", xf->dark, "frame of the white target with every LED off")
-      ->required()
       ->check(CLI::ExistingFile);
   crosstalk
       ->add_option("--led", xf->leds, "one frame per LED lit alone (codes 1111.., 2222.., 4444..)")
-      ->required()
       ->check(CLI::ExistingFile);
   add_common(crosstalk, *xf);
+  add_live_options(crosstalk, xf->live, white_frames_help);
   crosstalk->callback([xf] { run_crosstalk(*xf); });
 
   auto ff = std::make_shared<FlatFlags>();
   CLI::App* flat = calibrate->add_subcommand(
-      "flat", "Illumination and crosstalk per region of the field of view from a white target");
+      "flat",
+      "Illumination and crosstalk per region of the field of view from a white target (live: the "
+      "frames of calibrate crosstalk)");
   flat->add_option("--dark", ff->dark, "frame of the white target with every LED off")
-      ->required()
       ->check(CLI::ExistingFile);
   flat->add_option("--led", ff->leds, "one frame per LED lit alone (codes 1111.., 2222.., 4444..)")
-      ->required()
       ->check(CLI::ExistingFile);
   flat->add_option("--grid", ff->grid, "tiles across x down")->capture_default_str();
   flat->add_option("-o,--output", ff->output, "flat-field file to write (JSON)")->required();
-  flat->add_option("--bit-depth", ff->bit_depth, "significant bits per sample of the frames")
+  flat->add_option("--bit-depth", ff->bit_depth,
+                   "significant bits per sample of frames from files (live: the camera's)")
       ->check(CLI::Range(8, 16))
       ->capture_default_str();
   flat->add_flag("--json", ff->json, "print one JSON object");
   flat->add_option("--config", ff->config,
-                   "session config (TOML) whose optics.flat_field receives the file's path");
+                   "session config (TOML) whose optics.flat_field receives the file's path "
+                   "(live: also the camera and controller settings used)");
+  add_live_options(flat, ff->live, white_frames_help);
   flat->callback([ff] { run_flat(*ff); });
 
   auto nf = std::make_shared<NoiseFlags>();
   CLI::App* noise = calibrate->add_subcommand(
-      "noise", "Gain (e-/DN) and read noise (e-) by photon transfer (EMVA 1288 style)");
+      "noise",
+      "Gain (e-/DN) and read noise (e-) by photon transfer (EMVA 1288 style). Live (--camera): a "
+      "dark pair with the controller disarmed, then a pair per --lit-slots level (all LEDs in that "
+      "many of 52 slots, as code 7)");
   noise->add_option("--dark", nf->dark, "two frames without light")
-      ->required()
       ->expected(2)
       ->check(CLI::ExistingFile);
   noise
       ->add_option("--flat", nf->flats,
                    "two frames of a flat target at one light level; repeat per level")
-      ->required()
       ->expected(2)
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll)
       ->check(CLI::ExistingFile);
+  noise
+      ->add_option("--lit-slots", nf->lit_slots,
+                   "live: the light levels, as slots of 52 lit by all LEDs (light ~ slots)")
+      ->check(CLI::Range(2, 52))
+      ->capture_default_str();
   add_common(noise, *nf);
+  add_live_options(noise, nf->live, "");
   noise->callback([nf] { run_noise(*nf); });
 
   auto sf = std::make_shared<SpeedFlags>();
+  sf->live.frames = 8;
   CLI::App* speed = calibrate->add_subcommand(
-      "speed", "Blur length from coded frames of a moving target, and pixels per encoder count");
+      "speed",
+      "Blur length from coded frames of a moving target, and pixels per encoder count. Live "
+      "(--camera): frames under the session's code (code 0), the counts from their exposure "
+      "events");
   speed->add_option("frames", sf->frames, "coded frames, each with its descriptor (FRAME.json)")
-      ->required()
       ->check(CLI::ExistingFile);
   speed->add_option("--encoder-counts", sf->encoder_counts,
-                    "encoder counts during each frame's exposure (one per frame)");
+                    "encoder counts during each frame's exposure (one per frame; files only)");
   speed->add_option("--min-blur", sf->min_blur, "shortest blur searched, px")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
@@ -382,6 +487,7 @@ void add_calibrate(CLI::App& app) {
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   add_common(speed, *sf);
+  add_live_options(speed, sf->live, "live: coded frames to capture");
   speed->callback([sf] { run_speed(*sf); });
 }
 

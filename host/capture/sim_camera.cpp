@@ -93,10 +93,24 @@ class SimCamera final : public CameraSource {
 
   std::string open() override {
     if (o_.width < 64 || o_.height < 64) return "camera sim: width and height must be >= 64";
+    if (auto problem = parse_sim_target(o_.target, reflectance_); !problem.empty()) return problem;
+    if (!(o_.falloff >= 0 && o_.falloff <= 0.9)) return "camera sim: falloff must be within 0..0.9";
+    if (o_.falloff > 0 && reflectance_ < 0)
+      return "camera sim: falloff needs the static target (target=white)";
+    if (o_.bit_depth < 8 || o_.bit_depth > 16) return "camera sim: bit_depth must be within 8..16";
+    if (!(o_.full_well > 0)) return "camera sim: full_well must be > 0";
+    if (!(o_.read_noise >= 0)) return "camera sim: read_noise must be >= 0";
+    if (!(o_.black_level >= 0 && o_.black_level < std::pow(2.0, o_.bit_depth) - 1))
+      return "camera sim: black_level must be within 0..2^bit_depth - 1";
+    if (reflectance_ >= 0) return common_checks();  // the belt stands still: no labels to fit
     if (o_.tile_width + 2 * sim::kMinBeltPx > o_.width)
       return "camera sim: tile_width " + std::to_string(o_.tile_width) +
              " does not fit the view width " + std::to_string(o_.width);
     if (!(o_.speed_px_per_s > 0)) return "camera sim: speed_px_per_s must be > 0";
+    return common_checks();
+  }
+
+  std::string common_checks() const {
     if (o_.jitter < 0 || o_.jitter > 0.5) return "camera sim: jitter must be within 0..0.5";
     if (o_.drop_probability < 0 || o_.drop_probability >= 1)
       return "camera sim: drop_probability must be within 0..1 (exclusive)";
@@ -215,7 +229,7 @@ class SimCamera final : public CameraSource {
 
   /// One frame period on the virtual clock: strobe, encoder, clock to the next frame.
   RenderJob expose_one() {
-    double speed = o_.speed_px_per_s;
+    double speed = reflectance_ >= 0 ? 0.0 : o_.speed_px_per_s;  // a static target: belt stopped
     if (o_.jitter > 0) speed *= std::clamp(1.0 + o_.jitter * normal_(rng_), 0.2, 1.8);
     const std::uint64_t begin_us = controller_.now_us();
     const double travel_at_begin = travel_px_;
@@ -277,12 +291,35 @@ class SimCamera final : public CameraSource {
     return m;
   }
 
+  /// The static white card, under light falling off toward the corners.
+  void render_target(imaging::Plane& window, int pad) const {
+    const double cx = (o_.width - 1) / 2.0, cy = (o_.height - 1) / 2.0;
+    const double corner2 = cx * cx + cy * cy;
+    for (int y = 0; y < window.height; ++y)
+      for (int x = 0; x < window.width; ++x) {
+        const double dx = std::clamp(x - pad, 0, o_.width - 1) - cx, dy = y - cy;
+        window.at(x, y) =
+            static_cast<float>(reflectance_ * (1.0 - o_.falloff * (dx * dx + dy * dy) / corner2));
+      }
+  }
+
   bool render(Frame& frame, const Lighting& light, double travel, double blur, std::string& error) {
     const int pad = static_cast<int>(std::ceil(blur)) + 2;
     imaging::Plane window(o_.width + pad, o_.height);
-    const double pitch = o_.tile_width + o_.gap;
     frame.truth.clear();
     frame.truth_in_view.clear();
+    if (reflectance_ >= 0)
+      render_target(window, pad);
+    else if (!render_labels(window, frame, pad, travel, blur, error))
+      return false;
+    return record(frame, window, pad, light, blur);
+  }
+
+  /// The belt and its labels into `window` (`pad` columns upstream of the view),
+  /// and the frame's ground truth.
+  bool render_labels(imaging::Plane& window, Frame& frame, int pad, double travel, double blur,
+                     std::string& error) {
+    const double pitch = o_.tile_width + o_.gap;
     for (int x = 0; x < window.width; ++x) {
       const double u = (x - pad) - travel;
       float column_value = -1;
@@ -314,6 +351,12 @@ class SimCamera final : public CameraSource {
         frame.truth_in_view.push_back(content_of(sim_label_scene(i)));
       if (left + o_.tile_width < 0) break;
     }
+    return true;
+  }
+
+  /// The scene in `window` through the forward model into the frame's bytes and descriptor.
+  bool record(Frame& frame, const imaging::Plane& window, int pad, const Lighting& light,
+              double blur) {
     imaging::Image dn;
     imaging::CaptureModel model;
     if (light.dark) {
@@ -380,6 +423,7 @@ class SimCamera final : public CameraSource {
   std::uniform_real_distribution<double> uniform_{0.0, 1.0};
   std::normal_distribution<double> normal_{0.0, 1.0};
   CameraSettings settings_;
+  double reflectance_ = -1;  ///< the static target's; -1: labels on a moving belt
   CameraCounters counters_;
   std::uint64_t sequence_ = 0;
   std::uint64_t delivered_ = 0;
@@ -469,7 +513,34 @@ std::string apply_sim_options(const std::vector<std::pair<std::string, std::stri
       ok = parse_number(value, o.max_frames);
     else if (key == "ring_frames")
       ok = parse_number(value, o.ring_frames);
-    else if (key == "pace_realtime") {
+    else if (key == "render_threads")
+      ok = parse_number(value, o.render_threads);
+    else if (key == "full_well")
+      ok = parse_number(value, o.full_well);
+    else if (key == "bit_depth")
+      ok = parse_number(value, o.bit_depth);
+    else if (key == "black_level")
+      ok = parse_number(value, o.black_level);
+    else if (key == "falloff")
+      ok = parse_number(value, o.falloff);
+    else if (key == "target") {
+      double reflectance = 0;
+      if (auto problem = parse_sim_target(value, reflectance); !problem.empty()) return problem;
+      o.target = value;
+    } else if (key == "crosstalk") {
+      // Nine numbers, row-major (rows: camera channels, columns: LEDs).
+      std::vector<double> matrix;
+      std::size_t begin = 0;
+      while (ok && begin <= value.size()) {
+        const std::size_t comma = std::min(value.find(',', begin), value.size());
+        double entry = 0;
+        ok = parse_number(value.substr(begin, comma - begin), entry) && entry >= 0;
+        matrix.push_back(entry);
+        begin = comma + 1;
+      }
+      ok = ok && matrix.size() == 9;
+      if (ok) o.crosstalk = matrix;
+    } else if (key == "pace_realtime") {
       ok = value == "true" || value == "false";
       o.pace_realtime = value == "true";
     } else
@@ -477,6 +548,31 @@ std::string apply_sim_options(const std::vector<std::pair<std::string, std::stri
     if (!ok) return "camera sim: option " + key + ": '" + value + "' is not a valid value";
   }
   return {};
+}
+
+std::string parse_sim_target(const std::string& target, double& reflectance) {
+  reflectance = -1;
+  if (target == "labels") return {};
+  if (target == "white") {
+    reflectance = 0.9;
+    return {};
+  }
+  if (target.rfind("white:", 0) == 0 && parse_number(target.substr(6), reflectance) &&
+      reflectance > 0 && reflectance <= 1)
+    return {};
+  reflectance = -1;
+  return "camera sim: target must be labels, white or white:REFLECTANCE (0 < R <= 1), not '" +
+         target + "'";
+}
+
+SimTruth sim_truth(const SimConveyorOptions& options) {
+  SimTruth truth;
+  truth.crosstalk = options.crosstalk;
+  truth.black_level_dn = options.black_level;
+  truth.gain_e_per_dn = options.full_well / (std::pow(2.0, options.bit_depth) - 1.0);
+  truth.read_noise_e = options.read_noise;
+  truth.px_per_count = 1.0 / options.counts_per_px;
+  return truth;
 }
 
 std::unique_ptr<CameraSource> make_sim_camera(device::VirtualController& controller,

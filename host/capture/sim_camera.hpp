@@ -16,6 +16,17 @@
 // tile stays in view through the exposure and starts at least one blur
 // length from the upstream edge.
 //
+// Static target (option target=white[:REFLECTANCE], for `flutterscan calibrate`):
+// the belt stands still under a flat white card (reflectance 0.9 unless given),
+// lit by the same actual LED transitions through the same forward model,
+// crosstalk, noise and black level; the encoder does not turn. `falloff` makes
+// the light fall off toward the corners (1 - falloff * r^2, r = 1 at a corner),
+// as a real LED head does, for the flat-field calibration.
+//
+// True values a calibration should recover (sim_truth): the crosstalk matrix,
+// black_level, gain = full_well / (2^bit_depth - 1) e-/DN, read_noise e-,
+// px per encoder count = 1 / counts_per_px.
+//
 // Camera clock: timestamp_ns = offset_ns + controller_us * 1000 * (1 + drift_ppm
 // 1e-6) at the start of the strobe; sequence numbers count from 0 and include
 // frames lost on the way (drop_probability), as a V4L2 sequence does.
@@ -58,7 +69,27 @@ struct SimConveyorOptions {
   int ring_frames = 0;
   /// Frames rendered at once (exposures run that far ahead of delivery).
   int render_threads = 2;
+  /// "labels" (the conveyor) or "white[:REFLECTANCE]" (a static white card).
+  std::string target = "labels";
+  /// Static target only: relative light lost at the frame's corners (0..0.9).
+  double falloff = 0;
 };
+
+/// \brief The simulator's true calibration: what `flutterscan calibrate` should find.
+struct SimTruth {
+  std::vector<double> crosstalk;  ///< 3x3 row-major, as configured (columns not normalised)
+  double black_level_dn = 0;
+  double gain_e_per_dn = 0;  ///< full_well / (2^bit_depth - 1)
+  double read_noise_e = 0;
+  double px_per_count = 0;  ///< 1 / counts_per_px
+};
+
+/// \brief The true values behind `options`.
+SimTruth sim_truth(const SimConveyorOptions& options);
+
+/// \brief The static target's reflectance for `target` ("white" = 0.9, "white:R"),
+/// or -1 for "labels"; the error names a malformed target.
+std::string parse_sim_target(const std::string& target, double& reflectance);
 
 /// \brief Reads key=value options (the names of SimConveyorOptions' members);
 /// the error names the key or the value.

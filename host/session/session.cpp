@@ -35,6 +35,7 @@
 #include "session/barcode_reader.hpp"
 #include "session/frame_matcher.hpp"
 #include "session/frame_model.hpp"
+#include "session/line_devices.hpp"
 #include "session/model_fit.hpp"
 #include "session/object_tracker.hpp"
 #include "session/results_server.hpp"
@@ -200,61 +201,6 @@ Preview make_preview(const FrameOutcome& o) {
   cv::imencode(".png", before, p.before_png);
   cv::imencode(".png", after, p.after_png);
   return p;
-}
-
-/// Connects to the controller named by the config and sets it up for the session.
-struct ControllerLink {
-  std::shared_ptr<device::VirtualController> virtual_controller;
-  std::unique_ptr<device::ControllerClient> client;
-  std::string description;
-};
-
-std::string connect_controller(const SessionConfig& config, const SessionHooks& hooks,
-                               ControllerLink& link, bool& bad_input) {
-  const std::string& spec = config.controller.spec;
-  device::TransportOpener opener;
-  if (spec == "sim") {
-    link.virtual_controller = hooks.virtual_controller
-                                  ? hooks.virtual_controller
-                                  : std::make_shared<device::VirtualController>();
-    opener = device::in_process_opener(link.virtual_controller);
-    link.description = "virtual controller (firmware core on the sim port)";
-  } else {
-    auto found = device::find_controllers();
-    if (!found.ok()) return "controller: " + found.error().message;
-    auto picked = device::pick_controller(
-        found.value(), spec == "auto" ? std::nullopt : std::optional<std::string>(spec),
-        device::DeviceMode::kApplication);
-    if (!picked.ok()) {
-      bad_input = picked.error().kind == device::ErrorKind::kNotFound ||
-                  picked.error().kind == device::ErrorKind::kAmbiguous;
-      return "controller '" + spec + "': " + picked.error().message;
-    }
-    opener = device::hid_opener(picked.value().serial);
-    link.description = "controller " + picked.value().serial;
-  }
-  auto client = device::ControllerClient::connect(opener);
-  if (!client.ok()) return "controller '" + spec + "': " + client.error().message;
-  link.client = std::move(client.value());
-  auto fail = [&](const char* what, const device::DeviceError& e) {
-    return std::string("controller: ") + what + ": " + e.message;
-  };
-  if (auto r = link.client->disarm(); !r.ok()) return fail("Disarm", r.error());
-  // One-of-3 codes are checked as such on the controller; white strobes ("auto") are not.
-  const LedCode& code = config.controller.parsed_code;
-  bool one_of_n = true;
-  for (int t = 0; t < code.length(); ++t) one_of_n = one_of_n && std::popcount(code.mask(t)) == 1;
-  if (auto r = link.client->set_code(0, code, one_of_n); !r.ok()) return fail("SetCode", r.error());
-  if (auto r = link.client->select_code(0); !r.ok()) return fail("SelectCode", r.error());
-  protocol::SetTimingRequest timing{};
-  timing.slot_time_us = config.controller.slot_time_us;
-  timing.frame_period_us = config.controller.frame_period_us;
-  timing.slot_time_source = static_cast<std::uint8_t>(protocol::SlotTimeSource::kFixed);
-  if (auto r = link.client->set_timing(timing); !r.ok()) return fail("SetTiming", r.error());
-  const auto mode =
-      config.controller.sync == "master" ? protocol::SyncMode::kMaster : protocol::SyncMode::kSlave;
-  if (auto r = link.client->set_mode(mode, false); !r.ok()) return fail("SetMode", r.error());
-  return {};
 }
 
 /// Everything the threads share.
@@ -471,25 +417,9 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
     return outcome;
   }
 
-  capture::CameraContext context;
-  context.controller = link.virtual_controller.get();
-  context.options = config.camera.options;
-  std::string error;
-  auto camera = capture::make_camera(config.camera.spec, context, error);
-  if (!camera) {
-    outcome.error = error;
-    outcome.bad_input = true;
-    return outcome;
-  }
-  if (auto p = camera->open(); !p.empty()) {
-    outcome.error = p;
-    return outcome;
-  }
-  if (auto p = camera->configure(config.camera.settings); !p.empty()) {
-    outcome.error = p;
-    outcome.bad_input = true;
-    return outcome;
-  }
+  auto camera =
+      open_camera(config.camera, link.virtual_controller.get(), outcome.error, outcome.bad_input);
+  if (!camera) return outcome;
   for (const auto& warning : camera->warnings()) say("warning: " + warning);
   const capture::FrameFormat format = camera->format();
   if (!capture::keeps_channels_apart(format.pixel_format))

@@ -801,4 +801,164 @@ TEST_F(CalibrateCliTest, SpeedGivesPixelsPerEncoderCount) {
   expect_usage_error({"calibrate", "speed", slow}, {"slow.png", "descriptor"});
 }
 
+// -- flutterscan calibrate, live: sim camera and sim controller --------------------
+
+/// The live forms capture with the sim camera (a static white card, or labels on
+/// the belt for speed) lit by the virtual controller, and must recover the
+/// simulator's true values, set here away from the defaults.
+class CalibrateLiveCliTest : public CalibrateCliTest {
+ protected:
+  /// `calibrate WHAT --camera sim --controller sim` with the sim options `options`.
+  RunResult live(const std::string& what, const std::vector<std::string>& options,
+                 const std::vector<std::string>& extra) {
+    std::vector<std::string> args = {"calibrate", what, "--camera", "sim", "--controller", "sim"};
+    for (const auto& option : options) {
+      args.emplace_back("--camera-option");
+      args.push_back(option);
+    }
+    args.insert(args.end(), extra.begin(), extra.end());
+    return run(args);
+  }
+};
+
+// True crosstalk (rows: channels, columns: LEDs) and black level of the sim below.
+// Columns sum to 1.0, 0.95 and 0.92: the calibration must normalise them.
+constexpr double kLiveCrosstalk[3][3] = {{0.80, 0.15, 0.02}, {0.15, 0.70, 0.10}, {0.05, 0.10, 0.80}};
+
+TEST_F(CalibrateLiveCliTest, CrosstalkRecoversTheSimulatorsMatrixAndBlackLevel) {
+  write_config();
+  const RunResult result =
+      live("crosstalk",
+           {"target=white:0.9", "width=256", "height=192", "black_level=80",
+            "crosstalk=0.80,0.15,0.02,0.15,0.70,0.10,0.05,0.10,0.80"},
+           {"--frames", "4", "--config", config(), "--json"});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  const json report = json::parse(result.out.substr(0, result.out.find('\n')));
+  for (int k = 0; k < 3; ++k) {
+    const double column = kLiveCrosstalk[0][k] + kLiveCrosstalk[1][k] + kLiveCrosstalk[2][k];
+    for (int c = 0; c < 3; ++c)
+      EXPECT_NEAR(report["crosstalk"][c][k].get<double>(), kLiveCrosstalk[c][k] / column, 0.003)
+          << c << "," << k;
+    // Each LED gives a white card E x R x its column sum (12-bit, full well 12000 e-).
+    EXPECT_NEAR(report["led_strength_dn"][k].get<double>(), 3000 * 0.9 * column * 4095 / 12000,
+                0.01 * 3000 * 0.9 * column * 4095 / 12000)
+        << k;
+  }
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(report["black_level_dn"][c].get<double>(), 80, 0.5) << c;
+  const std::string written = read_file(config());
+  EXPECT_TRUE(contains(written, "px_per_count = 0.5 # from the drawing")) << written;
+  EXPECT_TRUE(contains(written, "crosstalk = [[0.8")) << written;
+  EXPECT_TRUE(contains(written, "black_level_dn = 80")) << written;
+  // What it did to the controller is said on stderr.
+  EXPECT_TRUE(contains(result.err, "disarmed")) << result;
+  EXPECT_TRUE(contains(result.err, "LED 2")) << result;
+}
+
+TEST_F(CalibrateLiveCliTest, FlatMeasuresTheLightFallingOffTowardTheCorners) {
+  const std::string flat = (dir_ / "flat.json").string();
+  const RunResult result = live("flat", {"target=white", "width=240", "height=180", "falloff=0.3"},
+                                {"--grid", "4x3", "-o", flat, "--config", config(), "--json"});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  const json file = json::parse(read_file(flat));
+  ASSERT_EQ(file["tiles"][0], 4);
+  ASSERT_EQ(file["tiles"][1], 3);
+  // The sim's light 1 - 0.3 r^2 (r = 1 at a corner), by its median over each tile.
+  auto light = [](int tx, int ty) {
+    std::vector<double> values;
+    for (int y = 60 * ty; y < 60 * (ty + 1); ++y)
+      for (int x = 60 * tx; x < 60 * (tx + 1); ++x) {
+        const double dx = x - 119.5, dy = y - 89.5;
+        values.push_back(1 - 0.3 * (dx * dx + dy * dy) / (119.5 * 119.5 + 89.5 * 89.5));
+      }
+    std::nth_element(values.begin(), values.begin() + values.size() / 2, values.end());
+    return values[values.size() / 2];
+  };
+  const auto& mixing = file["mixing_dn"];
+  for (int k = 0; k < 3; ++k)
+    for (int t = 0; t < 12; ++t) {
+      // Relative to tile 5 (second row, second column), each LED's own channel.
+      const double measured = mixing[t * 9 + k * 3 + k].get<double>() /
+                              mixing[5 * 9 + k * 3 + k].get<double>();
+      EXPECT_NEAR(measured, light(t % 4, t / 4) / light(1, 1), 0.02) << "LED " << k << " tile " << t;
+    }
+  EXPECT_GT(file["largest_deviation"].get<double>(), 0.08);  // 10.5% here
+  EXPECT_TRUE(contains(read_file(config()), "flat_field = ")) << read_file(config());
+}
+
+TEST_F(CalibrateLiveCliTest, NoiseRecoversGainReadNoiseAndBlackLevel) {
+  write_config();
+  const RunResult result =
+      live("noise",
+           {"target=white:1", "width=256", "height=192", "electrons=8000", "full_well=15000",
+            "read_noise=6", "black_level=100"},
+           {"--config", config(), "--json"});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  const json report = json::parse(result.out.substr(0, result.out.find('\n')));
+  for (int c = 0; c < 3; ++c) {
+    EXPECT_NEAR(report["gain_e_per_dn"][c].get<double>(), 15000.0 / 4095.0,
+                0.03 * 15000.0 / 4095.0)
+        << c;
+    EXPECT_NEAR(report["read_noise_e"][c].get<double>(), 6.0, 0.4) << c;
+    EXPECT_NEAR(report["black_level_dn"][c].get<double>(), 100, 0.5) << c;
+    // Four light levels (2, 4, 8 and 16 of 52 slots) and all of them in the fit range.
+    EXPECT_EQ(report["points"][c].size(), 4u) << c;
+  }
+  const std::string written = read_file(config());
+  EXPECT_TRUE(contains(written, "gain_e_per_dn = 3.6")) << written;
+  EXPECT_TRUE(contains(written, "read_noise_e = ")) << written;
+  EXPECT_TRUE(contains(result.err, "light level 16 of 52 slots")) << result;
+}
+
+TEST_F(CalibrateLiveCliTest, SpeedRecoversTheBlurAndPixelsPerEncoderCount) {
+  write_config();
+  // 10000 px/s over 52 slots of 100 us: 52 px of blur; 4 counts per px: 0.25 px per count.
+  const RunResult result =
+      live("speed", {"width=640", "height=200", "counts_per_px=4"},
+           {"--frames", "6", "--min-blur", "20", "--max-blur", "100", "--config", config(),
+            "--json"});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  const json report = json::parse(result.out.substr(0, result.out.find('\n')));
+  EXPECT_NEAR(report["blur_px"].get<double>(), 52.0, 0.25);
+  EXPECT_NEAR(report["px_per_count"].get<double>(), 0.25, 0.0025);
+  EXPECT_GE(report["frames"].size(), 3u);
+  for (const auto& frame : report["frames"])
+    EXPECT_NEAR(frame["encoder_counts"].get<double>(), 208, 1) << frame;
+  const std::string written = read_file(config());
+  EXPECT_TRUE(contains(written, "px_per_count = 0.25")) << written;
+  EXPECT_FALSE(contains(written, "from the drawing")) << written;
+}
+
+TEST_F(CalibrateLiveCliTest, ALineThatFailsExitsOneNamingCameraControllerAndStep) {
+  // The camera ends after 3 frames: the dark frames (1 dropped + 4) never complete.
+  const RunResult result = live("crosstalk", {"target=white", "width=128", "height=96",
+                                              "max_frames=3"},
+                                {"--frames", "4"});
+  EXPECT_EQ(result.exit_code, 1) << result;
+  for (const char* needle : {"camera sim", "virtual controller", "dark frames", "ended after 3"})
+    EXPECT_TRUE(contains(result.err, needle)) << "stderr lacks \"" << needle << "\"\n" << result;
+}
+
+TEST_F(CalibrateLiveCliTest, BadUsageIsRefusedNamingTheProblem) {
+  const std::string dark = simulate("dark", "flat:0.9", std::string(52, '7'), "0", "1", 1);
+  expect_usage_error({"calibrate", "crosstalk", "--dark", dark, "--camera", "sim"},
+                     {"--dark and --led", "--camera", "not both"});
+  expect_usage_error({"calibrate", "crosstalk", "--controller", "sim"}, {"--controller", "--camera"});
+  expect_usage_error({"calibrate", "crosstalk"}, {"--dark and --led", "--camera"});
+  expect_usage_error({"calibrate", "noise", "--camera", "sim", "--dark", dark, dark},
+                     {"--dark and --flat", "not both"});
+  expect_usage_error({"calibrate", "speed", "--camera", "sim", "--encoder-counts", "100"},
+                     {"--encoder-counts", "exposure events"});
+  expect_usage_error({"calibrate", "crosstalk", "--camera", "nosuch:cam", "--controller", "sim"},
+                     {"nosuch"});
+  expect_usage_error({"calibrate", "crosstalk", "--camera", "sim", "--controller", "sim",
+                      "--camera-option", "target=grey"},
+                     {"camera sim", "target", "grey"});
+  expect_usage_error({"calibrate", "crosstalk", "--camera", "sim", "--controller", "sim",
+                      "--camera-option", "target"},
+                     {"--camera-option", "KEY=VALUE"});
+  expect_usage_error({"calibrate", "noise", "--camera", "sim", "--lit-slots", "1", "4"},
+                     {"--lit-slots"});
+}
+
 }  // namespace

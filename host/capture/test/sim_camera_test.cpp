@@ -160,5 +160,107 @@ TEST(SimCamera, RefusesBadOptionsNamingThem) {
   EXPECT_NE(make_sim_camera(vc, o)->open().find("jitter"), std::string::npos);
 }
 
+/// Mean DN of `channel` over the frame's middle (a quarter of the width and height).
+double middle_mean(const imaging::Image& dn, int channel) {
+  const imaging::Plane& p = dn.channels[static_cast<std::size_t>(channel)];
+  double sum = 0;
+  int n = 0;
+  for (int y = p.height * 3 / 8; y < p.height * 5 / 8; ++y)
+    for (int x = p.width * 3 / 8; x < p.width * 5 / 8; ++x, ++n) sum += p.at(x, y);
+  return sum / n;
+}
+
+TEST(SimCamera, StaticWhiteTargetIsLitByOneLedThroughTheCrosstalk) {
+  device::VirtualController vc;
+  arm(vc);
+  // Code 0 becomes LED 1 alone in every slot (2222...).
+  proto::SetCodeRequest chunk{};
+  chunk.led_count = 3;
+  chunk.total_slots = 52;
+  chunk.slot_count = 52;
+  chunk.flags = proto::kCodeFlagOneOfN;
+  for (int i = 0; i < 52; ++i) chunk.masks[static_cast<std::size_t>(i)] = 2;
+  ASSERT_EQ(request(vc, proto::Command::kDisarm)[3], 0);
+  ASSERT_EQ(request(vc, proto::Command::kSetCode, chunk)[3], 0);
+  ASSERT_EQ(request(vc, proto::Command::kArm)[3], 0);
+  SimConveyorOptions o;
+  ASSERT_EQ(apply_sim_options({{"width", "128"},
+                               {"height", "96"},
+                               {"target", "white:0.8"},
+                               {"crosstalk", "0.9,0.1,0,0.1,0.8,0.1,0,0.1,0.9"},
+                               {"black_level", "100"},
+                               {"full_well", "9000"},
+                               {"bit_depth", "12"}},
+                              o),
+            "");
+  auto camera = make_sim_camera(vc, o);
+  ASSERT_EQ(camera->open(), "");
+  ASSERT_EQ(camera->start(), "");
+  Frame frame;
+  std::string error;
+  ASSERT_EQ(camera->next_frame(frame, 1000ms, error), FrameWait::kFrame) << error;
+  EXPECT_TRUE(frame.truth_in_view.empty());
+  const auto dn = frame_to_dn(frame);
+  ASSERT_TRUE(dn.ok()) << dn.error();
+  // LED 1 gives each channel crosstalk[c][1] x 3000 e- x 0.8 over the black level.
+  const double gain = sim_truth(o).gain_e_per_dn;
+  EXPECT_NEAR(gain, 9000.0 / 4095.0, 1e-12);
+  const double column[3] = {0.1, 0.8, 0.1};
+  for (int c = 0; c < 3; ++c)
+    EXPECT_NEAR(middle_mean(dn.value(), c), 100 + column[c] * 3000 * 0.8 / gain, 2.0) << c;
+  // The belt stands still: no encoder counts.
+  EXPECT_EQ(next_event(vc).encoder_delta, 0);
+  // Disarmed: dark frames at the black level.
+  ASSERT_EQ(request(vc, proto::Command::kDisarm)[3], 0);
+  ASSERT_EQ(camera->next_frame(frame, 1000ms, error), FrameWait::kFrame) << error;  // in flight
+  ASSERT_EQ(camera->next_frame(frame, 1000ms, error), FrameWait::kFrame) << error;
+  ASSERT_EQ(camera->next_frame(frame, 1000ms, error), FrameWait::kFrame) << error;
+  const auto dark = frame_to_dn(frame);
+  ASSERT_TRUE(dark.ok());
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(middle_mean(dark.value(), c), 100, 0.2) << c;
+}
+
+TEST(SimCamera, FalloffDimsTheCornersOfTheStaticTarget) {
+  device::VirtualController vc;
+  arm(vc);
+  SimConveyorOptions o;
+  ASSERT_EQ(apply_sim_options({{"width", "200"}, {"height", "100"}, {"target", "white"},
+                               {"falloff", "0.3"}, {"read_noise", "0"}},
+                              o),
+            "");
+  auto camera = make_sim_camera(vc, o);
+  ASSERT_EQ(camera->start(), "");
+  Frame frame;
+  std::string error;
+  ASSERT_EQ(camera->next_frame(frame, 1000ms, error), FrameWait::kFrame) << error;
+  const auto dn = frame_to_dn(frame);
+  ASSERT_TRUE(dn.ok());
+  const imaging::Plane& g = dn.value().channels[1];
+  double corner = 0, centre = 0;
+  for (int y = 0; y < 4; ++y)
+    for (int x = 0; x < 4; ++x) {
+      corner += g.at(x, y) - 64;
+      centre += g.at(98 + x, 48 + y) - 64;
+    }
+  EXPECT_NEAR(corner / centre, 0.7, 0.05);
+}
+
+TEST(SimCamera, RefusesBadTargetAndCalibrationOptions) {
+  SimConveyorOptions o;
+  EXPECT_NE(apply_sim_options({{"target", "grey"}}, o).find("target"), std::string::npos);
+  EXPECT_NE(apply_sim_options({{"target", "white:1.5"}}, o).find("white:1.5"), std::string::npos);
+  EXPECT_NE(apply_sim_options({{"crosstalk", "1,0,0"}}, o).find("crosstalk"), std::string::npos);
+  EXPECT_NE(apply_sim_options({{"crosstalk", "1,0,0,0,1,0,0,x,1"}}, o).find("crosstalk"),
+            std::string::npos);
+  device::VirtualController vc;
+  SimConveyorOptions labels;
+  labels.falloff = 0.2;
+  EXPECT_NE(make_sim_camera(vc, labels)->open().find("falloff"), std::string::npos);
+  SimConveyorOptions deep;
+  deep.bit_depth = 20;
+  EXPECT_NE(make_sim_camera(vc, deep)->open().find("bit_depth"), std::string::npos);
+  EXPECT_DOUBLE_EQ(sim_truth(SimConveyorOptions{}).px_per_count, 0.5);
+}
+
 }  // namespace
 }  // namespace flutterscan::capture
