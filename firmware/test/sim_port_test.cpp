@@ -3,7 +3,10 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <limits>
 #include <vector>
+
+#include "flutterscan/firmware/sim/sim_flash.hpp"
 
 namespace flutterscan::firmware::sim {
 namespace {
@@ -44,6 +47,27 @@ TEST(SimPort, PlaysATableExactlyOnTheVirtualClock) {
   EXPECT_EQ(port.now_us(), 2000u);
 }
 
+TEST(SimPort, NextEventIsTheEarliestScheduled) {
+  SimPort port(kPins);
+  EXPECT_EQ(port.next_event_us(), std::numeric_limits<std::uint64_t>::max());
+  port.inject_strobe(500, 100);
+  EXPECT_EQ(port.next_event_us(), 500u);
+  const std::array<std::uint32_t, 2> words = {0x00000001, 0x00010000};
+  port.run_until(100);
+  ASSERT_EQ(port.start_slot_table(words, 300), PortStatus::kOk);
+  EXPECT_EQ(port.next_event_us(), 100u);
+  port.run_until(100);
+  EXPECT_EQ(port.next_event_us(), 400u);
+  port.run_until(400);
+  EXPECT_EQ(port.next_event_us(), 500u);
+  ASSERT_EQ(port.start_frame_timer(1000, 0), PortStatus::kOk);
+  EXPECT_EQ(port.next_event_us(), 400u);
+  port.run_until(550);
+  EXPECT_EQ(port.next_event_us(), 600u);
+  port.run_until(600);
+  EXPECT_EQ(port.next_event_us(), 1400u);
+}
+
 TEST(SimPort, SetBitWinsOverResetBit) {
   SimPort port(kPins);
   port.write_led_bank(0x00010001);
@@ -82,8 +106,10 @@ TEST(SimPort, FrameTimerTicksAndDrivesTheTrigger) {
   port.set_listener(&listener);
   port.run_until(100);
   ASSERT_EQ(port.start_frame_timer(1000, 300), PortStatus::kOk);
+  EXPECT_EQ(port.next_event_us(), 100u);
   port.run_until(2100);
   EXPECT_EQ(listener.frames, (std::vector<std::uint64_t>{100, 1100, 2100}));
+  EXPECT_EQ(port.next_event_us(), 3100u);
   ASSERT_EQ(port.trigger_pulses().size(), 3u);
   EXPECT_EQ(port.trigger_pulses()[1].start_us, 1100u);
   EXPECT_EQ(port.trigger_pulses()[1].width_us, 300u);
@@ -106,6 +132,31 @@ TEST(SimPort, FlashProgrammingOnlyClearsBits) {
   EXPECT_EQ(out, (std::array<std::uint8_t, 3>{0xFF, 0xFF, 0xFF}));
   std::array<std::uint8_t, 65> too_much{};
   EXPECT_EQ(port.read_config_page(too_much), PortStatus::kError);
+}
+
+TEST(SimFlash, ProgrammingOnlyClearsBitsAndResetRestoresTheFreshFlash) {
+  SimFlash flash;
+  const std::uint32_t base = flash.base();
+  const std::array<std::uint8_t, 3> first = {0xF0, 0x0F, 0x00};
+  const std::array<std::uint8_t, 3> second = {0x3C, 0xFF, 0xFF};
+  ASSERT_EQ(flash.program(base + 16, first), FlashResult::kOk);
+  ASSERT_EQ(flash.program(base + 16, second), FlashResult::kOk);
+  const auto read = flash.read(base + 15, 5);
+  EXPECT_EQ(std::vector<std::uint8_t>(read.begin(), read.end()),
+            (std::vector<std::uint8_t>{0xFF, 0x30, 0x0F, 0x00, 0xFF}));
+  EXPECT_EQ(flash.program_count(0), 2);
+  ASSERT_EQ(flash.erase_sector(1), FlashResult::kOk);
+  EXPECT_EQ(flash.erase_count(1), 1);
+  flash.set_failures(true, true);
+
+  flash.reset();
+  for (const std::uint8_t b : flash.bytes()) ASSERT_EQ(b, 0xFF);
+  for (int s = 0; s < static_cast<int>(flash.layout().sectors.size()); ++s) {
+    EXPECT_EQ(flash.erase_count(s), 0);
+    EXPECT_EQ(flash.program_count(s), 0);
+  }
+  EXPECT_EQ(flash.program(base, first), FlashResult::kOk);  // failures cleared
+  EXPECT_EQ(flash.erase_sector(0), FlashResult::kOk);
 }
 
 }  // namespace

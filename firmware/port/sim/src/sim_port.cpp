@@ -5,6 +5,18 @@
 
 namespace flutterscan::firmware::sim {
 
+namespace {
+
+/// NOR programming: cells &= data. A function of its own, never inlined, so
+/// the fuzz build can leave its per-byte loop uninstrumented
+/// (firmware/fuzz/coverage_ignorelist.txt).
+[[gnu::noinline]] void nor_program_bytes(std::uint8_t* cells, const std::uint8_t* data,
+                                         std::size_t size) {
+  for (std::size_t i = 0; i < size; ++i) cells[i] = static_cast<std::uint8_t>(cells[i] & data[i]);
+}
+
+}  // namespace
+
 SimPort::SimPort(const LedPinMap& pins, std::size_t config_page_size)
     : pins_(pins), flash_(config_page_size, 0xFF) {}
 
@@ -69,10 +81,25 @@ void SimPort::add_encoder_counts(std::int32_t counts) {
 }
 
 void SimPort::inject_strobe(std::uint64_t start_us, std::uint32_t width_us) {
-  strobe_edges_.push_back({start_us, true});
-  strobe_edges_.push_back({start_us + width_us, false});
-  std::stable_sort(strobe_edges_.begin(), strobe_edges_.end(),
-                   [](const StrobeEdge& a, const StrobeEdge& b) { return a.time_us < b.time_us; });
+  // Each edge goes after every pending edge of its time or earlier: the order
+  // a stable sort of the appended edges gives, without sorting (or its buffer).
+  const auto insert = [this](StrobeEdge edge) {
+    const auto at =
+        std::upper_bound(strobe_edges_.begin(), strobe_edges_.end(), edge.time_us,
+                         [](std::uint64_t t, const StrobeEdge& e) { return t < e.time_us; });
+    strobe_edges_.insert(at, edge);
+  };
+  insert({start_us, true});
+  insert({start_us + width_us, false});
+}
+
+std::uint64_t SimPort::next_event_us() const {
+  constexpr std::uint64_t kNever = std::numeric_limits<std::uint64_t>::max();
+  const std::uint64_t slot_at =
+      table_.words.empty() ? kNever : table_.start_us + table_.next_word * table_.slot_time_us;
+  const std::uint64_t strobe_at = strobe_edges_.empty() ? kNever : strobe_edges_.front().time_us;
+  const std::uint64_t frame_at = frame_period_us_ == 0 ? kNever : next_frame_us_;
+  return std::min({slot_at, strobe_at, frame_at});
 }
 
 void SimPort::run_until(std::uint64_t time_us) {
@@ -120,8 +147,7 @@ PortStatus SimPort::erase_config_page() {
 PortStatus SimPort::write_config_page(std::span<const std::uint8_t> data) {
   if (flash_fails_ || data.size() > flash_.size()) return PortStatus::kError;
   // NOR flash programming only clears bits: writing over unerased bytes ANDs.
-  for (std::size_t i = 0; i < data.size(); ++i)
-    flash_[i] = static_cast<std::uint8_t>(flash_[i] & data[i]);
+  nor_program_bytes(flash_.data(), data.data(), data.size());
   return PortStatus::kOk;
 }
 

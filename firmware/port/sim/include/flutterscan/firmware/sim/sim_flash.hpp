@@ -35,6 +35,9 @@ class SimFlash final : public Flash {
   const FlashLayout& layout() const { return layout_; }
   int erase_count(int sector) const { return erases_.at(static_cast<std::size_t>(sector)); }
   int program_count(int sector) const { return programs_.at(static_cast<std::size_t>(sector)); }
+  /// \brief Back to the state just after construction: every byte erased,
+  /// no erase or program counted, no failure injected (reuses the memory).
+  void reset();
   /// \brief Makes the next erase (`erase`) or program (`program`) calls fail.
   void set_failures(bool erase, bool program) {
     erase_fails_ = erase;

@@ -93,6 +93,9 @@ class SimPort final : public Port {
   const std::vector<TriggerPulse>& trigger_pulses() const { return trigger_pulses_; }
   bool slot_table_running() const { return !table_.words.empty(); }
   bool frame_timer_running() const { return frame_period_us_ != 0; }
+  /// \brief The time of the earliest scheduled event (slot write, strobe
+  /// edge, frame tick), or UINT64_MAX if none: the clock can jump to it.
+  std::uint64_t next_event_us() const;
   bool strobe_active_low() const { return strobe_active_low_; }
   int watchdog_kicks() const { return watchdog_kicks_; }
   int bootloader_entries() const { return bootloader_entries_; }
