@@ -71,7 +71,8 @@ void add_common(CLI::App* command, CommonFlags& f) {
       ->check(CLI::Range(8, 16))
       ->capture_default_str();
   command->add_option("--config", f.config,
-                      "session config (TOML) whose [optics] table receives the results");
+                      "session config (TOML) whose [optics] table receives the results (live: "
+                      "read first for the camera, controller and optics)");
   command->add_flag("--json", f.json, "print one JSON object");
 }
 
@@ -410,10 +411,11 @@ void add_calibrate(CLI::App& app) {
 
   auto xf = std::make_shared<CrosstalkFlags>();
   CLI::App* crosstalk = calibrate->add_subcommand(
-      "crosstalk",
-      "LED-to-channel matrix, black levels and channel gains from a white target. Live (--camera): "
-      "disarms the controller for dark frames, then uploads 1111.., 2222.., 4444.. (52 slots) as "
-      "code 7, arms, averages --frames frames per LED, and leaves it disarmed");
+      "crosstalk", "LED-to-channel matrix, black levels and channel gains from a white target");
+  crosstalk->footer(
+      "Live (--camera): with a white target under the camera, belt stopped, it disarms the "
+      "controller for dark frames, then per LED uploads 1111.., 2222.., 4444.. (52 slots) as code "
+      "7, arms, averages --frames frames, and leaves the controller disarmed with code 0 selected.");
   crosstalk->add_option("--dark", xf->dark, "frame of the white target with every LED off")
       ->check(CLI::ExistingFile);
   crosstalk
@@ -425,9 +427,8 @@ void add_calibrate(CLI::App& app) {
 
   auto ff = std::make_shared<FlatFlags>();
   CLI::App* flat = calibrate->add_subcommand(
-      "flat",
-      "Illumination and crosstalk per region of the field of view from a white target (live: the "
-      "frames of calibrate crosstalk)");
+      "flat", "Illumination and crosstalk per region of the field of view from a white target");
+  flat->footer("Live (--camera): the frames of calibrate crosstalk, taken the same way.");
   flat->add_option("--dark", ff->dark, "frame of the white target with every LED off")
       ->check(CLI::ExistingFile);
   flat->add_option("--led", ff->leds, "one frame per LED lit alone (codes 1111.., 2222.., 4444..)")
@@ -447,10 +448,11 @@ void add_calibrate(CLI::App& app) {
 
   auto nf = std::make_shared<NoiseFlags>();
   CLI::App* noise = calibrate->add_subcommand(
-      "noise",
-      "Gain (e-/DN) and read noise (e-) by photon transfer (EMVA 1288 style). Live (--camera): a "
-      "dark pair with the controller disarmed, then a pair per --lit-slots level (all LEDs in that "
-      "many of 52 slots, as code 7)");
+      "noise", "Gain (e-/DN) and read noise (e-) by photon transfer (EMVA 1288 style)");
+  noise->footer(
+      "Live (--camera): with a white target under the camera, a dark pair with the controller "
+      "disarmed, then a pair per --lit-slots level (all LEDs lit in that many of 52 slots, "
+      "uploaded as code 7); the camera's exposure and gain are not touched.");
   noise->add_option("--dark", nf->dark, "two frames without light")
       ->expected(2)
       ->check(CLI::ExistingFile);
@@ -472,10 +474,10 @@ void add_calibrate(CLI::App& app) {
   auto sf = std::make_shared<SpeedFlags>();
   sf->live.frames = 8;
   CLI::App* speed = calibrate->add_subcommand(
-      "speed",
-      "Blur length from coded frames of a moving target, and pixels per encoder count. Live "
-      "(--camera): frames under the session's code (code 0), the counts from their exposure "
-      "events");
+      "speed", "Blur length from coded frames of a moving target, and pixels per encoder count");
+  speed->footer(
+      "Live (--camera): --frames frames of labels moving on the belt under the session's code "
+      "(code 0), each matched to its exposure event, whose encoder delta gives the counts.");
   speed->add_option("frames", sf->frames, "coded frames, each with its descriptor (FRAME.json)")
       ->check(CLI::ExistingFile);
   speed->add_option("--encoder-counts", sf->encoder_counts,

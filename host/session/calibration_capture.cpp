@@ -131,10 +131,19 @@ Captured<std::vector<capture::Frame>> CalibrationRig::take(int count, const std:
 
 Captured<std::vector<imaging::Image>> CalibrationRig::dark(int count) {
   using Out = Captured<std::vector<imaging::Image>>;
-  if (auto problem = prepare(nullptr, 0); !problem.empty())
-    return Out::failure(line_failure(parts_->link.description + ": " + problem));
-  say("dark: " + std::to_string(count) + " frames with the controller disarmed (every LED off)");
+  // In master mode the controller triggers the camera: it stays armed, with a
+  // pattern that lights nothing. Otherwise it is disarmed.
+  const bool master = options_.config.controller.sync == "master";
+  const LedCode none = LedCode::from_masks(std::vector<std::uint8_t>(52, 0), 3).value();
+  if (auto problem = prepare(master ? &none : nullptr, kCalibrationCodeId); !problem.empty()) {
+    finish();
+    return Out::failure(line_failure(parts_->link.description + ", dark frames: " + problem));
+  }
+  say("dark: " + std::to_string(count) + " frames with every LED off (" +
+      (master ? "code " + std::to_string(kCalibrationCodeId) + " lights no slot)"
+              : "the controller disarmed)"));
   auto frames = take(count, "dark frames");
+  finish();
   if (!frames.ok()) return Out::failure(frames.error());
   std::vector<imaging::Image> planes;
   for (const auto& frame : frames.value()) {

@@ -7,7 +7,8 @@
 // (Disarm, the session's code as code 0, SetTiming, SetMode); for each
 // calibration pattern it disarms, uploads the pattern as code
 // kCalibrationCodeId, selects it and arms; frames with every LED off are taken
-// disarmed. The camera is started for each pattern (the first settle frames
+// disarmed (in master mode, where the controller triggers the camera, armed
+// with a pattern that lights no slot). The camera is started for each pattern (the first settle frames
 // dropped, so no frame exposed under the previous pattern counts) and stopped
 // after it. Every lit pattern must produce exposure events from the controller
 // (else the strobe or trigger is not wired) and none may have hit the thermal
@@ -82,7 +83,7 @@ class CalibrationRig {
   double full_scale_dn() const;
   const SessionConfig& config() const { return options_.config; }
 
-  /// \brief `count` frames with every LED off (the controller disarmed).
+  /// \brief `count` frames with every LED off (disarmed; master mode: an unlit pattern).
   Captured<std::vector<imaging::Image>> dark(int count);
   /// \brief `count` frames lit by `pattern`; `what` names it in messages ("LED 0").
   Captured<std::vector<imaging::Image>> lit(const LedCode& pattern, int count,
