@@ -1,5 +1,6 @@
 #include "app/calibrate_live.hpp"
 
+#include <algorithm>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -14,14 +15,20 @@ namespace {
   throw RuntimeFailure(failure.message);
 }
 
+void say(const std::string& text) {
+  std::cerr << "flutterscan calibrate: " << text << "\n";
+}
+
 template <typename T>
 T take_or_fail(session::Captured<T> captured) {
   if (!captured.ok()) fail(captured.error());
   return std::move(captured.value());
 }
 
-/// The session config (--config when the file exists) with the command line's camera and controller.
-session::SessionConfig live_config(const LiveFlags& live) {
+/// The session config (--config when the file exists) with the command line's
+/// camera and controller. For a calibration on a white target (`static_target`)
+/// the sim camera shows its white card unless another target was asked for.
+session::SessionConfig live_config(const LiveFlags& live, bool static_target) {
   session::SessionConfig config;
   if (!live.config.empty() && std::filesystem::exists(live.config)) {
     auto loaded = session::load_config(live.config);
@@ -36,15 +43,21 @@ session::SessionConfig live_config(const LiveFlags& live) {
       throw UsageError("--camera-option '" + option + "' must be KEY=VALUE");
     config.camera.options.emplace_back(option.substr(0, equals), option.substr(equals + 1));
   }
+  const bool sim = config.camera.spec == "sim" || config.camera.spec.rfind("sim:", 0) == 0;
+  const bool target_given =
+      std::any_of(config.camera.options.begin(), config.camera.options.end(),
+                  [](const auto& option) { return option.first == "target"; });
+  if (static_target && sim && !target_given) {
+    config.camera.options.emplace_back("target", "white");
+    say("camera sim: target=white (a white card, belt stopped)");
+  }
   return config;
 }
 
-std::unique_ptr<session::CalibrationRig> open_rig(const LiveFlags& live) {
+std::unique_ptr<session::CalibrationRig> open_rig(const LiveFlags& live, bool static_target) {
   session::RigOptions options;
-  options.config = live_config(live);
-  options.progress = [](const std::string& text) {
-    std::cerr << "flutterscan calibrate: " << text << "\n";
-  };
+  options.config = live_config(live, static_target);
+  options.progress = say;
   return take_or_fail(session::CalibrationRig::open(std::move(options)));
 }
 
@@ -78,7 +91,7 @@ void check_live_or_files(const LiveFlags& live, bool file_inputs, const std::str
 }
 
 WhiteFrames capture_white_frames(const LiveFlags& live) {
-  auto rig = open_rig(live);
+  auto rig = open_rig(live, true);
   WhiteFrames out;
   out.full_scale_dn = rig->full_scale_dn();
   out.dark = session::mean_of(take_or_fail(rig->dark(live.frames)));
@@ -95,7 +108,7 @@ NoiseFrames capture_noise_frames(const LiveFlags& live, const std::vector<int>& 
   for (int n : lit_slots)
     if (n < 2 || n > 52)
       throw UsageError("--lit-slots: " + std::to_string(n) + " is not within 2..52");
-  auto rig = open_rig(live);
+  auto rig = open_rig(live, true);
   NoiseFrames out;
   out.full_scale_dn = rig->full_scale_dn();
   auto dark = take_or_fail(rig->dark(2));
@@ -109,7 +122,7 @@ NoiseFrames capture_noise_frames(const LiveFlags& live, const std::vector<int>& 
 }
 
 SpeedFrames capture_speed_frames(const LiveFlags& live) {
-  auto rig = open_rig(live);
+  auto rig = open_rig(live, false);
   SpeedFrames out;
   out.frames = take_or_fail(rig->coded(live.frames));
   out.config = rig->config();

@@ -4,7 +4,9 @@
 // controller (host/session/calibration_capture.hpp) instead of read from
 // files. The session config given with --config (when it exists) supplies the
 // camera settings and options, the controller's timing, sync and code, and the
-// optics the speed calibration models frames with. Failures throw UsageError
+// optics the speed calibration models frames with. On the sim camera the
+// white-target calibrations show its white card (target=white) unless told
+// otherwise. Failures throw UsageError
 // (exit 2: a spec or setting the user got wrong) or RuntimeFailure (exit 1:
 // the line failed), naming the camera, the controller and the step.
 

@@ -53,6 +53,14 @@ Captured<std::unique_ptr<CalibrationRig>> CalibrationRig::open(RigOptions option
   rig->parts_->camera = open_camera(config.camera, rig->parts_->link.virtual_controller.get(),
                                     error, bad_input);
   if (!rig->parts_->camera) return Out::failure({error, bad_input});
+  for (const auto& warning : rig->parts_->camera->warnings()) rig->say("warning: " + warning);
+  const capture::PixelFormat format = rig->parts_->camera->format().pixel_format;
+  if (!capture::keeps_channels_apart(format))
+    return Out::failure({"camera " + config.camera.spec + ": pixel format " +
+                             capture::pixel_format_name(format) +
+                             " mixes the camera channels, so the calibration would measure the "
+                             "conversion: use raw Bayer or RGB",
+                         true});
   return Out::success(std::move(rig));
 }
 
