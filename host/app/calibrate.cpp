@@ -316,6 +316,11 @@ std::vector<SpeedSample> speed_samples_live(const SpeedFlags& f) {
   const SpeedFrames captured = capture_speed_frames(live);
   std::vector<SpeedSample> samples;
   for (const auto& frame : captured.frames) {
+    const auto format = frame.format.pixel_format;
+    if (format == capture::PixelFormat::kBayerRggb8 || format == capture::PixelFormat::kBayerRggb16)
+      throw UsageError("camera " + captured.config.camera.spec +
+                       " delivers raw Bayer frames: the blur estimate needs the channels apart "
+                       "(configure an RGB pixel format for calibrate speed)");
     const std::string label = "frame " + std::to_string(frame.sequence) + " (exposure " +
                               std::to_string(frame.event.frame_counter) + ")";
     auto model = session::frame_model(frame.event, captured.config.controller.parsed_code,
