@@ -11,6 +11,9 @@
 #include <vector>
 
 #include "flutterscan/firmware/boot_decision.hpp"
+#include "flutterscan/firmware/sim/sim_flash.hpp"
+#include "flutterscan/firmware/sim/sim_usb_controller.hpp"
+#include "flutterscan/firmware/usb/bootloader_usb.hpp"
 #include "usb_test_host.hpp"
 
 namespace flutterscan::firmware::test {
@@ -294,6 +297,101 @@ TEST_F(DfuTest, FlashFailuresAreReported) {
   EXPECT_FALSE(dfu_request(board_, DfuRequest::kClrStatus).stalled);
   board_.flash().set_failures(false, false);
   EXPECT_EQ(dfu_download(board_, image).final_status.state, DfuState::kDfuIdle);
+}
+
+// The bootloader's main loop resets into the application only after the USB
+// poll in which DFU mode decided to leave, and that poll may hold more
+// requests: BootloaderUsb alone (no SimBoard, which resets at once) shows
+// what they do. A DNLOAD then used to be accepted and its block written at the
+// next GETSTATUS, so the chip reset to start an application that was no
+// longer the one checked (the start-up check then stayed in DFU mode).
+// Fuzz finding: firmware/fuzz/crashes/dfu-download-after-detach.
+class DfuLeavingTest : public ::testing::Test {
+ protected:
+  DfuLeavingTest() {
+    usb_.attach(&boot_);
+    usb_.bus_reset();
+    EXPECT_FALSE(usb_.control_transfer(0x00, 5, 1, 0, 0).stalled);  // SET_ADDRESS
+    EXPECT_FALSE(usb_.control_transfer(0x00, 9, 1, 0, 0).stalled);  // SET_CONFIGURATION
+  }
+
+  ControlResult request(DfuRequest r, std::uint16_t value = 0,
+                        std::span<const std::uint8_t> data = {}) {
+    return usb_.control_transfer(usb::kDfuRequestOut, static_cast<std::uint8_t>(r), value, 0,
+                                 static_cast<std::uint16_t>(data.size()), data);
+  }
+  DfuState get_status() {
+    const ControlResult r =
+        usb_.control_transfer(usb::kDfuRequestIn, static_cast<std::uint8_t>(DfuRequest::kGetStatus),
+                              0, 0, usb::kDfuStatusSize);
+    EXPECT_FALSE(r.stalled);
+    return r.data.size() == usb::kDfuStatusSize ? static_cast<DfuState>(r.data[4])
+                                                : DfuState::kAppIdle;
+  }
+  /// A DNLOAD of `block` with dfu-util's GETSTATUS polls after it; whether it was refused.
+  bool dnload_refused(std::uint16_t block, std::span<const std::uint8_t> data) {
+    if (request(DfuRequest::kDnload, block, data).stalled) return true;
+    for (int i = 0; i < 3; ++i)
+      if (get_status() == DfuState::kDnloadIdle) break;
+    return false;
+  }
+  bool region_runs() {
+    return choose_boot_target(false, flash_.read(kAppBase, kStm32f405AppRegion.max_size),
+                              kStm32f405AppRegion) == BootTarget::kApplication;
+  }
+  void expect_nothing_written_after(const std::vector<std::uint8_t>& image) {
+    std::array<int, 12> erases{}, programs{};
+    for (int s = 0; s < 12; ++s) {
+      erases[static_cast<std::size_t>(s)] = flash_.erase_count(s);
+      programs[static_cast<std::size_t>(s)] = flash_.program_count(s);
+    }
+    const std::vector<std::uint8_t> garbage(usb::kDfuTransferSize, 0x5A);
+    EXPECT_TRUE(dnload_refused(0, garbage));
+    EXPECT_TRUE(dnload_refused(0, garbage));  // also from the dfuERROR that left
+    EXPECT_FALSE(request(DfuRequest::kClrStatus).stalled);
+    EXPECT_TRUE(dnload_refused(0, garbage));
+    for (int s = 0; s < 12; ++s) {
+      EXPECT_EQ(flash_.erase_count(s), erases[static_cast<std::size_t>(s)]) << "sector " << s;
+      EXPECT_EQ(flash_.program_count(s), programs[static_cast<std::size_t>(s)]) << "sector " << s;
+    }
+    const auto bytes = flash_.read(kAppBase, image.size());
+    EXPECT_TRUE(std::equal(image.begin(), image.end(), bytes.begin()));
+    EXPECT_TRUE(region_runs());
+    EXPECT_TRUE(boot_.leave_requested());
+  }
+
+  static constexpr std::array<std::uint8_t, 12> kUniqueId{1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12};
+  static constexpr auto kDevice = usb::bootloader_device_descriptor(0x0100);
+  sim::SimFlash flash_;
+  sim::SimUsbController usb_;
+  usb::BootloaderUsb boot_{usb_, flash_, kStm32f405Flash, kStm32f405AppRegion, kDevice, kUniqueId};
+};
+
+TEST_F(DfuLeavingTest, NoDownloadAfterDetach) {
+  const auto image = sim::make_application_image(kBoardIdStm32f405, 3, 2, 0, 5000, 3);
+  flash_.load(kAppBase, image);  // a valid application, as the factory programmed it
+  ASSERT_FALSE(request(DfuRequest::kDetach, 1000).stalled);
+  ASSERT_TRUE(boot_.leave_requested());
+  expect_nothing_written_after(image);
+}
+
+TEST_F(DfuLeavingTest, NoDownloadAfterTheResetThatFollowsAManifest) {
+  const auto image = sim::make_application_image(kBoardIdStm32f405, 3, 2, 0, 5000, 3);
+  for (std::uint16_t block = 0; block * usb::kDfuTransferSize < image.size(); ++block) {
+    const std::size_t at = block * usb::kDfuTransferSize;
+    ASSERT_FALSE(dnload_refused(
+        block, std::span<const std::uint8_t>(image).subspan(
+                   at, std::min<std::size_t>(usb::kDfuTransferSize, image.size() - at))));
+  }
+  ASSERT_FALSE(request(DfuRequest::kDnload, 5).stalled);  // zero length: manifest
+  ASSERT_EQ(get_status(), DfuState::kManifest);
+  ASSERT_EQ(get_status(), DfuState::kDfuIdle);
+  ASSERT_FALSE(boot_.leave_requested());
+  usb_.bus_reset();
+  ASSERT_TRUE(boot_.leave_requested());
+  EXPECT_FALSE(usb_.control_transfer(0x00, 5, 1, 0, 0).stalled);
+  EXPECT_FALSE(usb_.control_transfer(0x00, 9, 1, 0, 0).stalled);
+  expect_nothing_written_after(image);
 }
 
 TEST(BootDecision, StartsOnlyAValidImageForThisBoardWhenNotAskedToStay) {

@@ -497,5 +497,56 @@ TEST(SequencingGuardSeam, AnLedOnThroughoutCarriesItsRunIntoTheNextSeam) {
   EXPECT_EQ(events[3].flags & proto::kEventGuardHit, 0);  // after the dark one
 }
 
+// Fuzz finding (firmware/fuzz/crashes/guard-refused-then-same-us): a strobe
+// edge the moment an exposure's all-off word lands is refused (the runs would
+// join past the limit), and a second edge in that same microsecond found the
+// last lit exposure forgotten by the refusal and the period 0 (no duty check):
+// it lit the LEDs again, on for two exposures without a gap.
+TEST(SequencingGuardSeam, ASecondTriggerInTheMicrosecondOfARefusedOneIsRefusedToo) {
+  Rig rig;
+  proto::SetGuardRequest guard = permissive_guard();
+  guard.max_on_time_us.fill(10);
+  ASSERT_EQ(rig.send(Command::kSetGuard, guard).status(), Status::kOk);
+  arm_slave(rig, "1", 10);  // one slot of 10 us: exactly the limit
+  rig.port.clear_led_transitions();
+  rig.port.inject_strobe(1'000, 5);  // lit from 1000 to 1010
+  rig.port.inject_strobe(1'010, 5);  // joins it: 20 us, refused
+  rig.port.inject_strobe(1'010, 5);  // the same microsecond: still joins it, refused
+  rig.port.inject_strobe(1'030, 5);  // after a gap: lit
+  rig.port.run_until(2'000);
+  EXPECT_LE(longest_on_us(rig.port.led_transitions(), 0), 10u);
+  const auto events = rig.events();
+  ASSERT_EQ(events.size(), 4u);
+  EXPECT_EQ(events[0].flags & proto::kEventGuardHit, 0);
+  EXPECT_NE(events[1].flags & proto::kEventGuardHit, 0);
+  EXPECT_NE(events[2].flags & proto::kEventGuardHit, 0);
+  EXPECT_EQ(events[3].flags & proto::kEventGuardHit, 0);
+  EXPECT_EQ(rig.status().guard_hits, 2u);
+}
+
+TEST(Sequencing, GuardMeasuresTheDutyPeriodFromTheLastLitExposure) {
+  Rig rig;
+  proto::SetGuardRequest guard = permissive_guard();
+  guard.max_duty_permille.fill(200);  // one 100 us slot: at least 500 us between exposures
+  ASSERT_EQ(rig.send(Command::kSetGuard, guard).status(), Status::kOk);
+  arm_slave(rig, "1", 100);
+  rig.port.inject_strobe(1'000, 50);  // first: lit
+  rig.port.inject_strobe(1'200, 50);  // 200 us after it: 50 %, refused
+  rig.port.inject_strobe(1'200, 50);  // same microsecond: was period 0, unchecked; refused
+  rig.port.inject_strobe(1'400, 50);  // 400 us after the lit one: 25 %, refused
+  rig.port.inject_strobe(1'500, 50);  // 500 us after it: 20 %, lit (the refused ones lit nothing)
+  rig.port.run_until(3'000);
+  const auto events = rig.events();
+  ASSERT_EQ(events.size(), 5u);
+  EXPECT_EQ(events[0].flags & proto::kEventGuardHit, 0);
+  EXPECT_NE(events[1].flags & proto::kEventGuardHit, 0);
+  EXPECT_NE(events[2].flags & proto::kEventGuardHit, 0);
+  EXPECT_NE(events[3].flags & proto::kEventGuardHit, 0);
+  EXPECT_EQ(events[4].flags & proto::kEventGuardHit, 0);
+  const auto& log = rig.port.led_transitions();
+  ASSERT_FALSE(log.empty());
+  EXPECT_EQ(log.back().time_us, 1'600u);
+}
+
 }  // namespace
 }  // namespace flutterscan::firmware::test

@@ -383,11 +383,11 @@ void Controller::begin_exposure(std::uint64_t time_us) {
   const SlotTable& table = tables_[static_cast<std::size_t>(playing_table_)];
   const int length = table.stats.length;
   const std::uint32_t slot_time = slot_time_for_next_exposure(length, flags);
+  // The period since the last lit exposure began: one the guard refused lit
+  // nothing, so it neither starts a period nor ends the last lit exposure.
   const std::uint64_t period = have_previous_start_
                                    ? time_us - previous_start_us_
                                    : (uses_frame_timer() ? settings_.timing.frame_period_us : 0);
-  have_previous_start_ = true;
-  previous_start_us_ = time_us;
   ++frame_counter_;
 
   exposure_start_us_ = time_us;
@@ -404,7 +404,11 @@ void Controller::begin_exposure(std::uint64_t time_us) {
   if (verdict.status == GuardStatus::kOk && joins_previous)
     verdict = check_led_guard_seam(lit_trailing_on_us_, table.stats, slot_time, settings_.guard);
   if (verdict.status != GuardStatus::kOk) {
-    have_lit_exposure_ = false;  // this exposure stays dark: nothing joins across it
+    // This exposure stays dark, but it takes no time: a trigger in the same
+    // microsecond still touches the last lit exposure, so that one stays the
+    // one to join (and to measure the period from). Clearing it here let a
+    // second strobe edge in the microsecond of a refused one light the LEDs
+    // again with no seam check (fuzz finding, crashes/guard-refused-then-same-us).
     ++guard_hits_;
     protocol::ExposureEvent event{};
     event.frame_counter = frame_counter_;
@@ -424,6 +428,8 @@ void Controller::begin_exposure(std::uint64_t time_us) {
     return;
   }
   note_lit_exposure(table.stats, time_us, slot_time, joins_previous);
+  have_previous_start_ = true;
+  previous_start_us_ = time_us;
   state_ = ControllerState::kExposing;
 }
 

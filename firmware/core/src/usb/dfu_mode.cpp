@@ -37,7 +37,10 @@ ControlReply DfuMode::control_request(const SetupPacket& setup, std::span<std::u
     return fail(DfuStatus::kErrStalledPacket);  // the host must wait bwPollTimeout
   switch (static_cast<DfuRequest>(setup.request)) {
     case DfuRequest::kDnload:
-      if (!is_request(setup, kDfuRequestOut)) break;
+      // Once the application is to start, the region stays as it was checked:
+      // the main loop resets only after this USB poll, which may hold more
+      // requests (fuzz finding, firmware/fuzz/crashes/dfu-download-after-detach).
+      if (!is_request(setup, kDfuRequestOut) || leave_requested_) break;
       return dnload(setup);
     case DfuRequest::kUpload:
       if (!is_request(setup, kDfuRequestIn)) break;

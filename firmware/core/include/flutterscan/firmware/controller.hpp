@@ -157,7 +157,7 @@ class Controller final : public PortListener {
   std::uint16_t exposure_flags_ = 0;
   std::uint32_t exposure_pulse_width_us_ = 0;
   bool have_previous_start_ = false;
-  std::uint64_t previous_start_us_ = 0;
+  std::uint64_t previous_start_us_ = 0;  ///< start of the last lit exposure (the guard's period)
   // The last exposure that lit its LEDs (a refused one stays dark): when its
   // all-off word lands, and per LED how long the LED had been on, without a
   // gap, at that moment. An exposure starting then joins its runs to these.

@@ -24,6 +24,10 @@
 // - ABORT returns to dfuIDLE from dfuIDLE and every download or upload state
 //   that accepts requests; CLRSTATUS leaves dfuERROR.
 // - DFU_DETACH in dfuIDLE starts the application if the region holds a valid image.
+// - Once the application is to start (leave_requested(): after DFU_DETACH, or a
+//   USB reset after a manifest), DNLOAD stalls (dfuERROR, errSTALLEDPKT):
+//   nothing is written to the region the decision was made on before the
+//   main loop resets the chip.
 // - A request the state does not allow: STALL, dfuERROR with errSTALLEDPKT
 //   (DFU 1.1 appendix A), except DFU_DETACH without a valid image (errFIRMWARE).
 // Freestanding C++20: no heap, no exceptions, no RTTI.
