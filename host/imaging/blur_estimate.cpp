@@ -28,12 +28,14 @@ class ConsistencyCost {
                   int row_step = 1)
       : model_(model) {
     std::vector<Plane> rows;
+    std::vector<float> line;
     for (const auto& plane : electrons.channels) {
-      const Plane along = to_motion_frame(plane, model.direction);
-      Plane kept(along.width, (along.height + row_step - 1) / row_step);
+      const int along_rows = motion_rows(plane, model.direction);
+      Plane kept(along_rows == plane.height ? plane.width : plane.height,
+                 (along_rows + row_step - 1) / row_step);
       for (int y = 0; y < kept.height; ++y) {
-        const auto from = along.row(y * row_step);
-        std::copy(from.begin(), from.end(), kept.row(y).begin());
+        motion_row(plane, model.direction, y * row_step, line);
+        std::copy(line.begin(), line.end(), kept.row(y).begin());
       }
       rows.push_back(std::move(kept));
     }
@@ -242,12 +244,14 @@ Result<BlurEstimate, std::string> estimate_blur(const Image& electrons, const Ca
 }
 
 Result<double, std::string> cross_channel_residual(const Image& electrons,
-                                                   const CaptureModel& model) {
+                                                   const CaptureModel& model, int row_step) {
   using Out = Result<double, std::string>;
   if (electrons.channel_count() < 2 || electrons.channel_count() != model.channels)
     return Out::failure("the cross-channel residual needs two or more channels");
   if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
-  ConsistencyCost cost(electrons, model, static_cast<int>(std::floor(model.blur_px)) + 2);
+  if (row_step < 1) return Out::failure("the row step must be 1 or more");
+  ConsistencyCost cost(electrons, model, static_cast<int>(std::floor(model.blur_px)) + 2,
+                       row_step);
   if (model.blur_px + 2 >= cost.width())
     return Out::failure("the blur does not fit the frame along the motion");
   return Out::success(cost(model.blur_px, 0, cost.height()).mean());

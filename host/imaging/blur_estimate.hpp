@@ -53,10 +53,10 @@ Result<BlurEstimate, std::string> estimate_blur(const Image& electrons, const Ca
                                                 double min_px, double max_px, int row_step = 1);
 
 /// \brief The cross-channel residual per sample (R / samples above) at the
-/// model's own blur: about 1 when the frame fits a grey scene under `model`;
-/// much more when it does not (colour objects, a wrong blur, a changed
-/// crosstalk). Fails as estimate_blur does.
+/// model's own blur, over every `row_step`-th row along the motion: about 1
+/// when the frame fits a grey scene under `model`; much more when it does not
+/// (colour objects, a wrong blur, a changed crosstalk). Fails as estimate_blur does.
 Result<double, std::string> cross_channel_residual(const Image& electrons,
-                                                   const CaptureModel& model);
+                                                   const CaptureModel& model, int row_step = 1);
 
 }  // namespace flutterscan::imaging

@@ -1,6 +1,9 @@
 #include "imaging/model_choice.hpp"
 
 #include "imaging/blur_estimate.hpp"
+#include "imaging/motion_frame.hpp"
+
+#include <algorithm>
 
 namespace flutterscan::imaging {
 
@@ -16,7 +19,10 @@ FrameModelChoice choose_frame_model(const Image& electrons, const CaptureModel& 
   choice.per_row_phase = rolling_shutter;
   choice.blur_from_encoder = encoder_present;
   if (electrons.channel_count() >= 2) {
-    const auto residual = cross_channel_residual(electrons, model);
+    // A statistic over the frame: about 128 rows along the motion measure it
+    // as well as all of them (a colour label spans many rows), at a fraction of the cost.
+    const int rows = motion_rows(electrons.channels[0], model.direction);
+    const auto residual = cross_channel_residual(electrons, model, std::max(1, rows / 128));
     if (residual.ok()) {
       choice.grey_residual = residual.value();
       if (residual.value() > kColourResidual) choice.latent = LatentModel::kPerChannel;

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 #include "imaging/motion_frame.hpp"
 
@@ -21,28 +22,38 @@ double saturated_share(const Image& dn, const CaptureModel& model) {
 
 double residual_ratio(const Image& electrons, const Plane& latent, const CaptureModel& model,
                       int row_step) {
-  const Plane x = to_motion_frame(latent, model.direction);
   double ratio_sum = 0;
   int channels = 0;
+  std::vector<float> observed, sharp, predicted;
   for (int c = 0; c < electrons.channel_count(); ++c) {
-    const Plane y =
-        to_motion_frame(electrons.channels[static_cast<std::size_t>(c)], model.direction);
-    const auto taps = channel_psf(model, c);
+    const Plane& plane = electrons.channels[static_cast<std::size_t>(c)];
+    const auto psf = channel_psf(model, c);
+    const std::vector<float> taps(psf.begin(), psf.end());
     const int k = static_cast<int>(taps.size());
-    if (y.width != x.width || y.height != x.height || k >= y.width) return INFINITY;
+    if (plane.width != latent.width || plane.height != latent.height) return INFINITY;
+    const int rows = motion_rows(plane, model.direction);
     double squares = 0, signal = 0;
     std::size_t samples = 0;
-    for (int row = 0; row < y.height; row += std::max(1, row_step)) {
-      const auto observed = y.row(row);
-      const auto sharp = x.row(row);
-      for (int n = k - 1; n < y.width; ++n) {
-        double predicted = 0;
-        for (int j = 0; j < k; ++j) predicted += taps[static_cast<std::size_t>(j)] * sharp[n - j];
-        const double r = observed[n] - predicted;
-        squares += r * r;
-        signal += observed[n];
-        ++samples;
+    for (int row = 0; row < rows; row += std::max(1, row_step)) {
+      motion_row(plane, model.direction, row, observed);
+      motion_row(latent, model.direction, row, sharp);
+      const int width = static_cast<int>(observed.size());
+      if (k >= width) return INFINITY;
+      // The blurred row, tap by tap over the whole row (vectorises).
+      predicted.assign(static_cast<std::size_t>(width), 0.0f);
+      for (int j = 0; j < k; ++j) {
+        const float tap = taps[static_cast<std::size_t>(j)];
+        for (int n = k - 1; n < width; ++n) predicted[n] += tap * sharp[n - j];
       }
+      float row_squares = 0, row_signal = 0;
+      for (int n = k - 1; n < width; ++n) {
+        const float r = observed[n] - predicted[n];
+        row_squares += r * r;
+        row_signal += observed[n];
+      }
+      squares += row_squares;
+      signal += row_signal;
+      samples += static_cast<std::size_t>(width - k + 1);
     }
     if (samples == 0) continue;
     const double variance =

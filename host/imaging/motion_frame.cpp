@@ -39,6 +39,24 @@ Plane to_motion_frame(const Plane& plane, Direction direction) {
   return plane;
 }
 
+int motion_rows(const Plane& plane, Direction direction) {
+  const bool along_x = direction == Direction::kPlusX || direction == Direction::kMinusX;
+  return along_x ? plane.height : plane.width;
+}
+
+void motion_row(const Plane& plane, Direction direction, int row, std::vector<float>& out) {
+  const bool along_x = direction == Direction::kPlusX || direction == Direction::kMinusX;
+  if (along_x) {
+    const auto from = plane.row(row);
+    out.assign(from.begin(), from.end());
+  } else {
+    out.resize(static_cast<std::size_t>(plane.height));
+    for (int n = 0; n < plane.height; ++n) out[static_cast<std::size_t>(n)] = plane.at(row, n);
+  }
+  if (direction == Direction::kMinusX || direction == Direction::kMinusY)
+    std::reverse(out.begin(), out.end());
+}
+
 Plane from_motion_frame(const Plane& plane, Direction direction) {
   switch (direction) {
     case Direction::kPlusX:

@@ -3,6 +3,8 @@
 
 #include "session/barcode_reader.hpp"
 
+#include "session/assertion_guard.hpp"
+
 #include <ZXing/BarcodeFormat.h>
 #include <ZXing/DecodeHints.h>
 #include <ZXing/ImageView.h>
@@ -11,11 +13,21 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <stdexcept>
 
 namespace flutterscan::session {
 
-std::vector<DecodedCode> read_barcodes(const imaging::Plane& latent) {
-  std::vector<DecodedCode> out;
+std::string check_symbologies(const std::string& symbologies) {
+  try {
+    if (ZXing::BarcodeFormatsFromString(symbologies).empty()) return "names no symbology";
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return {};
+}
+
+BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& symbologies) {
+  BarcodeReadout out;
   if (latent.empty()) return out;
   std::vector<std::uint8_t> lum(latent.pixels.size());
   std::transform(latent.pixels.begin(), latent.pixels.end(), lum.begin(), [](float v) {
@@ -23,8 +35,14 @@ std::vector<DecodedCode> read_barcodes(const imaging::Plane& latent) {
   });
   const ZXing::ImageView view(lum.data(), latent.width, latent.height, ZXing::ImageFormat::Lum);
   ZXing::DecodeHints hints;
-  hints.setFormats(ZXing::BarcodeFormat::Any).setTryHarder(true).setTryRotate(true);
-  for (const ZXing::Result& result : ZXing::ReadBarcodes(view, hints)) {
+  hints.setFormats(ZXing::BarcodeFormatsFromString(symbologies))
+      .setTryHarder(true)
+      .setTryRotate(true);
+  ZXing::Results results;
+  out.decoder_fault =
+      run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, hints); });
+  if (!out.decoder_fault.empty()) return out;
+  for (const ZXing::Result& result : results) {
     if (!result.isValid()) continue;
     DecodedCode code;
     code.text = result.text();
@@ -41,7 +59,7 @@ std::vector<DecodedCode> read_barcodes(const imaging::Plane& latent) {
     }
     code.centre_x = sx / 4;
     code.centre_y = sy / 4;
-    out.push_back(std::move(code));
+    out.codes.push_back(std::move(code));
   }
   return out;
 }

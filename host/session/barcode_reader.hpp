@@ -19,8 +19,29 @@ struct DecodedCode {
   double min_x = 0, max_x = 0;  ///< extent along x
 };
 
-/// \brief Every barcode ZXing reads on `latent` (reflectance, clipped to 0..1).
-std::vector<DecodedCode> read_barcodes(const imaging::Plane& latent);
+/// \brief The symbologies read unless `processing.symbologies` names others.
+/// Left out: Micro QR, whose sampler in Debian's ZXing 1.4 fails an assertion
+/// on some deblurred frames (see assertion_guard.hpp), and DataBar, which
+/// conveyor labels rarely carry. ZXing's names, comma-separated.
+inline constexpr const char* kDefaultSymbologies =
+    "Aztec,Codabar,Code39,Code93,Code128,DataMatrix,EAN-8,EAN-13,ITF,PDF417,QRCode,UPC-A,UPC-E";
+
+/// \brief "" if `symbologies` is a list of ZXing format names ZXing knows
+/// (comma-separated, e.g. "Code128,QRCode"), else what is wrong with it.
+std::string check_symbologies(const std::string& symbologies);
+
+/// \brief What one decode found.
+struct BarcodeReadout {
+  std::vector<DecodedCode> codes;
+  /// Non-empty when the decoder failed an internal assertion on this image:
+  /// its text. The codes read are then none (the frame is flagged, the session goes on).
+  std::string decoder_fault;
+};
+
+/// \brief Every barcode of the named symbologies (check_symbologies() passed)
+/// ZXing reads on `latent` (reflectance, clipped to 0..1).
+BarcodeReadout read_barcodes(const imaging::Plane& latent,
+                             const std::string& symbologies = kDefaultSymbologies);
 
 /// \brief A run of columns [begin, end) where the image is mostly label paper.
 struct LabelRegion {

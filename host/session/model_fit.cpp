@@ -1,5 +1,6 @@
 #include "session/model_fit.hpp"
 
+#include <chrono>
 #include <cmath>
 
 #include "imaging/blur_estimate.hpp"
@@ -13,6 +14,14 @@ namespace {
 
 double rounded(double v, double step) {
   return std::round(v / step) * step;
+}
+
+/// Milliseconds since `since`, to 0.01 ms; `since` moves to now.
+double lap_ms(std::chrono::steady_clock::time_point& since) {
+  const auto now = std::chrono::steady_clock::now();
+  const double ms = std::chrono::duration<double, std::milli>(now - since).count();
+  since = now;
+  return rounded(ms, 0.01);
 }
 
 /// The blur searched around a nominal one: -20% to +25%, inside the frame.
@@ -34,6 +43,8 @@ Result<FittedFrame, std::string> deblur_fitting_model(const imaging::Image& dn,
   const bool along_x = model.direction == imaging::Direction::kPlusX ||
                        model.direction == imaging::Direction::kMinusX;
   const int along = along_x ? electrons.width() : electrons.height();
+  auto lap = std::chrono::steady_clock::now();
+  nlohmann::json& times = out.log["fit_ms"];
 
   // 1. The blur.
   const bool check_blur = config.encoder && config.blur_check_every > 0 &&
@@ -64,12 +75,15 @@ Result<FittedFrame, std::string> deblur_fitting_model(const imaging::Image& dn,
     }
   }
 
+  times["blur_estimate"] = lap_ms(lap);
+
   // 2. The model, and the deblur under it.
   const auto choice =
       config.choose_latent
           ? imaging::choose_frame_model(electrons, model, config.line_time_us > 0, config.encoder)
           : imaging::FrameModelChoice{imaging::LatentModel::kGrey, config.line_time_us > 0,
                                       config.encoder, 0};
+  times["model_choice"] = lap_ms(lap);
   out.log["model"] = {{"chosen", choice.describe()},
                       {"grey_residual", rounded(choice.grey_residual, 0.01)},
                       {"blur_px", rounded(model.blur_px, 0.01)}};
@@ -91,11 +105,14 @@ Result<FittedFrame, std::string> deblur_fitting_model(const imaging::Image& dn,
     auto result = imaging::deblur(electrons, model, options);
     if (!result.ok()) return Out::failure(result.error());
     out.latent = std::move(result.value().latent);
+    times["deblur"] = lap_ms(lap);
     // The residual check needs the grey global model the frame was deblurred with.
     guards.residual_ratio = imaging::residual_ratio(
         electrons, out.latent, model,
         std::max(4, (along_x ? electrons.height() : electrons.width()) / 32));
   }
+
+  if (!times.contains("deblur")) times["deblur"] = lap_ms(lap);
 
   // 3. Guards.
   guards.saturated_share = imaging::saturated_share(dn, model);
@@ -103,6 +120,7 @@ Result<FittedFrame, std::string> deblur_fitting_model(const imaging::Image& dn,
                        {"residual_ratio", rounded(guards.residual_ratio, 0.01)}};
   if (guards.blur_checked) out.log["guards"]["blur_disagrees"] = guards.blur_disagrees;
   for (auto& flag : guards.flags()) out.flags.push_back(flag);
+  times["guards"] = lap_ms(lap);  // with the residual check after a global deblur
   return Out::success(std::move(out));
 }
 

@@ -301,7 +301,13 @@ FrameOutcome process(const FrameJob& job, const SessionConfig& config,
     log["flags"] = flags;
     return out;
   }
-  const auto codes = read_barcodes(latent);
+  const BarcodeReadout readout = read_barcodes(latent, config.processing.symbologies);
+  const std::vector<DecodedCode>& codes = readout.codes;
+  if (!readout.decoder_fault.empty()) {
+    // ZXing failed an internal assertion on this image: nothing read, the session goes on.
+    log["decoder_fault"] = readout.decoder_fault;
+    flags.push_back("decoder-fault");
+  }
   const imaging::Direction direction = model.value().direction;
   const imaging::Plane along = imaging::to_motion_frame(latent, direction);
   auto regions = find_label_regions(along);

@@ -211,7 +211,8 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     if (auto p = known_keys_problem(
             *t, "processing.",
             {"method", "workers", "threads_per_worker", "queue_depth", "max_frames", "max_seconds",
-             "match_tolerance_us", "object_match_px", "choose_model", "blur_check_every"},
+             "match_tolerance_us", "object_match_px", "choose_model", "blur_check_every",
+             "symbologies"},
             origin);
         !p.empty())
       return Out::failure(p);
@@ -234,6 +235,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     r.get("object_match_px", c.processing.object_match_px);
     r.get("choose_model", c.processing.choose_model);
     r.get("blur_check_every", c.processing.blur_check_every);
+    r.get("symbologies", c.processing.symbologies);
   }
   if (const toml::table* t = root["output"].as_table()) {
     if (auto p = known_keys_problem(*t, "output.",
@@ -316,6 +318,8 @@ std::string check_config(SessionConfig& c) {
     return problem("optics.line_time_us", "must be 0 (global shutter) up to 1000 us");
   if (c.processing.blur_check_every < 0)
     return problem("processing.blur_check_every", "must be >= 0");
+  if (auto why = check_symbologies(c.processing.symbologies); !why.empty())
+    return problem("processing.symbologies", "'" + c.processing.symbologies + "': " + why);
   imaging::Direction direction;
   if (!imaging::parse_direction(c.optics.direction, direction))
     return problem("optics.direction", "must be +x, -x, +y or -y");

@@ -14,6 +14,7 @@
 #include "flutterscan/common/led_code.hpp"
 #include "flutterscan/common/result.hpp"
 #include "imaging/deblur.hpp"
+#include "session/barcode_reader.hpp"
 
 namespace flutterscan::session {
 
@@ -71,6 +72,8 @@ struct ProcessingConfig {
   /// With an encoder: every N-th frame, estimate the blur from the frame and flag a
   /// disagreement with the encoder (0: never; each check costs about one tv deblur).
   int blur_check_every = 0;
+  /// ZXing format names read on each fused frame, comma-separated (fewer is faster).
+  std::string symbologies = kDefaultSymbologies;
 };
 
 struct OutputConfig {

@@ -133,6 +133,18 @@ TEST(MotionFrame, EveryDirectionRoundTrips) {
   EXPECT_EQ(down.width, 3);
   EXPECT_EQ(down.at(1, 0), p.at(0, 1));
   EXPECT_EQ(to_motion_frame(p, Direction::kMinusX).at(0, 0), p.at(4, 0));
+  // One row at a time, without the whole rearrangement: the same rows.
+  std::vector<float> line;
+  for (Direction d :
+       {Direction::kPlusX, Direction::kMinusX, Direction::kPlusY, Direction::kMinusY}) {
+    const Plane moved = to_motion_frame(p, d);
+    ASSERT_EQ(motion_rows(p, d), moved.height);
+    for (int r = 0; r < moved.height; ++r) {
+      motion_row(p, d, r, line);
+      const auto want = moved.row(r);
+      EXPECT_EQ(line, std::vector<float>(want.begin(), want.end())) << "row " << r;
+    }
+  }
 }
 
 }  // namespace

@@ -6,7 +6,11 @@
 //
 //   session_bench [--frames N] [--width W --height H] [--csv FILE]
 
+#include <algorithm>
 #include <chrono>
+#include <ctime>
+#include <map>
+#include <vector>
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
@@ -14,8 +18,17 @@
 #include <iostream>
 #include <string>
 
+#include "capture/frame_pixels.hpp"
 #include "capture/sim_camera.hpp"
+#include "device/controller_client.hpp"
+#include "device/in_process_transport.hpp"
 #include "device/virtual_controller.hpp"
+#include "imaging/capture_descriptor.hpp"
+#include "imaging/deblur.hpp"
+#include "imaging/frame_conversion.hpp"
+#include "imaging/model_choice.hpp"
+#include "imaging/model_guards.hpp"
+#include "session/barcode_reader.hpp"
 #include "session/session.hpp"
 
 namespace {
@@ -26,7 +39,33 @@ namespace fs = std::filesystem;
 struct Run {
   std::string name;
   nlohmann::json summary;
+  std::map<std::string, double> stage_ms;  ///< median per stage over processed frames
 };
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
+  return v[v.size() / 2];
+}
+
+/// Medians of the per-stage times of session.jsonl's processed frames.
+std::map<std::string, double> stage_medians(const fs::path& log) {
+  std::map<std::string, std::vector<double>> samples;
+  std::ifstream in(log);
+  std::string line;
+  while (std::getline(in, line)) {
+    const auto j = nlohmann::json::parse(line, nullptr, false);
+    if (j.is_discarded() || !j.contains("times_ms")) continue;
+    for (const auto& [stage, ms] : j["times_ms"].items())
+      if (stage != "deblur") samples[stage].push_back(ms.get<double>());
+    if (j.contains("fit_ms"))
+      for (const auto& [stage, ms] : j["fit_ms"].items())
+        samples[stage].push_back(ms.get<double>());
+  }
+  std::map<std::string, double> out;
+  for (auto& [stage, v] : samples) out[stage] = median(v);
+  return out;
+}
 
 session::SessionConfig bench_config(int width, int height, int frames, bool paced,
                                     int frame_period_us, const fs::path& out) {
@@ -76,6 +115,77 @@ double render_ms(int width, int height) {
          n;
 }
 
+/// CPU time of this thread, ms: a stage's cost whatever else the machine runs.
+double thread_cpu_ms() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
+}
+
+/// What one worker spends on one frame, stage by stage (medians over `repeats`
+/// runs on one sim frame, thread CPU time, one thread as the bench's workers).
+std::map<std::string, double> stage_costs(int width, int height, int repeats) {
+  std::map<std::string, double> out;
+  auto controller = std::make_shared<device::VirtualController>();
+  session::SessionConfig defaults;
+  if (!session::check_config(defaults).empty()) return out;
+  auto client = device::ControllerClient::connect(device::in_process_opener(controller));
+  if (!client.ok()) return out;
+  protocol::SetTimingRequest timing{};
+  timing.slot_time_us = defaults.controller.slot_time_us;
+  if (!client.value()->set_code(0, defaults.controller.parsed_code, true).ok() ||
+      !client.value()->select_code(0).ok() || !client.value()->set_timing(timing).ok() ||
+      !client.value()->arm().ok())
+    return out;
+  capture::SimConveyorOptions o;
+  o.width = width;
+  o.height = height;
+  o.tile_width = 600;
+  o.gap = 200;
+  o.speed_px_per_s = 10000;
+  o.counts_per_px = 2;
+  o.exposure_us = 6000;
+  o.render_threads = 1;
+  auto camera = capture::make_sim_camera(*controller, o);
+  capture::Frame frame;
+  std::string error;
+  if (!camera->start().empty()) return out;
+  // A frame with a label in the middle of the view.
+  for (int i = 0; i < 4; ++i) camera->next_frame(frame, std::chrono::milliseconds(1000), error);
+  auto model = imaging::from_descriptor(nlohmann::json::parse(frame.descriptor_json));
+  if (!model.ok()) return out;
+  imaging::DeblurOptions options;
+  options.threads = 1;
+  std::map<std::string, std::vector<double>> samples;
+  for (int r = 0; r < repeats; ++r) {
+    double t = thread_cpu_ms();
+    auto lap = [&](const char* stage) {
+      const double now = thread_cpu_ms();
+      samples[stage].push_back(now - t);
+      t = now;
+    };
+    auto dn = capture::frame_to_dn(frame);
+    const imaging::Image electrons = imaging::dn_to_electrons(dn.value(), model.value());
+    lap("convert");
+    const auto choice = imaging::choose_frame_model(electrons, model.value(), false, true);
+    lap("model_choice");
+    auto deblurred = imaging::deblur(electrons, model.value(), options);
+    lap("deblur");
+    const imaging::Plane& latent = deblurred.value().latent;
+    const double ratio = imaging::residual_ratio(electrons, latent, model.value(), height / 32);
+    const double saturated = imaging::saturated_share(dn.value(), model.value());
+    lap("guards");
+    const auto readout = session::read_barcodes(latent, session::kDefaultSymbologies);
+    lap("decode");
+    if (r == 0)
+      std::cout << "stage frame: model " << choice.describe() << ", residual ratio " << ratio
+                << ", saturated " << saturated << ", " << readout.codes.size() << " code(s) read"
+                << (readout.decoder_fault.empty() ? "" : ", decoder fault") << "\n";
+  }
+  for (auto& [stage, v] : samples) out[stage] = median(v);
+  return out;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -115,6 +225,19 @@ int main(int argc, char** argv) {
   std::cout << "rendering (sim forward model, 1 thread, apart from the pipeline): " << render
             << " ms per frame\n\n";
 
+  const auto costs = stage_costs(width, height, 9);
+  double total = 0;
+  std::cout << "one worker, one frame, stage by stage (thread CPU time, median of 9):\n\n"
+               "| stage | ms |\n|---|---|\n";
+  for (const char* stage : {"convert", "model_choice", "deblur", "guards", "decode"}) {
+    const auto it = costs.find(stage);
+    const double ms = it == costs.end() ? 0.0 : it->second;
+    total += ms;
+    std::cout << "| " << stage << " | " << ms << " |\n";
+  }
+  std::cout << "| total | " << total << " |\n\nso at most " << 2000.0 / total
+            << " fps on 2 cores (2 workers x 1 thread)\n\n";
+
   std::vector<Run> runs;
   const struct {
     const char* name;
@@ -132,10 +255,10 @@ int main(int argc, char** argv) {
       std::cerr << "session_bench: " << c.name << ": " << outcome.error << "\n";
       return 1;
     }
-    runs.push_back({c.name, outcome.summary});
+    runs.push_back({c.name, outcome.summary, stage_medians(out / "session.jsonl")});
   }
-  std::cout << "| input | frames in | processed | dropped | fps out | latency p50 ms | p99 ms |\n"
-            << "|---|---|---|---|---|---|---|\n";
+  std::cout << "| input | frames in | processed | dropped | seconds | fps out | latency p50 ms | p99 ms |\n"
+            << "|---|---|---|---|---|---|---|---|\n";
   std::ofstream table;
   if (!csv.empty()) {
     table.open(csv);
@@ -144,12 +267,28 @@ int main(int argc, char** argv) {
   for (const auto& r : runs) {
     const auto& s = r.summary;
     std::cout << "| " << r.name << " | " << s["frames_captured"] << " | " << s["frames_processed"]
-              << " | " << s["frames_dropped"] << " | " << s["fps"] << " | " << s["latency_ms_p50"]
+              << " | " << s["frames_dropped"] << " | " << s["duration_s"] << " | " << s["fps"] << " | " << s["latency_ms_p50"]
               << " | " << s["latency_ms_p99"] << " |\n";
     if (table.is_open())
       table << '"' << r.name << "\"," << s["frames_captured"] << "," << s["frames_processed"] << ","
             << s["frames_dropped"] << "," << s["fps"] << "," << s["latency_ms_p50"] << ","
             << s["latency_ms_p99"] << "," << render << "\n";
+  }
+  std::cout << "\nper frame, median ms on one worker thread (model_choice: grey or colour print; "
+               "guards: residual and saturation checks):\n\n| input |";
+  const std::vector<std::string> stages = {"convert",      "blur_estimate", "model_choice",
+                                           "deblur",       "guards",        "decode"};
+  for (const auto& stage : stages) std::cout << " " << stage << " |";
+  std::cout << "\n|---|";
+  for (std::size_t i = 0; i < stages.size(); ++i) std::cout << "---|";
+  std::cout << "\n";
+  for (const auto& r : runs) {
+    std::cout << "| " << r.name << " |";
+    for (const auto& stage : stages) {
+      const auto it = r.stage_ms.find(stage);
+      std::cout << " " << (it == r.stage_ms.end() ? 0.0 : it->second) << " |";
+    }
+    std::cout << "\n";
   }
   fs::remove_all(out);
   return 0;

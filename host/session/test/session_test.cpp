@@ -213,6 +213,10 @@ TEST(SessionConfigFile, ReadsTheAnnotatedExampleAndNamesBadKeys) {
   SessionConfig bad;
   bad.controller.code = "1234";
   EXPECT_NE(check_config(bad).find("controller.code"), std::string::npos);
+
+  SessionConfig unknown_symbology;
+  unknown_symbology.processing.symbologies = "Code128,Code129";
+  EXPECT_NE(check_config(unknown_symbology).find("processing.symbologies"), std::string::npos);
 }
 
 }  // namespace
