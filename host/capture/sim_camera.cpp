@@ -1,6 +1,7 @@
 #include "capture/sim_camera.hpp"
 
 #include <algorithm>
+#include <atomic>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -157,8 +158,9 @@ class SimCamera final : public CameraSource {
     sequence_ = 0;
     delivered_ = 0;
     travel_px_ = 0;
-    host_start_ns_ = steady_now_ns();
     running_ = true;
+    if (o_.ring_frames > 0) prerender_ring();
+    host_start_ns_ = steady_now_ns();
     return {};
   }
 
@@ -169,13 +171,6 @@ class SimCamera final : public CameraSource {
     const std::size_t lookahead =
         o_.ring_frames > 0 ? 1 : static_cast<std::size_t>(std::max(1, o_.render_threads));
     while (in_flight_.size() < lookahead && (o_.max_frames == 0 || sequence_ < o_.max_frames)) {
-      if (o_.pace_realtime) {
-        const std::int64_t due =
-            host_start_ns_ + static_cast<std::int64_t>(sequence_) *
-                                 static_cast<std::int64_t>(o_.frame_period_us) * 1000;
-        const std::int64_t wait = due - steady_now_ns();
-        if (wait > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(wait));
-      }
       const bool lost = o_.drop_probability > 0 && uniform_(rng_) < o_.drop_probability;
       RenderJob job = expose_one();
       if (lost) {
@@ -194,6 +189,14 @@ class SimCamera final : public CameraSource {
     if (in_flight_.empty()) return FrameWait::kEnd;
     Rendered rendered = in_flight_.front().get();
     in_flight_.pop_front();
+    if (o_.pace_realtime) {  // delivered at the frame rate, counted from start()
+      const std::int64_t due = host_start_ns_ + static_cast<std::int64_t>(delivered_) *
+                                                    static_cast<std::int64_t>(o_.frame_period_us) *
+                                                    1000;
+      const std::int64_t wait = due - steady_now_ns();
+      if (wait > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(wait));
+    }
+    ++delivered_;
     if (!rendered.error.empty()) {
       error = rendered.error;
       return FrameWait::kError;
@@ -254,6 +257,42 @@ class SimCamera final : public CameraSource {
         speed * static_cast<double>(job.light.dark ? 0 : job.light.start_us - begin_us) * 1e-6;
     job.blur = job.light.dark ? 0.0 : speed * static_cast<double>(job.light.duration_us) * 1e-6;
     return job;
+  }
+
+  /// Ring mode: the ring's frames are exposed and rendered (on render_threads)
+  /// before start() returns, so that every frame afterwards comes from memory
+  /// and the frame rate holds from the first frame on.
+  void prerender_ring() {
+    std::vector<RenderJob> jobs;
+    while (static_cast<int>(jobs.size()) < o_.ring_frames &&
+           (o_.max_frames == 0 || sequence_ < o_.max_frames)) {
+      const bool lost = o_.drop_probability > 0 && uniform_(rng_) < o_.drop_probability;
+      RenderJob job = expose_one();
+      if (lost)
+        ++counters_.frames_dropped;
+      else
+        jobs.push_back(job);
+    }
+    std::vector<Rendered> rendered(jobs.size());
+    std::atomic<std::size_t> next{0};
+    std::vector<std::thread> threads;
+    for (int t = 0; t < std::max(1, o_.render_threads); ++t)
+      threads.emplace_back([&] {
+        for (std::size_t i = next++; i < jobs.size(); i = next++) {
+          Frame& frame = rendered[i].frame;
+          frame.sequence = jobs[i].sequence;
+          frame.timestamp_ns = jobs[i].timestamp_ns;
+          frame.format = format();
+          render(frame, jobs[i].light, jobs[i].travel_at_slot0, jobs[i].blur, rendered[i].error);
+        }
+      });
+    for (auto& t : threads) t.join();
+    for (auto& r : rendered) {
+      if (r.error.empty()) ring_.push_back(r.frame);
+      std::promise<Rendered> ready;
+      ready.set_value(std::move(r));
+      in_flight_.push_back(ready.get_future());
+    }
   }
 
   Rendered render_job(const RenderJob& job) {
