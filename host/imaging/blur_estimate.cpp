@@ -250,8 +250,7 @@ Result<double, std::string> cross_channel_residual(const Image& electrons,
     return Out::failure("the cross-channel residual needs two or more channels");
   if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
   if (row_step < 1) return Out::failure("the row step must be 1 or more");
-  ConsistencyCost cost(electrons, model, static_cast<int>(std::floor(model.blur_px)) + 2,
-                       row_step);
+  ConsistencyCost cost(electrons, model, static_cast<int>(std::floor(model.blur_px)) + 2, row_step);
   if (model.blur_px + 2 >= cost.width())
     return Out::failure("the blur does not fit the frame along the motion");
   return Out::success(cost(model.blur_px, 0, cost.height()).mean());

@@ -117,7 +117,8 @@ Result<DeblurResult, std::string> deblur(const Image& electrons, const CaptureMo
   const std::span<const Plane> rows = as_is ? std::span<const Plane>(electrons.channels) : moved;
   std::vector<ChannelPsf> psfs;
   for (int c = 0; c < model.channels; ++c) {
-    const double variance = channel_noise_variance(model, mean_of(rows[static_cast<std::size_t>(c)]));
+    const double variance =
+        channel_noise_variance(model, mean_of(rows[static_cast<std::size_t>(c)]));
     result.noise_variance.push_back(variance);
     psfs.push_back({channel_psf(model, c), variance});
   }

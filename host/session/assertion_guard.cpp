@@ -36,8 +36,8 @@ extern "C" [[noreturn]] void __assert_fail(const char* assertion, const char* fi
                                            unsigned int line, const char* function) noexcept {
   using namespace flutterscan::session;
   if (sigjmp_buf* back = t_return_point) {
-    t_failure = std::string(file) + ":" + std::to_string(line) + ": " + function +
-                ": Assertion `" + assertion + "' failed";
+    t_failure = std::string(file) + ":" + std::to_string(line) + ": " + function + ": Assertion `" +
+                assertion + "' failed";
     siglongjmp(*back, 1);
   }
   std::fprintf(stderr, "%s:%u: %s: Assertion `%s' failed.\n", file, line, function, assertion);

@@ -39,8 +39,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
       .setTryHarder(true)
       .setTryRotate(true);
   ZXing::Results results;
-  out.decoder_fault =
-      run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, hints); });
+  out.decoder_fault = run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, hints); });
   if (!out.decoder_fault.empty()) return out;
   for (const ZXing::Result& result : results) {
     if (!result.isValid()) continue;

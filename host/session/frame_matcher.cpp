@@ -48,7 +48,9 @@ std::vector<FrameMatch> FrameMatcher::add_frame(const FrameStamp& frame) {
   return decide(frame.arrival_ns);
 }
 
-std::vector<FrameMatch> FrameMatcher::decide_waiting(std::int64_t now_ns) { return decide(now_ns); }
+std::vector<FrameMatch> FrameMatcher::decide_waiting(std::int64_t now_ns) {
+  return decide(now_ns);
+}
 
 std::vector<FrameMatch> FrameMatcher::decide(std::int64_t now_ns) {
   std::vector<FrameMatch> out;

@@ -57,8 +57,8 @@ struct ClockRelation {
 ClockRelation fit_clocks(const std::deque<std::pair<std::int64_t, std::uint64_t>>& pairs);
 
 struct MatcherOptions {
-  std::size_t window = 32;      ///< matches in the clock fit
-  double tolerance_us = 2000;   ///< largest |event start - predicted| accepted
+  std::size_t window = 32;     ///< matches in the clock fit
+  double tolerance_us = 2000;  ///< largest |event start - predicted| accepted
   /// How long (host clock) a frame waits for a late event before it is
   /// declared without one. Time, not a frame count: a fast camera (or the
   /// simulator replaying frames) can deliver many frames while the event

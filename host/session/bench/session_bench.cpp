@@ -8,15 +8,15 @@
 
 #include <algorithm>
 #include <chrono>
-#include <ctime>
-#include <map>
-#include <vector>
 #include <cstdio>
 #include <cstdlib>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <string>
+#include <vector>
 
 #include "capture/frame_pixels.hpp"
 #include "capture/sim_camera.hpp"
@@ -257,7 +257,8 @@ int main(int argc, char** argv) {
     }
     runs.push_back({c.name, outcome.summary, stage_medians(out / "session.jsonl")});
   }
-  std::cout << "| input | frames in | processed | dropped | seconds | fps out | latency p50 ms | p99 ms |\n"
+  std::cout << "| input | frames in | processed | dropped | seconds | fps out | latency p50 ms | "
+               "p99 ms |\n"
             << "|---|---|---|---|---|---|---|---|\n";
   std::ofstream table;
   if (!csv.empty()) {
@@ -267,8 +268,8 @@ int main(int argc, char** argv) {
   for (const auto& r : runs) {
     const auto& s = r.summary;
     std::cout << "| " << r.name << " | " << s["frames_captured"] << " | " << s["frames_processed"]
-              << " | " << s["frames_dropped"] << " | " << s["duration_s"] << " | " << s["fps"] << " | " << s["latency_ms_p50"]
-              << " | " << s["latency_ms_p99"] << " |\n";
+              << " | " << s["frames_dropped"] << " | " << s["duration_s"] << " | " << s["fps"]
+              << " | " << s["latency_ms_p50"] << " | " << s["latency_ms_p99"] << " |\n";
     if (table.is_open())
       table << '"' << r.name << "\"," << s["frames_captured"] << "," << s["frames_processed"] << ","
             << s["frames_dropped"] << "," << s["fps"] << "," << s["latency_ms_p50"] << ","
@@ -276,8 +277,8 @@ int main(int argc, char** argv) {
   }
   std::cout << "\nper frame, median ms on one worker thread (model_choice: grey or colour print; "
                "guards: residual and saturation checks):\n\n| input |";
-  const std::vector<std::string> stages = {"convert",      "blur_estimate", "model_choice",
-                                           "deblur",       "guards",        "decode"};
+  const std::vector<std::string> stages = {"convert", "blur_estimate", "model_choice",
+                                           "deblur",  "guards",        "decode"};
   for (const auto& stage : stages) std::cout << " " << stage << " |";
   std::cout << "\n|---|";
   for (std::size_t i = 0; i < stages.size(); ++i) std::cout << "---|";

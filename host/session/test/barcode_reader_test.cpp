@@ -46,9 +46,8 @@ TEST(AssertionGuard, AFailedAssertionInsideReturnsItsTextAndLaterCallsRunNormall
 
 TEST(AssertionGuard, EachThreadReturnsToItsOwnGuard) {
   std::string in_thread, here;
-  std::thread other([&] {
-    in_thread = run_catching_assertions([] { __assert_fail("a", "a.cpp", 1, "fa"); });
-  });
+  std::thread other(
+      [&] { in_thread = run_catching_assertions([] { __assert_fail("a", "a.cpp", 1, "fa"); }); });
   here = run_catching_assertions([] { __assert_fail("b", "b.cpp", 2, "fb"); });
   other.join();
   EXPECT_NE(in_thread.find("a.cpp:1"), std::string::npos) << in_thread;
