@@ -462,18 +462,10 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   std::atomic<std::uint64_t> events_received{0};
   std::atomic<std::uint64_t> events_missing{0};
   link.client->set_event_handler([&](const device::EventNotice& notice) {
-    ExposureRecord r;
-    r.frame_counter = notice.event.frame_counter;
-    r.start_us = notice.event.start_time_us;
-    r.encoder_delta = notice.event.encoder_delta;
-    r.slot_time_us = notice.event.slot_time_us;
-    r.slot_count = notice.event.slot_count;
-    r.code_id = notice.event.code_id;
-    r.flags = notice.event.flags;
     events_missing += notice.frames_missing_before;
     ++events_received;
     std::lock_guard lock(inbox_mutex);
-    inbox.push_back(r);
+    inbox.push_back(exposure_record(notice));
   });
   if (auto r = link.client->arm(); !r.ok()) {
     outcome.error = "controller: Arm: " + r.error().message;
