@@ -320,7 +320,9 @@ class SimCamera final : public CameraSource {
     m.blur_px = blur;
     m.crosstalk = o_.crosstalk;
     const auto per_bit = imaging::budgeted_led_electrons(light.code, o_.electrons, o_.cap);
-    m.led_electrons.assign(per_bit.begin(), per_bit.begin() + 3);
+    // A pattern that lights fewer than the three LEDs has fewer bits: the rest stay dark.
+    m.led_electrons.assign(3, 0.0);
+    std::copy_n(per_bit.begin(), std::min<std::size_t>(per_bit.size(), 3), m.led_electrons.begin());
     m.ambient_electrons = {0, 0, 0};
     m.read_noise = o_.read_noise;
     m.full_well = o_.full_well;
