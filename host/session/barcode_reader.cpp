@@ -26,7 +26,8 @@ std::string check_symbologies(const std::string& symbologies) {
   return {};
 }
 
-BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& symbologies) {
+BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& symbologies,
+                             bool try_rotate) {
   BarcodeReadout out;
   if (latent.empty()) return out;
   std::vector<std::uint8_t> lum(latent.pixels.size());
@@ -37,7 +38,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
   ZXing::DecodeHints hints;
   hints.setFormats(ZXing::BarcodeFormatsFromString(symbologies))
       .setTryHarder(true)
-      .setTryRotate(true);
+      .setTryRotate(try_rotate);
   ZXing::Results results;
   out.decoder_fault = run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, hints); });
   if (!out.decoder_fault.empty()) return out;

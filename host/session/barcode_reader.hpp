@@ -39,9 +39,11 @@ struct BarcodeReadout {
 };
 
 /// \brief Every barcode of the named symbologies (check_symbologies() passed)
-/// ZXing reads on `latent` (reflectance, clipped to 0..1).
+/// ZXing reads on `latent` (reflectance, clipped to 0..1). `try_rotate`: also
+/// look for 1-D codes turned by 90 degrees (about twice the decode time).
 BarcodeReadout read_barcodes(const imaging::Plane& latent,
-                             const std::string& symbologies = kDefaultSymbologies);
+                             const std::string& symbologies = kDefaultSymbologies,
+                             bool try_rotate = true);
 
 /// \brief A run of columns [begin, end) where the image is mostly label paper.
 struct LabelRegion {

@@ -301,7 +301,8 @@ FrameOutcome process(const FrameJob& job, const SessionConfig& config,
     log["flags"] = flags;
     return out;
   }
-  const BarcodeReadout readout = read_barcodes(latent, config.processing.symbologies);
+  const BarcodeReadout readout =
+      read_barcodes(latent, config.processing.symbologies, config.processing.try_rotate);
   const std::vector<DecodedCode>& codes = readout.codes;
   if (!readout.decoder_fault.empty()) {
     // ZXing failed an internal assertion on this image: nothing read, the session goes on.

@@ -212,7 +212,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
             *t, "processing.",
             {"method", "workers", "threads_per_worker", "queue_depth", "max_frames", "max_seconds",
              "match_tolerance_us", "object_match_px", "choose_model", "blur_check_every",
-             "symbologies"},
+             "symbologies", "try_rotate"},
             origin);
         !p.empty())
       return Out::failure(p);
@@ -236,6 +236,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     r.get("choose_model", c.processing.choose_model);
     r.get("blur_check_every", c.processing.blur_check_every);
     r.get("symbologies", c.processing.symbologies);
+    r.get("try_rotate", c.processing.try_rotate);
   }
   if (const toml::table* t = root["output"].as_table()) {
     if (auto p = known_keys_problem(*t, "output.",

@@ -74,6 +74,9 @@ struct ProcessingConfig {
   int blur_check_every = 0;
   /// ZXing format names read on each fused frame, comma-separated (fewer is faster).
   std::string symbologies = kDefaultSymbologies;
+  /// Also look for 1-D codes turned by 90 degrees; a line whose labels always
+  /// pass the same way up can turn it off and decode in about half the time.
+  bool try_rotate = true;
 };
 
 struct OutputConfig {

@@ -2,6 +2,8 @@
 // assert() on, and its Micro QR sampler fails one on some deblurred frames.
 #include "session/barcode_reader.hpp"
 
+#include <ZXing/BitMatrix.h>
+#include <ZXing/MultiFormatWriter.h>
 #include <gtest/gtest.h>
 
 #include <fstream>
@@ -67,6 +69,20 @@ TEST(BarcodeReader, AnImageThatTripsZXingsMicroQrAssertionIsReportedNotFatal) {
   // The default symbologies leave Micro QR out, and the reader still works.
   const BarcodeReadout defaults = read_barcodes(image);
   EXPECT_EQ(defaults.decoder_fault, "");
+}
+
+TEST(BarcodeReader, ACodeTurnedBy90DegreesIsReadOnlyWithTryRotate) {
+  const ZXing::BitMatrix bars = ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code128)
+                                    .setMargin(20)
+                                    .encode(L"FS-ROTATE-7", 600, 120);
+  // Bars running along the rows: the code turned by 90 degrees.
+  imaging::Plane turned(bars.height(), bars.width());
+  for (int y = 0; y < bars.height(); ++y)
+    for (int x = 0; x < bars.width(); ++x) turned.at(y, x) = bars.get(x, y) ? 0.05f : 0.9f;
+  const BarcodeReadout with = read_barcodes(turned, "Code128", true);
+  ASSERT_EQ(with.codes.size(), 1u);
+  EXPECT_EQ(with.codes[0].text, "FS-ROTATE-7");
+  EXPECT_TRUE(read_barcodes(turned, "Code128", false).codes.empty());
 }
 
 TEST(BarcodeReader, SymbologyListsAreCheckedByName) {

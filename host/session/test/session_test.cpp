@@ -214,6 +214,11 @@ TEST(SessionConfigFile, ReadsTheAnnotatedExampleAndNamesBadKeys) {
   bad.controller.code = "1234";
   EXPECT_NE(check_config(bad).find("controller.code"), std::string::npos);
 
+  const auto no_rotate = parse_config("[processing]\ntry_rotate = false\n", "line3.toml");
+  ASSERT_TRUE(no_rotate.ok()) << no_rotate.error();
+  EXPECT_FALSE(no_rotate.value().processing.try_rotate);
+  EXPECT_TRUE(config.processing.try_rotate);  // the annotated example keeps it on
+
   SessionConfig unknown_symbology;
   unknown_symbology.processing.symbologies = "Code128,Code129";
   EXPECT_NE(check_config(unknown_symbology).find("processing.symbologies"), std::string::npos);
