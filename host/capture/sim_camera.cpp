@@ -278,13 +278,7 @@ class SimCamera final : public CameraSource {
     std::vector<std::thread> threads;
     for (int t = 0; t < std::max(1, o_.render_threads); ++t)
       threads.emplace_back([&] {
-        for (std::size_t i = next++; i < jobs.size(); i = next++) {
-          Frame& frame = rendered[i].frame;
-          frame.sequence = jobs[i].sequence;
-          frame.timestamp_ns = jobs[i].timestamp_ns;
-          frame.format = format();
-          render(frame, jobs[i].light, jobs[i].travel_at_slot0, jobs[i].blur, rendered[i].error);
-        }
+        for (std::size_t i = next++; i < jobs.size(); i = next++) rendered[i] = render_new(jobs[i]);
       });
     for (auto& t : threads) t.join();
     for (auto& r : rendered) {
@@ -295,22 +289,37 @@ class SimCamera final : public CameraSource {
     }
   }
 
-  Rendered render_job(const RenderJob& job) {
-    Rendered out;
-    Frame& frame = out.frame;
+  /// The frame of `job` with its identity set and nothing drawn yet.
+  Frame frame_of(const RenderJob& job) const {
+    Frame frame;
     frame.sequence = job.sequence;
     frame.timestamp_ns = job.timestamp_ns;
     frame.format = format();
+    return frame;
+  }
+
+  /// `job` through the forward model (any thread).
+  Rendered render_new(const RenderJob& job) {
+    Rendered out;
+    out.frame = frame_of(job);
+    render(out.frame, job.light, job.travel_at_slot0, job.blur, out.error);
+    return out;
+  }
+
+  /// `job` from the ring once it is full, else rendered (and kept, in ring mode).
+  Rendered render_job(const RenderJob& job) {
     if (o_.ring_frames > 0 && ring_.size() == static_cast<std::size_t>(o_.ring_frames)) {
+      Rendered out;
+      out.frame = frame_of(job);
       const Frame& stored = ring_[job.sequence % ring_.size()];
-      frame.data = stored.data;
-      frame.truth = stored.truth;
-      frame.truth_in_view = stored.truth_in_view;
-      frame.descriptor_json = stored.descriptor_json;
+      out.frame.data = stored.data;
+      out.frame.truth = stored.truth;
+      out.frame.truth_in_view = stored.truth_in_view;
+      out.frame.descriptor_json = stored.descriptor_json;
       return out;
     }
-    if (!render(frame, job.light, job.travel_at_slot0, job.blur, out.error)) return out;
-    if (o_.ring_frames > 0) ring_.push_back(frame);
+    Rendered out = render_new(job);
+    if (out.error.empty() && o_.ring_frames > 0) ring_.push_back(out.frame);
     return out;
   }
 

@@ -95,15 +95,23 @@ session::SessionConfig bench_config(int width, int height, int frames, bool pace
   return c;
 }
 
-double render_ms(int width, int height) {
-  device::VirtualController controller;
+/// The sim conveyor of bench_config(), rendering on one thread, for the measurements apart.
+capture::SimConveyorOptions one_thread_conveyor(int width, int height) {
   capture::SimConveyorOptions o;
   o.width = width;
   o.height = height;
   o.tile_width = 600;
   o.gap = 200;
+  o.speed_px_per_s = 10000;
+  o.counts_per_px = 2;
+  o.exposure_us = 6000;
   o.render_threads = 1;
-  auto camera = capture::make_sim_camera(controller, o);
+  return o;
+}
+
+double render_ms(int width, int height) {
+  device::VirtualController controller;
+  auto camera = capture::make_sim_camera(controller, one_thread_conveyor(width, height));
   if (!camera->start().empty()) return -1;
   capture::Frame frame;
   std::string error;
@@ -137,16 +145,7 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
       !client.value()->select_code(0).ok() || !client.value()->set_timing(timing).ok() ||
       !client.value()->arm().ok())
     return out;
-  capture::SimConveyorOptions o;
-  o.width = width;
-  o.height = height;
-  o.tile_width = 600;
-  o.gap = 200;
-  o.speed_px_per_s = 10000;
-  o.counts_per_px = 2;
-  o.exposure_us = 6000;
-  o.render_threads = 1;
-  auto camera = capture::make_sim_camera(*controller, o);
+  auto camera = capture::make_sim_camera(*controller, one_thread_conveyor(width, height));
   capture::Frame frame;
   std::string error;
   if (!camera->start().empty()) return out;
