@@ -2,11 +2,20 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "imaging/frame_conversion.hpp"
+#include "imaging/model_guards.hpp"
+
 #include <algorithm>
+#include <bit>
+#include <cmath>
 #include <cstring>
+#include <vector>
 
 namespace flutterscan::capture {
 namespace {
+
+static_assert(std::endian::native == std::endian::little,
+              "16-bit frames are copied as they are: a big-endian host would need a byte swap");
 
 using Out = Result<imaging::Image, std::string>;
 
@@ -18,6 +27,31 @@ imaging::Image planes(int count, int width, int height) {
 
 std::uint16_t read16(const std::uint8_t* p) {
   return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
+}
+
+/// Three interleaved samples per pixel into three float rows (vectorised).
+template <typename Sample>
+void deinterleave3(const Sample* __restrict in, int width, float* __restrict a, float* __restrict b,
+                   float* __restrict c) {
+  for (int x = 0; x < width; ++x) {
+    a[x] = in[3 * x];
+    b[x] = in[3 * x + 1];
+    c[x] = in[3 * x + 2];
+  }
+}
+
+/// One row of samples (`stride` apart, first at `in`) into electrons, counting
+/// samples at or above `ceiling` DN.
+template <int Stride, typename Sample>
+std::size_t row_to_electrons(const Sample* __restrict in, int width, float black, float gain,
+                             float ceiling, float* __restrict out) {
+  std::size_t saturated = 0;
+  for (int x = 0; x < width; ++x) {
+    const float dn = in[Stride * x];
+    saturated += dn >= ceiling ? 1 : 0;
+    out[x] = (dn - black) * gain;
+  }
+  return saturated;
 }
 
 float clamp8(float v) {
@@ -60,6 +94,8 @@ Result<imaging::Image, std::string> frame_to_dn(const Frame& frame) {
                       f.pixel_format == PixelFormat::kBgr8 ||
                       f.pixel_format == PixelFormat::kRgb16 || f.pixel_format == PixelFormat::kYuyv;
   imaging::Image image = planes(colour ? 3 : 1, f.width, f.height);
+  std::vector<std::uint16_t> samples16(
+      f.pixel_format == PixelFormat::kRgb16 ? 3 * static_cast<std::size_t>(f.width) : 0);
   for (int y = 0; y < f.height; ++y) {
     const std::uint8_t* row = frame.data.data() + row_bytes * static_cast<std::size_t>(y);
     switch (f.pixel_format) {
@@ -74,19 +110,15 @@ Result<imaging::Image, std::string> frame_to_dn(const Frame& frame) {
       case PixelFormat::kRgb8:
       case PixelFormat::kBgr8: {
         const bool bgr = f.pixel_format == PixelFormat::kBgr8;
-        float* r = image.channels[0].row(y).data();
-        float* g = image.channels[1].row(y).data();
-        float* b = image.channels[2].row(y).data();
-        for (int x = 0; x < f.width; ++x) {
-          r[x] = row[3 * x + (bgr ? 2 : 0)];
-          g[x] = row[3 * x + 1];
-          b[x] = row[3 * x + (bgr ? 0 : 2)];
-        }
+        deinterleave3(row, f.width, image.channels[bgr ? 2 : 0].row(y).data(),
+                      image.channels[1].row(y).data(), image.channels[bgr ? 0 : 2].row(y).data());
         break;
       }
       case PixelFormat::kRgb16:
-        for (int x = 0; x < f.width; ++x)
-          for (int c = 0; c < 3; ++c) image.channels[c].at(x, y) = read16(row + 6 * x + 2 * c);
+        // Little-endian samples (the formats' byte order, and this host's).
+        std::memcpy(samples16.data(), row, static_cast<std::size_t>(f.width) * 6);
+        deinterleave3(samples16.data(), f.width, image.channels[0].row(y).data(),
+                      image.channels[1].row(y).data(), image.channels[2].row(y).data());
         break;
       case PixelFormat::kYuyv:
         for (int x = 0; x < f.width; ++x) {
@@ -104,6 +136,70 @@ Result<imaging::Image, std::string> frame_to_dn(const Frame& frame) {
     }
   }
   return Out::success(std::move(image));
+}
+
+Result<ElectronFrame, std::string> frame_to_electrons(const Frame& frame,
+                                                      const imaging::CaptureModel& model) {
+  using Converted = Result<ElectronFrame, std::string>;
+  const FrameFormat& f = frame.format;
+  const PixelFormat p = f.pixel_format;
+  const bool one_pass =
+      model.encoding == imaging::Encoding::kLinear &&
+      (p == PixelFormat::kRgb8 || p == PixelFormat::kBgr8 || p == PixelFormat::kRgb16 ||
+       p == PixelFormat::kMono8 || p == PixelFormat::kMono16 || p == PixelFormat::kBayerRggb8 ||
+       p == PixelFormat::kBayerRggb16);
+  if (!one_pass) {
+    auto dn = frame_to_dn(frame);
+    if (!dn.ok()) return Converted::failure(dn.error());
+    return Converted::success(
+        {imaging::dn_to_electrons(dn.value(), model), imaging::saturated_share(dn.value(), model)});
+  }
+  const std::string where = "frame " + std::to_string(frame.sequence);
+  if (f.width <= 0 || f.height <= 0) return Converted::failure(where + ": empty size");
+  const int bpp = bytes_per_pixel(p);
+  const std::size_t row_bytes =
+      f.row_bytes != 0 ? f.row_bytes : static_cast<std::size_t>(f.width) * bpp;
+  if (row_bytes < static_cast<std::size_t>(f.width) * bpp)
+    return Converted::failure(where + ": row stride " + std::to_string(row_bytes) +
+                              " shorter than a row of " + std::to_string(f.width) + " pixels");
+  if (frame.data.size() <
+      row_bytes * static_cast<std::size_t>(f.height - 1) + static_cast<std::size_t>(f.width) * bpp)
+    return Converted::failure(where + ": " + std::to_string(frame.data.size()) + " bytes, " +
+                              std::to_string(f.width) + "x" + std::to_string(f.height) + " " +
+                              pixel_format_name(p) + " needs more");
+  const int channels =
+      p == PixelFormat::kRgb8 || p == PixelFormat::kBgr8 || p == PixelFormat::kRgb16 ? 3 : 1;
+  const bool wide =
+      p == PixelFormat::kRgb16 || p == PixelFormat::kMono16 || p == PixelFormat::kBayerRggb16;
+  // The sample order of the planes R, G, B: BGR8 stores blue first.
+  const int first = p == PixelFormat::kBgr8 ? 2 : 0;
+  const auto black = static_cast<float>(model.black_level);
+  const auto gain = static_cast<float>(model.gain);
+  const double code_ceiling = std::pow(2.0, model.bit_depth) - 1;
+  const double well_ceiling = model.black_level + model.full_well / model.gain;
+  const auto ceiling = static_cast<float>(std::min(code_ceiling, well_ceiling) - 0.5);
+  ElectronFrame out;
+  out.electrons = planes(channels, f.width, f.height);
+  std::vector<std::uint16_t> samples16(wide ? static_cast<std::size_t>(channels) * f.width : 0);
+  std::size_t saturated = 0;
+  for (int y = 0; y < f.height; ++y) {
+    const std::uint8_t* row = frame.data.data() + row_bytes * static_cast<std::size_t>(y);
+    if (wide) std::memcpy(samples16.data(), row, samples16.size() * 2);  // little-endian
+    for (int c = 0; c < channels; ++c) {
+      const int sample = c == 0 ? first : c == 2 ? 2 - first : 1;
+      float* to = out.electrons.channels[static_cast<std::size_t>(c)].row(y).data();
+      if (channels == 3)
+        saturated +=
+            wide ? row_to_electrons<3>(samples16.data() + sample, f.width, black, gain, ceiling, to)
+                 : row_to_electrons<3>(row + sample, f.width, black, gain, ceiling, to);
+      else
+        saturated += wide ? row_to_electrons<1>(samples16.data(), f.width, black, gain, ceiling, to)
+                          : row_to_electrons<1>(row, f.width, black, gain, ceiling, to);
+    }
+  }
+  out.saturated_share =
+      static_cast<double>(saturated) / (static_cast<double>(channels) * f.width * f.height);
+  return Converted::success(std::move(out));
 }
 
 }  // namespace flutterscan::capture

@@ -5,6 +5,7 @@
 
 #include "capture/camera_source.hpp"
 #include "flutterscan/common/result.hpp"
+#include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
 
 namespace flutterscan::capture {
@@ -14,5 +15,17 @@ namespace flutterscan::capture {
 /// with BT.601 and MJPEG decoded, both mixing the channels (warned at start).
 /// The error names the frame and what is inconsistent (size, data length).
 Result<imaging::Image, std::string> frame_to_dn(const Frame& frame);
+
+/// \brief A frame as the workers deblur it.
+struct ElectronFrame {
+  imaging::Image electrons;    ///< imaging::dn_to_electrons(frame_to_dn(frame), model)
+  double saturated_share = 0;  ///< imaging::saturated_share(frame_to_dn(frame), model)
+};
+
+/// \brief frame_to_dn, imaging::saturated_share and imaging::dn_to_electrons,
+/// with the same results; in one pass over the samples for linear RGB8/BGR8/
+/// RGB16, mono and Bayer frames (the session's per-frame path), else in three.
+Result<ElectronFrame, std::string> frame_to_electrons(const Frame& frame,
+                                                      const imaging::CaptureModel& model);
 
 }  // namespace flutterscan::capture

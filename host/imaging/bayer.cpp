@@ -23,12 +23,6 @@ int channel_at(int x, int y) {
   return kColours[static_cast<std::size_t>((y % 2) * 2 + (x % 2))].channel;
 }
 
-double mean_of(const Plane& plane) {
-  double sum = 0;
-  for (float v : plane.pixels) sum += v;
-  return plane.pixels.empty() ? 0.0 : sum / static_cast<double>(plane.pixels.size());
-}
-
 bool moves_along_x(Direction d) {
   return d == Direction::kPlusX || d == Direction::kMinusX;
 }
@@ -129,7 +123,7 @@ Result<DeblurResult, std::string> deblur_raw_planes(const Plane& mosaic, const C
     // Motion-frame column of this colour within each pair: parity when moving
     // forward; reversing the rows (even length) swaps it.
     const int offset = moves_forward(model.direction) ? parity : 1 - parity;
-    const double variance = channel_noise_variance(model, mean_of(rows.back()));
+    const double variance = channel_noise_variance(model, noise_level_mean(rows.back()));
     result.noise_variance.push_back(variance);
     psfs.push_back({pair_summed_psf(channel_psf(model, colour.channel), 1 - offset), variance});
     for (double tap : psfs.back().taps) white += tap;

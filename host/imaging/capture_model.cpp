@@ -106,4 +106,17 @@ double channel_noise_variance(const CaptureModel& m, double signal_electrons) {
   return std::max(0.0, signal_electrons) + m.read_noise * m.read_noise + m.gain * m.gain / 12.0;
 }
 
+double noise_level_mean(const Plane& plane) {
+  constexpr int kRowStep = 4;
+  double sum = 0;
+  std::size_t count = 0;
+  for (int y = 0; y < plane.height; y += kRowStep) {
+    float row_sum = 0;  // a row in float (vectorised), the rows in double
+    for (float v : plane.row(y)) row_sum += v;
+    sum += row_sum;
+    count += static_cast<std::size_t>(plane.width);
+  }
+  return count == 0 ? 0.0 : sum / static_cast<double>(count);
+}
+
 }  // namespace flutterscan::imaging

@@ -7,19 +7,6 @@
 #include "imaging/richardson_lucy.hpp"
 
 namespace flutterscan::imaging {
-namespace {
-
-double mean_of(const Plane& plane) {
-  double sum = 0;
-  for (int y = 0; y < plane.height; ++y) {
-    float row_sum = 0;  // a row in float (vectorised), the rows in double
-    for (float v : plane.row(y)) row_sum += v;
-    sum += row_sum;
-  }
-  return plane.pixels.empty() ? 0.0 : sum / static_cast<double>(plane.pixels.size());
-}
-
-}  // namespace
 
 std::string method_name(Method method) {
   switch (method) {
@@ -48,7 +35,8 @@ Plane deconvolve_motion_rows(std::span<const ChannelPsf> psfs, std::span<const P
   Plane latent;
   switch (options.method) {
     case Method::kJointWiener:
-      latent = JointWiener(psfs, width, lambda).deconvolve(rows, options.threads);
+      latent =
+          JointWiener(psfs, width, lambda, options.plan_effort).deconvolve(rows, options.threads);
       break;
     case Method::kWienerAverage: {
       int used = 0;
@@ -56,8 +44,8 @@ Plane deconvolve_motion_rows(std::span<const ChannelPsf> psfs, std::span<const P
         double gain = 0;
         for (double tap : psfs[c].taps) gain += tap;
         if (gain <= 0) continue;  // a channel no LED reaches carries no image
-        const Plane one =
-            JointWiener({&psfs[c], 1}, width, lambda).deconvolve({&rows[c], 1}, options.threads);
+        const Plane one = JointWiener({&psfs[c], 1}, width, lambda, options.plan_effort)
+                              .deconvolve({&rows[c], 1}, options.threads);
         if (latent.empty()) latent = Plane(one.width, one.height);
         for (std::size_t i = 0; i < one.pixels.size(); ++i) latent.pixels[i] += one.pixels[i];
         ++used;
@@ -118,7 +106,7 @@ Result<DeblurResult, std::string> deblur(const Image& electrons, const CaptureMo
   std::vector<ChannelPsf> psfs;
   for (int c = 0; c < model.channels; ++c) {
     const double variance =
-        channel_noise_variance(model, mean_of(rows[static_cast<std::size_t>(c)]));
+        channel_noise_variance(model, noise_level_mean(rows[static_cast<std::size_t>(c)]));
     result.noise_variance.push_back(variance);
     psfs.push_back({channel_psf(model, c), variance});
   }

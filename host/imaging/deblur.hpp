@@ -47,6 +47,9 @@ struct DeblurOptions {
   /// (TotalVariationSettings::weight_per_noise).
   double tv_weight_per_noise = TotalVariationSettings{}.weight_per_noise;
   int threads = 2;
+  /// joint-wiener and wiener-avg: FFTW planning. A session that deblurs many frames
+  /// of one size measures once (FFTW keeps what it learnt for the process).
+  PlanEffort plan_effort = PlanEffort::kEstimate;
 };
 
 struct DeblurResult {

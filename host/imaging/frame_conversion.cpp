@@ -15,14 +15,21 @@ Image dn_to_electrons(const Image& dn, const CaptureModel& m) {
   Image out;
   for (const Plane& plane : dn.channels) {
     Plane e(plane.width, plane.height);
-    for (std::size_t i = 0; i < plane.pixels.size(); ++i) {
-      double value = plane.pixels[i];
-      if (m.encoding != Encoding::kLinear) {
-        const double unit = std::clamp(value / full_scale, 0.0, 1.0);
-        value = full_scale *
-                (m.encoding == Encoding::kSrgb ? srgb_to_linear(unit) : std::pow(unit, m.gamma));
+    const std::size_t count = plane.pixels.size();
+    const float* __restrict in = plane.pixels.data();
+    float* __restrict to = e.pixels.data();
+    if (m.encoding == Encoding::kLinear) {
+      // The common case, in float (vectorised): (DN - black) x gain.
+      const auto black = static_cast<float>(m.black_level);
+      const auto gain = static_cast<float>(m.gain);
+      for (std::size_t i = 0; i < count; ++i) to[i] = (in[i] - black) * gain;
+    } else {
+      for (std::size_t i = 0; i < count; ++i) {
+        const double unit = std::clamp(in[i] / full_scale, 0.0, 1.0);
+        const double value = full_scale * (m.encoding == Encoding::kSrgb ? srgb_to_linear(unit)
+                                                                         : std::pow(unit, m.gamma));
+        to[i] = static_cast<float>((value - m.black_level) * m.gain);
       }
-      e.pixels[i] = static_cast<float>((value - m.black_level) * m.gain);
     }
     out.channels.push_back(std::move(e));
   }

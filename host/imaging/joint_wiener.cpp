@@ -23,8 +23,9 @@ void extend_row_periodically(std::span<float> padded, int width, std::span<const
   for (std::size_t i = 0; i < blend.size(); ++i) tail[i] = last + step * blend[i];
 }
 
-void filter_and_sum_channels(const RowFft& fft, std::span<const std::vector<std::complex<float>>> filters,
-                             int width, std::span<const float> blend, std::span<AlignedFloats> padded,
+void filter_and_sum_channels(const RowFft& fft,
+                             std::span<const std::vector<std::complex<float>>> filters, int width,
+                             std::span<const float> blend, std::span<AlignedFloats> padded,
                              AlignedFloats& spectrum, float* sum) {
   const auto bins = static_cast<std::size_t>(fft.bins());
   for (std::size_t c = 0; c < filters.size(); ++c) {
@@ -39,15 +40,7 @@ void filter_and_sum_channels(const RowFft& fft, std::span<const std::vector<std:
 }
 
 std::vector<std::complex<double>> psf_spectrum(std::span<const double> taps, int n) {
-  std::vector<std::complex<double>> spectrum(static_cast<std::size_t>(n / 2 + 1));
-  for (std::size_t j = 0; j < spectrum.size(); ++j) {
-    std::complex<double> sum = 0;
-    const double w = -2.0 * std::numbers::pi * static_cast<double>(j) / n;
-    for (std::size_t t = 0; t < taps.size(); ++t)
-      if (taps[t] != 0.0) sum += taps[t] * std::polar(1.0, w * static_cast<double>(t));
-    spectrum[j] = sum;
-  }
-  return spectrum;
+  return real_dft_bins(taps, n);
 }
 
 JointWiener::JointWiener(std::span<const ChannelPsf> channels, int width, double lambda,
@@ -126,9 +119,7 @@ Plane JointWiener::deconvolve(std::span<const Plane> channels, int threads) {
   const int height = channels[0].height;
   Plane latent(width_, height);
   RowPool pool(std::max(1, std::min(threads, height)));
-  deconvolve(
-      plane_row_loader(channels),
-      height, latent, pool);
+  deconvolve(plane_row_loader(channels), height, latent, pool);
   return latent;
 }
 

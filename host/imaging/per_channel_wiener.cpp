@@ -45,12 +45,6 @@ Matrix3 solve3(Matrix3 n, Matrix3 b) {
   return b;
 }
 
-double mean_of(const Plane& p) {
-  double sum = 0;
-  for (float v : p.pixels) sum += v;
-  return p.pixels.empty() ? 0.0 : sum / static_cast<double>(p.pixels.size());
-}
-
 /// Symmetric 3x3 eigen-decomposition by Jacobi rotations: eigenvectors as
 /// columns of `vectors`, sorted by decreasing eigenvalue.
 void symmetric_eigen(std::array<std::array<double, 3>, 3> a, std::array<double, 3>& values,
@@ -284,7 +278,7 @@ Result<PerChannelResult, std::string> deblur_per_channel(const Image& electrons,
                         std::to_string(rows[0].width) + " px)");
   PerChannelResult result;
   for (const auto& r : rows)
-    result.noise_variance.push_back(channel_noise_variance(model, mean_of(r)));
+    result.noise_variance.push_back(channel_noise_variance(model, noise_level_mean(r)));
   BandBasis three;
   three.basis = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
   std::vector<Plane> bands =

@@ -1,6 +1,7 @@
 #include "imaging/row_fft.hpp"
 
 #include <algorithm>
+#include <memory>
 #include <mutex>
 
 namespace flutterscan::imaging {
@@ -11,7 +12,61 @@ std::mutex& planner_mutex() {
   return mutex;
 }
 
+/// A double-precision forward plan of one length with its own aligned buffers,
+/// made once per thread and length in use (planning holds the planner lock).
+class DoublePlan {
+ public:
+  explicit DoublePlan(int n)
+      : n_(n),
+        in_(static_cast<double*>(fftw_malloc(sizeof(double) * static_cast<std::size_t>(n)))),
+        out_(static_cast<fftw_complex*>(
+            fftw_malloc(sizeof(fftw_complex) * static_cast<std::size_t>(n / 2 + 1)))) {
+    const std::lock_guard lock(planner_mutex());
+    plan_ = fftw_plan_dft_r2c_1d(n, in_, out_, FFTW_ESTIMATE);
+  }
+  ~DoublePlan() {
+    {
+      const std::lock_guard lock(planner_mutex());
+      fftw_destroy_plan(plan_);
+    }
+    fftw_free(in_);
+    fftw_free(out_);
+  }
+  DoublePlan(const DoublePlan&) = delete;
+  DoublePlan& operator=(const DoublePlan&) = delete;
+
+  int length() const { return n_; }
+  std::vector<std::complex<double>> transform(std::span<const double> samples) {
+    std::fill(in_, in_ + n_, 0.0);
+    for (std::size_t t = 0; t < samples.size(); ++t)
+      in_[t % static_cast<std::size_t>(n_)] += samples[t];
+    fftw_execute(plan_);
+    std::vector<std::complex<double>> bins(static_cast<std::size_t>(n_ / 2 + 1));
+    for (std::size_t j = 0; j < bins.size(); ++j) bins[j] = {out_[j][0], out_[j][1]};
+    return bins;
+  }
+
+ private:
+  int n_;
+  double* in_;
+  fftw_complex* out_;
+  fftw_plan plan_ = nullptr;
+};
+
 }  // namespace
+
+std::vector<std::complex<double>> real_dft_bins(std::span<const double> samples, int n) {
+  // The last few lengths this thread used (a frame's rows, a blur search's rows).
+  thread_local std::vector<std::unique_ptr<DoublePlan>> plans;
+  auto it =
+      std::find_if(plans.begin(), plans.end(), [n](const auto& p) { return p->length() == n; });
+  if (it == plans.end()) {
+    if (plans.size() >= 4) plans.erase(plans.begin());
+    plans.push_back(std::make_unique<DoublePlan>(n));
+    it = plans.end() - 1;
+  }
+  return (*it)->transform(samples);
+}
 
 int fast_fft_length(int n) {
   for (int m = std::max(1, n);; ++m) {
@@ -35,11 +90,28 @@ RowFft::RowFft(int n, PlanEffort effort) : n_(n) {
   AlignedFloats spectrum(static_cast<std::size_t>(2 * bins()));
   const std::lock_guard lock(planner_mutex());
   // FFTW_MEASURE overwrites the buffers while planning: they are scratch here.
-  const unsigned flags = effort == PlanEffort::kMeasure ? FFTW_MEASURE : FFTW_ESTIMATE;
-  forward_ = fftwf_plan_dft_r2c_1d(n, real.data(),
-                                   reinterpret_cast<fftwf_complex*>(spectrum.data()), flags);
-  inverse_ = fftwf_plan_dft_c2r_1d(n, reinterpret_cast<fftwf_complex*>(spectrum.data()),
-                                   real.data(), flags);
+  auto make = [&](unsigned flags) {
+    forward_ = fftwf_plan_dft_r2c_1d(n, real.data(),
+                                     reinterpret_cast<fftwf_complex*>(spectrum.data()), flags);
+    inverse_ = fftwf_plan_dft_c2r_1d(n, reinterpret_cast<fftwf_complex*>(spectrum.data()),
+                                     real.data(), flags);
+  };
+  if (effort == PlanEffort::kMeasuredIfKnown) {
+    make(FFTW_MEASURE | FFTW_WISDOM_ONLY);  // no plan (null) unless measured before
+    if (forward_ != nullptr && inverse_ != nullptr) return;
+    if (forward_ != nullptr) fftwf_destroy_plan(forward_);
+    if (inverse_ != nullptr) fftwf_destroy_plan(inverse_);
+  }
+  make(effort == PlanEffort::kMeasure ? FFTW_MEASURE : FFTW_ESTIMATE);
+}
+
+void measure_row_ffts(int width, int longest_psf) {
+  int measured = 0;
+  for (int taps = 1; taps <= longest_psf; ++taps) {
+    const int n = row_fft_length(width + taps);
+    if (n != measured) const RowFft plans(n, PlanEffort::kMeasure);
+    measured = n;
+  }
 }
 
 RowFft::~RowFft() {

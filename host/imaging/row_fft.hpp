@@ -8,6 +8,7 @@
 #include <complex>
 #include <memory>
 #include <span>
+#include <vector>
 
 namespace flutterscan::imaging {
 
@@ -18,6 +19,11 @@ int fast_fft_length(int n);
 /// 64 whose quotient is 2-3-5-7 smooth (2048 for a 1080p row and a 52 px blur;
 /// 3136 rather than 3087 for a 5 Mpx row).
 int row_fft_length(int needed);
+
+/// \brief Bins 0..n/2 of the n-point DFT of `samples` (zero-padded to n; samples
+/// past n wrap around), in double precision: sum_t samples[t] e^{-2 pi i j t / n}.
+/// One FFT (plan kept per thread and length), not a sum per bin.
+std::vector<std::complex<double>> real_dft_bins(std::span<const double> samples, int n);
 
 /// \brief A 64-byte aligned float buffer (what FFTW's SIMD paths want).
 class AlignedFloats {
@@ -43,8 +49,11 @@ class AlignedFloats {
 };
 
 /// \brief How long FFTW may spend planning: a one-off run estimates (microseconds),
-/// a long-running session or benchmark measures (seconds, once) for faster plans.
-enum class PlanEffort { kEstimate, kMeasure };
+/// a benchmark measures (up to a second, once per length) for plans about 20%
+/// faster; a session measures before it streams (measure_row_ffts) and its
+/// workers then take the measured plan when there is one, else estimate, so a
+/// frame never waits for planning.
+enum class PlanEffort { kEstimate, kMeasure, kMeasuredIfKnown };
 
 /// \brief Forward (real to half-complex) and inverse plans of length n.
 class RowFft {
@@ -66,6 +75,11 @@ class RowFft {
   fftwf_plan forward_ = nullptr;
   fftwf_plan inverse_ = nullptr;
 };
+
+/// \brief Measures FFTW plans (PlanEffort::kMeasure) for rows of `width`
+/// samples and PSFs up to `longest_psf` taps: every padded length row_fft_length()
+/// gives in that range (usually one or two). FFTW keeps them for the process.
+void measure_row_ffts(int width, int longest_psf);
 
 /// \brief out[j] = a[j] * b[j] over `bins` complex values stored as interleaved
 /// floats. Written out: std::complex<float> products go through a NaN-checking

@@ -7,15 +7,6 @@
 #include "imaging/motion_frame.hpp"
 
 namespace flutterscan::imaging {
-namespace {
-
-double mean_of(const Plane& p) {
-  double sum = 0;
-  for (float v : p.pixels) sum += v;
-  return p.pixels.empty() ? 0.0 : sum / static_cast<double>(p.pixels.size());
-}
-
-}  // namespace
 
 Result<Plane, std::string> deblur_row_phases(const Image& electrons, const CaptureModel& model,
                                              std::span<const double> row_phase_slots,
@@ -47,7 +38,7 @@ Result<Plane, std::string> deblur_row_phases(const Image& electrons, const Captu
   std::vector<double> variance;
   for (const auto& plane : electrons.channels) {
     rows.push_back(to_motion_frame(plane, model.direction));
-    variance.push_back(channel_noise_variance(model, mean_of(rows.back())));
+    variance.push_back(channel_noise_variance(model, noise_level_mean(rows.back())));
   }
   const int width = rows[0].width;
   // Rows per quantised phase (in units of phase_step, modulo the code's cycle).

@@ -12,6 +12,7 @@
 #include <ZXing/Result.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdint>
 #include <stdexcept>
 
@@ -26,46 +27,84 @@ std::string check_symbologies(const std::string& symbologies) {
   return {};
 }
 
-BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& symbologies,
-                             bool try_rotate) {
-  BarcodeReadout out;
-  if (latent.empty()) return out;
+namespace {
+
+/// The image as ZXing's 8-bit luminance.
+std::vector<std::uint8_t> luminance(const imaging::Plane& latent) {
   std::vector<std::uint8_t> lum(latent.pixels.size());
   std::transform(latent.pixels.begin(), latent.pixels.end(), lum.begin(), [](float v) {
     return static_cast<std::uint8_t>(std::clamp(v, 0.0f, 1.0f) * 255.0f + 0.5f);
   });
-  const ZXing::ImageView view(lum.data(), latent.width, latent.height, ZXing::ImageFormat::Lum);
+  return lum;
+}
+
+DecodedCode decoded_code(const ZXing::Result& result, int offset_x, int offset_y) {
+  DecodedCode code;
+  code.text = result.text();
+  code.format = ZXing::ToString(result.format());
+  const auto& p = result.position();
+  double sx = 0, sy = 0;
+  code.min_x = p[0].x;
+  code.max_x = p[0].x;
+  for (int i = 0; i < 4; ++i) {
+    sx += p[i].x;
+    sy += p[i].y;
+    code.min_x = std::min<double>(code.min_x, p[i].x);
+    code.max_x = std::max<double>(code.max_x, p[i].x);
+  }
+  code.centre_x = sx / 4 + offset_x;
+  code.centre_y = sy / 4 + offset_y;
+  code.min_x += offset_x;
+  code.max_x += offset_x;
+  return code;
+}
+
+/// Windows may overlap: a symbol in two of them is one symbol.
+bool already_read(const std::vector<DecodedCode>& codes, const DecodedCode& code) {
+  return std::any_of(codes.begin(), codes.end(), [&](const DecodedCode& c) {
+    return c.text == code.text && c.format == code.format &&
+           std::abs(c.centre_x - code.centre_x) < 4 && std::abs(c.centre_y - code.centre_y) < 4;
+  });
+}
+
+}  // namespace
+
+BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& symbologies,
+                             bool try_rotate, std::span<const DecodeWindow> windows) {
+  BarcodeReadout out;
+  if (latent.empty()) return out;
+  const std::vector<std::uint8_t> lum = luminance(latent);
   ZXing::DecodeHints hints;
   hints.setFormats(ZXing::BarcodeFormatsFromString(symbologies))
       .setTryHarder(true)
       .setTryRotate(try_rotate);
-  ZXing::Results results;
-  out.decoder_fault = run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, hints); });
-  if (!out.decoder_fault.empty()) return out;
-  for (const ZXing::Result& result : results) {
-    if (!result.isValid()) continue;
-    DecodedCode code;
-    code.text = result.text();
-    code.format = ZXing::ToString(result.format());
-    const auto& p = result.position();
-    double sx = 0, sy = 0;
-    code.min_x = p[0].x;
-    code.max_x = p[0].x;
-    for (int i = 0; i < 4; ++i) {
-      sx += p[i].x;
-      sy += p[i].y;
-      code.min_x = std::min<double>(code.min_x, p[i].x);
-      code.max_x = std::max<double>(code.max_x, p[i].x);
+  const DecodeWindow whole{0, 0, latent.width, latent.height};
+  for (const DecodeWindow& w :
+       windows.empty() ? std::span<const DecodeWindow>(&whole, 1) : windows) {
+    const int x0 = std::clamp(w.x, 0, latent.width), y0 = std::clamp(w.y, 0, latent.height);
+    const int x1 = std::clamp(w.x + w.width, x0, latent.width),
+              y1 = std::clamp(w.y + w.height, y0, latent.height);
+    if (x1 - x0 < 1 || y1 - y0 < 1) continue;
+    const ZXing::ImageView view(lum.data() + static_cast<std::size_t>(y0) * latent.width + x0,
+                                x1 - x0, y1 - y0, ZXing::ImageFormat::Lum, latent.width);
+    ZXing::Results results;
+    out.decoder_fault =
+        run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, hints); });
+    if (!out.decoder_fault.empty()) {
+      out.codes.clear();
+      return out;
     }
-    code.centre_x = sx / 4;
-    code.centre_y = sy / 4;
-    out.codes.push_back(std::move(code));
+    for (const ZXing::Result& result : results) {
+      if (!result.isValid()) continue;
+      DecodedCode code = decoded_code(result, x0, y0);
+      if (!already_read(out.codes, code)) out.codes.push_back(std::move(code));
+    }
   }
   return out;
 }
 
-std::vector<LabelRegion> find_label_regions(const imaging::Plane& latent, double paper_threshold,
-                                            double min_fraction, int min_width, int max_gap) {
+std::vector<LabelRegion> find_paper_runs(const imaging::Plane& latent, double paper_threshold,
+                                         double min_fraction, int min_width, int max_gap) {
   std::vector<LabelRegion> regions;
   if (latent.empty()) return regions;
   std::vector<int> bright(static_cast<std::size_t>(latent.width), 0);
@@ -88,10 +127,43 @@ std::vector<LabelRegion> find_label_regions(const imaging::Plane& latent, double
       start = -1;
     }
   }
-  for (const auto& run : runs)
-    if (run.end - run.begin >= min_width && run.begin > 0 && run.end < latent.width)
-      regions.push_back(run);
+  for (auto& run : runs) {
+    run.cut = run.begin == 0 || run.end == latent.width;
+    if (run.end - run.begin >= min_width || run.cut) regions.push_back(run);
+  }
   return regions;
+}
+
+std::vector<LabelRegion> find_label_regions(const imaging::Plane& latent, double paper_threshold,
+                                            double min_fraction, int min_width, int max_gap) {
+  auto regions = find_paper_runs(latent, paper_threshold, min_fraction, min_width, max_gap);
+  std::erase_if(regions, [](const LabelRegion& r) { return r.cut; });  // the rest are wide enough
+  return regions;
+}
+
+std::string decode_area_name(DecodeArea area) {
+  return area == DecodeArea::kFrame ? "frame" : "labels";
+}
+
+std::vector<DecodeWindow> decode_windows(std::span<const LabelRegion> runs, int width, int height,
+                                         imaging::Direction direction, int margin) {
+  const bool along_x =
+      direction == imaging::Direction::kPlusX || direction == imaging::Direction::kMinusX;
+  const bool reversed =
+      direction == imaging::Direction::kMinusX || direction == imaging::Direction::kMinusY;
+  const int length = along_x ? width : height;
+  std::vector<DecodeWindow> windows;
+  for (const LabelRegion& r : runs) {
+    int begin = std::max(0, r.begin - margin), end = std::min(length, r.end + margin);
+    if (reversed) {
+      const int b = length - end;
+      end = length - begin;
+      begin = b;
+    }
+    windows.push_back(along_x ? DecodeWindow{begin, 0, end - begin, height}
+                              : DecodeWindow{0, begin, width, end - begin});
+  }
+  return windows;
 }
 
 }  // namespace flutterscan::session

@@ -3,9 +3,11 @@
 // label regions (bright paper on the darker belt) whether a code was read on
 // them or not: a region without a decode is what becomes a NO-READ.
 
+#include <span>
 #include <string>
 #include <vector>
 
+#include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
 
 namespace flutterscan::session {
@@ -38,26 +40,54 @@ struct BarcodeReadout {
   std::string decoder_fault;
 };
 
+/// \brief A rectangle of the latent image to decode: columns [x, x + width), rows [y, y + height).
+struct DecodeWindow {
+  int x = 0, y = 0, width = 0, height = 0;
+};
+
 /// \brief Every barcode of the named symbologies (check_symbologies() passed)
-/// ZXing reads on `latent` (reflectance, clipped to 0..1). `try_rotate`: also
-/// look for 1-D codes turned by 90 degrees (about twice the decode time).
+/// ZXing reads on `latent` (reflectance, clipped to 0..1), inside `windows`
+/// (each decoded on its own; none: the whole image). Positions are the
+/// latent's. `try_rotate`: also look for 1-D codes turned by 90 degrees (about
+/// twice the decode time).
 BarcodeReadout read_barcodes(const imaging::Plane& latent,
                              const std::string& symbologies = kDefaultSymbologies,
-                             bool try_rotate = true);
+                             bool try_rotate = true, std::span<const DecodeWindow> windows = {});
 
 /// \brief A run of columns [begin, end) where the image is mostly label paper.
 struct LabelRegion {
   int begin = 0;
   int end = 0;
+  bool cut = false;  ///< touches the first or last column: the label may go on outside the frame
 };
 
-/// \brief Label regions along x: columns where at least `min_fraction` of the
-/// pixels are brighter than `paper_threshold`, in runs at least `min_width`
-/// wide that touch neither edge (a label cut by the frame is not judged).
-/// Dark gaps up to `max_gap` columns (the bars of a linear code) do not split a run.
+/// \brief Paper along x: columns where at least `min_fraction` of the pixels
+/// are brighter than `paper_threshold`, in runs at least `min_width` wide
+/// (narrower ones only where the frame's edge cuts them). Dark gaps up to
+/// `max_gap` columns (the bars of a linear code) do not split a run.
+std::vector<LabelRegion> find_paper_runs(const imaging::Plane& latent,
+                                         double paper_threshold = 0.62, double min_fraction = 0.05,
+                                         int min_width = 48, int max_gap = 16);
+
+/// \brief Label regions along x: the paper runs (find_paper_runs) that are not
+/// cut by the frame's edges (a label cut by the frame is not judged).
 std::vector<LabelRegion> find_label_regions(const imaging::Plane& latent,
                                             double paper_threshold = 0.62,
                                             double min_fraction = 0.05, int min_width = 48,
                                             int max_gap = 16);
+
+/// \brief Where the session looks for codes: the whole frame, or the label
+/// paper only (decode_windows()), which is faster and finds the same codes on
+/// labels brighter than the belt.
+enum class DecodeArea { kFrame, kLabels };
+
+/// \brief "frame", "labels".
+std::string decode_area_name(DecodeArea area);
+
+/// \brief Windows of a `width` x `height` latent around `runs` (found along
+/// the motion: x for +-x, y for +-y, in the motion frame of `direction`), each
+/// widened by `margin` px along the motion and spanning the frame across it.
+std::vector<DecodeWindow> decode_windows(std::span<const LabelRegion> runs, int width, int height,
+                                         imaging::Direction direction, int margin = 24);
 
 }  // namespace flutterscan::session

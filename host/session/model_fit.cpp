@@ -31,7 +31,7 @@ std::pair<double, double> blur_range(double nominal, int along) {
 
 }  // namespace
 
-Result<FittedFrame, std::string> deblur_fitting_model(const imaging::Image& dn,
+Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
                                                       const imaging::Image& electrons,
                                                       imaging::CaptureModel model,
                                                       const imaging::DeblurOptions& options,
@@ -115,7 +115,7 @@ Result<FittedFrame, std::string> deblur_fitting_model(const imaging::Image& dn,
   if (!times.contains("deblur")) times["deblur"] = lap_ms(lap);
 
   // 3. Guards.
-  guards.saturated_share = imaging::saturated_share(dn, model);
+  guards.saturated_share = saturated_share;
   out.log["guards"] = {{"saturated_share", rounded(guards.saturated_share, 1e-5)},
                        {"residual_ratio", rounded(guards.residual_ratio, 0.01)}};
   if (guards.blur_checked) out.log["guards"]["blur_disagrees"] = guards.blur_disagrees;

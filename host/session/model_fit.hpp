@@ -48,11 +48,12 @@ struct FittedFrame {
   double estimated_blur_px = 0;    ///< a confident estimate from this frame (0: none)
 };
 
-/// \brief Deblurs one frame (`dn` as recorded, `electrons` from it) under the
-/// simplest model that fits. `model.blur_px` is the nominal (encoder) blur;
-/// `frame_index` paces the blur check. Fails only when deblurring itself fails.
+/// \brief Deblurs one frame (`electrons`; `saturated_share` of its samples at
+/// the ceiling, imaging::saturated_share) under the simplest model that fits.
+/// `model.blur_px` is the nominal (encoder) blur; `frame_index` paces the blur
+/// check. Fails only when deblurring itself fails.
 Result<FittedFrame, std::string> deblur_fitting_model(
-    const imaging::Image& dn, const imaging::Image& electrons, imaging::CaptureModel model,
+    double saturated_share, const imaging::Image& electrons, imaging::CaptureModel model,
     const imaging::DeblurOptions& options, const ModelFitConfig& config, std::uint64_t frame_index);
 
 }  // namespace flutterscan::session

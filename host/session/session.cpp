@@ -4,6 +4,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <malloc.h>
+
 #include <algorithm>
 #include <bit>
 #include <chrono>
@@ -30,8 +32,8 @@
 #include "imaging/capture_descriptor.hpp"
 #include "imaging/deblur.hpp"
 #include "imaging/flat_field.hpp"
-#include "imaging/frame_conversion.hpp"
 #include "imaging/motion_frame.hpp"
+#include "imaging/row_fft.hpp"
 #include "session/barcode_reader.hpp"
 #include "session/frame_matcher.hpp"
 #include "session/frame_model.hpp"
@@ -79,7 +81,7 @@ struct FrameOutcome {
   double latency_ms = 0;
   std::int64_t arrival_ns = 0;
   // Kept only for frames whose files are saved.
-  imaging::Image dn;
+  capture::Frame frame;  ///< as captured (the DN planes are made again only to save or show it)
   imaging::Plane latent;
   nlohmann::json descriptor;
   std::vector<std::string> truth;
@@ -164,30 +166,30 @@ double along_motion(double x, double y, int width, int height, imaging::Directio
 }
 
 /// PNG bytes for the report: the raw frame stretched to 8 bits (display only) and the latent.
-Preview make_preview(const FrameOutcome& o) {
+Preview make_preview(const FrameOutcome& o, const imaging::Image& dn) {
   Preview p;
   p.sequence = o.sequence;
   // Display only: the brightest sample maps to white.
   float brightest = 1;
-  for (const auto& plane : o.dn.channels)
+  for (const auto& plane : dn.channels)
     for (float v : plane.pixels) brightest = std::max(brightest, v);
   const double scale = 255.0 / brightest;
-  const int width = o.dn.width(), height = o.dn.height();
+  const int width = dn.width(), height = dn.height();
   const int out_width = std::min(width, 960);
   const double shrink = static_cast<double>(out_width) / width;
   cv::Mat before;
-  if (o.dn.channel_count() == 3) {
+  if (dn.channel_count() == 3) {
     std::vector<cv::Mat> planes;
     for (int c = 2; c >= 0; --c) {
       cv::Mat plane(height, width, CV_32F,
-                    const_cast<float*>(o.dn.channels[static_cast<std::size_t>(c)].pixels.data()));
+                    const_cast<float*>(dn.channels[static_cast<std::size_t>(c)].pixels.data()));
       cv::Mat bytes;
       plane.convertTo(bytes, CV_8U, scale);
       planes.push_back(bytes);
     }
     cv::merge(planes, before);
   } else {
-    cv::Mat plane(height, width, CV_32F, const_cast<float*>(o.dn.channels[0].pixels.data()));
+    cv::Mat plane(height, width, CV_32F, const_cast<float*>(dn.channels[0].pixels.data()));
     plane.convertTo(before, CV_8U, scale);
   }
   cv::Mat latent(o.latent.height, o.latent.width, CV_32F,
@@ -215,9 +217,13 @@ struct Shared {
   std::atomic<std::uint64_t> processing_errors{0};
 };
 
+/// Blurs up to this long deblur with FFT plans measured before the session
+/// streams (longer ones with estimated plans, about 20% slower).
+constexpr int kLongestPlannedBlurPx = 256;
+
 /// Worker: descriptor, deblur and fusion, decoding, sightings.
-FrameOutcome process(const FrameJob& job, const SessionConfig& config,
-                     std::atomic<double>& last_blur_px, const imaging::FlatField* flat) {
+FrameOutcome process(FrameJob& job, const SessionConfig& config, std::atomic<double>& last_blur_px,
+                     const imaging::FlatField* flat) {
   FrameOutcome out;
   out.index = job.index;
   out.sequence = job.frame.sequence;
@@ -241,10 +247,11 @@ FrameOutcome process(const FrameJob& job, const SessionConfig& config,
          {"clock_residual_us", std::round(job.residual_us * 10) / 10},
          {"method", imaging::method_name(config.processing.method)}};
   if (!job.match_note.empty()) log["match_note"] = job.match_note;
-  auto dn = capture::frame_to_dn(job.frame);
   auto model = frame_model(job.event, config.controller.parsed_code, config, job.frame.format);
-  if (!dn.ok() || !model.ok()) {
-    log["error"] = !dn.ok() ? dn.error() : model.error();
+  auto converted = model.ok() ? capture::frame_to_electrons(job.frame, model.value())
+                              : Result<capture::ElectronFrame, std::string>::failure(model.error());
+  if (!converted.ok()) {
+    log["error"] = converted.error();
     flags.push_back("error");
     log["flags"] = flags;
     return out;
@@ -254,7 +261,8 @@ FrameOutcome process(const FrameJob& job, const SessionConfig& config,
   imaging::DeblurOptions options;
   options.method = config.processing.method;
   options.threads = config.processing.threads_per_worker;
-  imaging::Image electrons = imaging::dn_to_electrons(dn.value(), model.value());
+  options.plan_effort = imaging::PlanEffort::kMeasuredIfKnown;  // measured before streaming
+  imaging::Image& electrons = converted.value().electrons;
   if (flat != nullptr && !model.value().bayer_rggb) {
     if (auto problem = imaging::apply_flat_field(electrons, *flat); !problem.empty()) {
       log["error"] = "optics.flat_field: " + problem;
@@ -282,7 +290,8 @@ FrameOutcome process(const FrameJob& job, const SessionConfig& config,
     fit.slot_time_us = job.event.slot_time_us;
     fit.blur_check_every = config.processing.blur_check_every;
     fit.fallback_blur_px = last_blur_px.load();
-    auto r = deblur_fitting_model(dn.value(), electrons, model.value(), options, fit, job.index);
+    auto r = deblur_fitting_model(converted.value().saturated_share, electrons, model.value(),
+                                  options, fit, job.index);
     if (r.ok()) {
       if (r.value().estimated_blur_px > 0) last_blur_px.store(r.value().estimated_blur_px);
       latent = std::move(r.value().latent);
@@ -301,20 +310,31 @@ FrameOutcome process(const FrameJob& job, const SessionConfig& config,
     log["flags"] = flags;
     return out;
   }
-  const BarcodeReadout readout =
-      read_barcodes(latent, config.processing.symbologies, config.processing.try_rotate);
+  // Paper along the motion: where codes are looked for (processing.decode_area) and
+  // the labels judged (read, or NO-READ).
+  const imaging::Direction direction = model.value().direction;
+  const std::vector<LabelRegion> paper =
+      find_paper_runs(imaging::to_motion_frame(latent, direction));
+  const bool labels_only = config.processing.decode_area == DecodeArea::kLabels;
+  const std::vector<DecodeWindow> windows =
+      labels_only ? decode_windows(paper, latent.width, latent.height, direction)
+                  : std::vector<DecodeWindow>{};
+  BarcodeReadout readout;
+  if (!labels_only || !windows.empty())
+    readout =
+        read_barcodes(latent, config.processing.symbologies, config.processing.try_rotate, windows);
+  if (labels_only) log["decode_windows"] = windows.size();
   const std::vector<DecodedCode>& codes = readout.codes;
   if (!readout.decoder_fault.empty()) {
     // ZXing failed an internal assertion on this image: nothing read, the session goes on.
     log["decoder_fault"] = readout.decoder_fault;
     flags.push_back("decoder-fault");
   }
-  const imaging::Direction direction = model.value().direction;
-  const imaging::Plane along = imaging::to_motion_frame(latent, direction);
-  auto regions = find_label_regions(along);
-  // Near the upstream edge the deblurred image has no support: no judging there.
+  std::vector<LabelRegion> regions = paper;
+  // A label cut by the frame is not judged; near the upstream edge the deblurred
+  // image has no support: no judging there either.
   const double upstream = model.value().blur_px + 4;
-  std::erase_if(regions, [&](const LabelRegion& r) { return r.begin < upstream; });
+  std::erase_if(regions, [&](const LabelRegion& r) { return r.cut || r.begin < upstream; });
   const std::int64_t t3 = now_ns();
 
   std::vector<bool> used(codes.size(), false);
@@ -354,7 +374,6 @@ FrameOutcome process(const FrameJob& job, const SessionConfig& config,
   if (!job.frame.truth.empty()) log["truth"] = job.frame.truth;
   log["flags"] = flags;
   out.processed = true;
-  out.dn = std::move(dn.value());
   out.latent = std::move(latent);
   out.descriptor = imaging::to_descriptor(model.value());
   out.descriptor["capture"] = {{"sequence", job.frame.sequence},
@@ -363,13 +382,20 @@ FrameOutcome process(const FrameJob& job, const SessionConfig& config,
   if (!job.frame.truth.empty()) out.descriptor["capture"]["truth"] = job.frame.truth;
   if (!job.frame.truth_in_view.empty())
     out.descriptor["capture"]["truth_in_view"] = job.frame.truth_in_view;
+  out.frame = std::move(job.frame);  // last: the lines above read it
   return out;
 }
 
 }  // namespace
 
+void keep_freed_frame_memory() {
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's largest
+  mallopt(M_TRIM_THRESHOLD, 512 << 20);
+}
+
 SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
                            const SessionHooks& hooks) {
+  keep_freed_frame_memory();
   SessionOutcome outcome;
   auto say = [&](const std::string& text) {
     if (hooks.message) hooks.message(text);
@@ -432,6 +458,14 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   if (!capture::keeps_channels_apart(format.pixel_format))
     say("warning: pixel format " + capture::pixel_format_name(format.pixel_format) +
         " mixes the camera channels: the joint deblur loses accuracy (use raw Bayer or RGB)");
+
+  // Faster FFT plans for the frame's rows, measured now: a worker that planned
+  // on its first frame would stall the queue. Blurs up to kLongestPlannedBlurPx.
+  imaging::Direction direction = imaging::Direction::kPlusX;
+  imaging::parse_direction(config.optics.direction, direction);
+  const bool along_x =
+      direction == imaging::Direction::kPlusX || direction == imaging::Direction::kMinusX;
+  imaging::measure_row_ffts(along_x ? format.width : format.height, kLongestPlannedBlurPx + 2);
 
   SessionFolder folder;
   const std::string folder_path = session_folder_name(config.output);
@@ -499,10 +533,6 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   std::map<std::string, std::uint64_t> model_counts, flag_counts;
 
   // Results thread: in capture order.
-  imaging::Direction direction = imaging::Direction::kPlusX;
-  imaging::parse_direction(config.optics.direction, direction);
-  const bool along_x =
-      direction == imaging::Direction::kPlusX || direction == imaging::Direction::kMinusX;
   ObjectTracker tracker(along_x ? format.width : format.height, config.processing.object_match_px);
   std::vector<ObjectResult> objects;
   std::vector<double> latencies;
@@ -545,19 +575,27 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
           for (const auto& t : f.truth_in_view) truth_in_view.insert(t);
           const bool keep = static_cast<int>(frames_saved) < config.output.keep_first_frames ||
                             (f.decode_failed && config.output.keep_failed_frames);
-          if (keep) {
-            if (auto p = folder.save_frame(f.sequence, f.dn, f.descriptor, &f.latent); !p.empty()) {
+          // The report shows the first frames with a read label, and failures.
+          const bool read_something = std::any_of(f.sightings.begin(), f.sightings.end(),
+                                                  [](const Sighting& x) { return x.decoded; });
+          const bool preview =
+              (read_something && previews_read < 3) || (f.decode_failed && previews_failed < 3);
+          // The frame's DN planes again (it converted without them), for these frames only.
+          const auto dn = keep || preview ? capture::frame_to_dn(f.frame)
+                                          : Result<imaging::Image, std::string>::success({});
+          if (keep && !dn.ok()) {
+            if (save_error.empty()) save_error = dn.error();
+          } else if (keep) {
+            if (auto p = folder.save_frame(f.sequence, dn.value(), f.descriptor, &f.latent);
+                !p.empty()) {
               if (save_error.empty()) save_error = p;
             } else {
               ++frames_saved;
               f.log["files_saved"] = true;
             }
           }
-          // The report shows the first frames with a read label, and failures.
-          const bool read_something = std::any_of(f.sightings.begin(), f.sightings.end(),
-                                                  [](const Sighting& x) { return x.decoded; });
-          if ((read_something && previews_read < 3) || (f.decode_failed && previews_failed < 3)) {
-            Preview p = make_preview(f);
+          if (preview && dn.ok()) {
+            Preview p = make_preview(f, dn.value());
             p.caption = "frame " + std::to_string(f.sequence) +
                         (f.decode_failed ? ": a label without a read" : ": labels read");
             previews.push_back(std::move(p));

@@ -212,7 +212,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
             *t, "processing.",
             {"method", "workers", "threads_per_worker", "queue_depth", "max_frames", "max_seconds",
              "match_tolerance_us", "object_match_px", "choose_model", "blur_check_every",
-             "symbologies", "try_rotate"},
+             "symbologies", "try_rotate", "decode_area"},
             origin);
         !p.empty())
       return Out::failure(p);
@@ -237,6 +237,16 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     r.get("blur_check_every", c.processing.blur_check_every);
     r.get("symbologies", c.processing.symbologies);
     r.get("try_rotate", c.processing.try_rotate);
+    std::string area;
+    r.get("decode_area", area);
+    if (!area.empty()) {
+      if (area != decode_area_name(DecodeArea::kLabels) &&
+          area != decode_area_name(DecodeArea::kFrame))
+        return Out::failure(origin + ": processing.decode_area '" + area +
+                            "' is neither labels nor frame");
+      c.processing.decode_area =
+          area == decode_area_name(DecodeArea::kFrame) ? DecodeArea::kFrame : DecodeArea::kLabels;
+    }
   }
   if (const toml::table* t = root["output"].as_table()) {
     if (auto p = known_keys_problem(*t, "output.",

@@ -77,6 +77,10 @@ struct ProcessingConfig {
   /// Also look for 1-D codes turned by 90 degrees; a line whose labels always
   /// pass the same way up can turn it off and decode in about half the time.
   bool try_rotate = true;
+  /// Look for codes on the label paper only (bright runs along the motion, the
+  /// frame's edges included) or on the whole frame; "frame" for codes printed
+  /// straight on a substrate no brighter than the belt.
+  DecodeArea decode_area = DecodeArea::kLabels;
 };
 
 struct OutputConfig {

@@ -4,7 +4,7 @@
 // results out. Rendering is measured apart. Not a test: `tools/bench`
 // (BENCH_ONLY=session) runs it; docs/benchmarks.md quotes it.
 //
-//   session_bench [--frames N] [--width W --height H] [--csv FILE]
+//   session_bench [--frames N] [--width W --height H] [--csv FILE] [--stages-only]
 
 #include <algorithm>
 #include <chrono>
@@ -25,7 +25,6 @@
 #include "device/virtual_controller.hpp"
 #include "imaging/capture_descriptor.hpp"
 #include "imaging/deblur.hpp"
-#include "imaging/frame_conversion.hpp"
 #include "imaging/model_choice.hpp"
 #include "imaging/model_guards.hpp"
 #include "session/barcode_reader.hpp"
@@ -155,6 +154,8 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
   if (!model.ok()) return out;
   imaging::DeblurOptions options;
   options.threads = 1;
+  imaging::measure_row_ffts(width, 258);  // as the session does before it streams
+  options.plan_effort = imaging::PlanEffort::kMeasuredIfKnown;
   std::map<std::string, std::vector<double>> samples;
   for (int r = 0; r < repeats; ++r) {
     double t = thread_cpu_ms();
@@ -163,8 +164,8 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
       samples[stage].push_back(now - t);
       t = now;
     };
-    auto dn = capture::frame_to_dn(frame);
-    const imaging::Image electrons = imaging::dn_to_electrons(dn.value(), model.value());
+    auto converted = capture::frame_to_electrons(frame, model.value());
+    const imaging::Image& electrons = converted.value().electrons;
     lap("convert");
     const auto choice = imaging::choose_frame_model(electrons, model.value(), false, true);
     lap("model_choice");
@@ -172,9 +173,12 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
     lap("deblur");
     const imaging::Plane& latent = deblurred.value().latent;
     const double ratio = imaging::residual_ratio(electrons, latent, model.value(), height / 32);
-    const double saturated = imaging::saturated_share(dn.value(), model.value());
+    const double saturated = converted.value().saturated_share;
     lap("guards");
-    const auto readout = session::read_barcodes(latent, session::kDefaultSymbologies);
+    const auto windows = session::decode_windows(session::find_paper_runs(latent), latent.width,
+                                                 latent.height, imaging::Direction::kPlusX);
+    const auto readout =
+        session::read_barcodes(latent, session::kDefaultSymbologies, true, windows);
     lap("decode");
     if (r == 0)
       std::cout << "stage frame: model " << choice.describe() << ", residual ratio " << ratio
@@ -190,6 +194,7 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
 int main(int argc, char** argv) {
   int frames = 300, width = 1920, height = 1080;
   std::string csv;
+  bool stages_only = false;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     auto next = [&]() -> std::string {
@@ -207,6 +212,8 @@ int main(int argc, char** argv) {
       height = std::atoi(next().c_str());
     else if (arg == "--csv")
       csv = next();
+    else if (arg == "--stages-only")
+      stages_only = true;
     else {
       std::cerr << "session_bench: unknown argument '" << arg << "'\n";
       return 2;
@@ -224,6 +231,7 @@ int main(int argc, char** argv) {
   std::cout << "rendering (sim forward model, 1 thread, apart from the pipeline): " << render
             << " ms per frame\n\n";
 
+  session::keep_freed_frame_memory();  // as run_session() does
   const auto costs = stage_costs(width, height, 9);
   double total = 0;
   std::cout << "one worker, one frame, stage by stage (thread CPU time, median of 9):\n\n"
@@ -236,6 +244,7 @@ int main(int argc, char** argv) {
   }
   std::cout << "| total | " << total << " |\n\nso at most " << 2000.0 / total
             << " fps on 2 cores (2 workers x 1 thread)\n\n";
+  if (stages_only) return 0;
 
   std::vector<Run> runs;
   const struct {

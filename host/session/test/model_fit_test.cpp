@@ -9,6 +9,7 @@
 
 #include "imaging/frame_conversion.hpp"
 #include "imaging/metrics.hpp"
+#include "imaging/model_guards.hpp"
 #include "session/model_fit.hpp"
 #include "sim/colour_scene.hpp"
 #include "sim/forward_model.hpp"
@@ -64,7 +65,8 @@ TEST(ModelFit, NominalGreyFrameKeepsTheSimplestModel) {
   const auto m = capture();
   const auto scene = sim::render_scene(code128()).value();
   const Frame f = record(sim::expected_electrons(scene, m), m);
-  const auto fitted = deblur_fitting_model(f.dn, f.electrons, m, tv(), {}, 1);
+  const auto fitted =
+      deblur_fitting_model(imaging::saturated_share(f.dn, m), f.electrons, m, tv(), {}, 1);
   ASSERT_TRUE(fitted.ok()) << fitted.error();
   EXPECT_TRUE(fitted.value().flags.empty()) << fitted.value().log.dump();
   EXPECT_EQ(fitted.value().log["model"]["chosen"],
@@ -77,7 +79,8 @@ TEST(ModelFit, ColourPrintGetsPerChannelLatents) {
   const auto m = capture();
   const auto bands = sim::render_colour_scene(code128(), sim::kRedInk).value();
   const Frame f = record(sim::expected_colour_electrons(bands, m).value(), m);
-  const auto fitted = deblur_fitting_model(f.dn, f.electrons, m, tv(), {}, 1);
+  const auto fitted =
+      deblur_fitting_model(imaging::saturated_share(f.dn, m), f.electrons, m, tv(), {}, 1);
   ASSERT_TRUE(fitted.ok()) << fitted.error();
   EXPECT_EQ(fitted.value().log["model"]["chosen"],
             "per-channel latents, global code phase, blur from the encoder");
@@ -91,7 +94,8 @@ TEST(ModelFit, WithoutAnEncoderTheBlurComesFromTheFrame) {
   ModelFitConfig config;
   config.encoder = false;
   // The nominal blur (from the configured belt speed) is 10% off.
-  const auto fitted = deblur_fitting_model(f.dn, f.electrons, capture(52), tv(), config, 1);
+  const auto fitted = deblur_fitting_model(imaging::saturated_share(f.dn, capture(52)), f.electrons,
+                                           capture(52), tv(), config, 1);
   ASSERT_TRUE(fitted.ok()) << fitted.error();
   EXPECT_NEAR(fitted.value().log["model"]["blur_px"].get<double>(), 47.5, 0.3);
   EXPECT_EQ(fitted.value().log["model"]["chosen"],
@@ -105,10 +109,12 @@ TEST(ModelFit, TheBlurCheckCatchesAWrongEncoderReading) {
   const Frame f = record(sim::expected_electrons(scene, truth), truth);
   ModelFitConfig config;
   config.blur_check_every = 1;
-  const auto right = deblur_fitting_model(f.dn, f.electrons, capture(52), tv(), config, 1);
+  const auto right = deblur_fitting_model(imaging::saturated_share(f.dn, capture(52)), f.electrons,
+                                          capture(52), tv(), config, 1);
   ASSERT_TRUE(right.ok());
   EXPECT_FALSE(has(right.value().flags, "blur-disagrees")) << right.value().log.dump();
-  const auto wrong = deblur_fitting_model(f.dn, f.electrons, capture(57), tv(), config, 1);
+  const auto wrong = deblur_fitting_model(imaging::saturated_share(f.dn, capture(57)), f.electrons,
+                                          capture(57), tv(), config, 1);
   ASSERT_TRUE(wrong.ok());
   EXPECT_TRUE(has(wrong.value().flags, "blur-disagrees")) << wrong.value().log.dump();
   EXPECT_TRUE(has(wrong.value().flags, "misfit")) << wrong.value().log.dump();
@@ -120,7 +126,8 @@ TEST(ModelFit, SaturationIsFlagged) {
   const Frame f = record(sim::expected_electrons(scene, m), m);
   ModelFitConfig config;
   config.choose_latent = false;
-  const auto fitted = deblur_fitting_model(f.dn, f.electrons, m, tv(), config, 1);
+  const auto fitted =
+      deblur_fitting_model(imaging::saturated_share(f.dn, m), f.electrons, m, tv(), config, 1);
   ASSERT_TRUE(fitted.ok());
   EXPECT_TRUE(has(fitted.value().flags, "saturated")) << fitted.value().log.dump();
 }
