@@ -158,8 +158,10 @@ Out estimate_light_level(const std::vector<Image>& dn_frames, const CaptureModel
     }
   level.saturated_share = static_cast<double>(saturated) / static_cast<double>(count);
   if (level.saturated_share > options.max_saturated)
-    return Out::failure("the brightest paper saturates (" + number(100 * level.saturated_share) +
-                        "% of its pixels at full scale): shorten the exposure or lower the gain");
+    return Out::failure(
+        "the brightest paper saturates (" + number(100 * level.saturated_share) +
+        "% of its pixels at full scale): the probe needs less light per exposure or a "
+        "lower camera gain");
   level.electrons = m / (options.paper_reflectance * level.white_per_unit_e);
   return Out::success(level);
 }
