@@ -76,8 +76,10 @@ void add_scan(CLI::App& app) {
   command->add_option("--method", o->method, "joint-wiener, wiener-avg, rl or tv");
   command->add_option("--scheme", o->scheme,
                       "LED pattern: a code (digits or library name), or auto: the capture scheme "
-                      "the regime map says wins at the calibrated light and noise "
-                      "(docs/algorithms.md)");
+                      "the regime map (docs/algorithms.md) says wins at the light measured on the "
+                      "line before the session starts (every LED on, optics.paper_reflectance for "
+                      "the brightest paper; optics.electrons is the fallback) and the calibrated "
+                      "read noise and cap (docs/session.md)");
   command->add_option("--frames", o->frames, "stop after this many frames");
   command->add_option("--seconds", o->seconds, "stop after this long")->check(CLI::PositiveNumber);
   command->add_option("--workers", o->workers, "frames deblurred at once")

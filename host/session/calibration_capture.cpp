@@ -50,8 +50,8 @@ Captured<std::unique_ptr<CalibrationRig>> CalibrationRig::open(RigOptions option
   rig->say("controller: " + rig->parts_->link.description +
            " set up as for a session (disarmed, the session's code as code 0)");
   std::string error;
-  rig->parts_->camera = open_camera(config.camera, rig->parts_->link.virtual_controller.get(),
-                                    error, bad_input);
+  rig->parts_->camera =
+      open_camera(config.camera, rig->parts_->link.virtual_controller.get(), error, bad_input);
   if (!rig->parts_->camera) return Out::failure({error, bad_input});
   for (const auto& warning : rig->parts_->camera->warnings()) rig->say("warning: " + warning);
   const capture::PixelFormat format = rig->parts_->camera->format().pixel_format;
@@ -70,6 +70,10 @@ std::string CalibrationRig::where() const {
 
 double CalibrationRig::full_scale_dn() const {
   return std::pow(2.0, parts_->camera->format().bit_depth) - 1;
+}
+
+capture::FrameFormat CalibrationRig::format() const {
+  return parts_->camera->format();
 }
 
 void CalibrationRig::say(const std::string& text) const {
@@ -163,7 +167,7 @@ Captured<std::vector<imaging::Image>> CalibrationRig::dark(int count) {
 }
 
 Captured<std::vector<imaging::Image>> CalibrationRig::lit(const LedCode& pattern, int count,
-                                                           const std::string& what) {
+                                                          const std::string& what) {
   using Out = Captured<std::vector<imaging::Image>>;
   if (auto problem = prepare(&pattern, kCalibrationCodeId); !problem.empty()) {
     finish();
@@ -184,12 +188,12 @@ Captured<std::vector<imaging::Image>> CalibrationRig::lit(const LedCode& pattern
     if (e.code_id == kCalibrationCodeId) ++lit_events;
   }
   if (lit_events == 0)
-    return Out::failure(line_failure(
-        where() + ", " + what + ": the controller reported no exposure while armed (" +
-        (options_.config.controller.sync == "master"
-             ? "is its trigger output wired to the camera's trigger input?"
-             : "is the camera's strobe output wired to the controller?") +
-        ")"));
+    return Out::failure(
+        line_failure(where() + ", " + what + ": the controller reported no exposure while armed (" +
+                     (options_.config.controller.sync == "master"
+                          ? "is its trigger output wired to the camera's trigger input?"
+                          : "is the camera's strobe output wired to the controller?") +
+                     ")"));
   std::vector<imaging::Image> planes;
   for (const auto& frame : frames.value()) {
     auto p = calibration_planes(frame);
@@ -202,8 +206,8 @@ Captured<std::vector<imaging::Image>> CalibrationRig::lit(const LedCode& pattern
 Captured<std::vector<CodedFrame>> CalibrationRig::coded(int count) {
   using Out = Captured<std::vector<CodedFrame>>;
   const LedCode& code = options_.config.controller.parsed_code;
-  const std::string what = "frames under the session's code '" + options_.config.controller.code +
-                           "'";
+  const std::string what =
+      "frames under the session's code '" + options_.config.controller.code + "'";
   if (auto problem = prepare(&code, 0); !problem.empty()) {
     finish();
     return Out::failure(line_failure(parts_->link.description + ", " + what + ": " + problem));
@@ -239,9 +243,8 @@ Captured<std::vector<CodedFrame>> CalibrationRig::coded(int count) {
   }
   if (out.empty())
     return Out::failure(line_failure(where() + ", " + what + ": no frame matched an exposure " +
-                                     "event (" + std::to_string(events.size()) +
-                                     " events for " + std::to_string(frames.value().size()) +
-                                     " frames)"));
+                                     "event (" + std::to_string(events.size()) + " events for " +
+                                     std::to_string(frames.value().size()) + " frames)"));
   return Out::success(std::move(out));
 }
 

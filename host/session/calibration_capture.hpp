@@ -8,11 +8,11 @@
 // calibration pattern it disarms, uploads the pattern as code
 // kCalibrationCodeId, selects it and arms; frames with every LED off are taken
 // disarmed (in master mode, where the controller triggers the camera, armed
-// with a pattern that lights no slot). The camera is started for each pattern (the first settle frames
-// dropped, so no frame exposed under the previous pattern counts) and stopped
-// after it. Every lit pattern must produce exposure events from the controller
-// (else the strobe or trigger is not wired) and none may have hit the thermal
-// guard. It leaves the controller disarmed with code 0 selected.
+// with a pattern that lights no slot). The camera is started for each pattern (the first settle
+// frames dropped, so no frame exposed under the previous pattern counts) and stopped after it.
+// Every lit pattern must produce exposure events from the controller (else the strobe or trigger is
+// not wired) and none may have hit the thermal guard. It leaves the controller disarmed with code 0
+// selected.
 
 #include <chrono>
 #include <cstdint>
@@ -81,6 +81,8 @@ class CalibrationRig {
   std::string where() const;
   /// \brief 2^bit_depth - 1 of the camera's frames.
   double full_scale_dn() const;
+  /// \brief The camera's frame format (size, pixel format, bit depth).
+  capture::FrameFormat format() const;
   const SessionConfig& config() const { return options_.config; }
 
   /// \brief `count` frames with every LED off (disarmed; master mode: an unlit pattern).

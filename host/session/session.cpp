@@ -37,6 +37,7 @@
 #include "session/barcode_reader.hpp"
 #include "session/frame_matcher.hpp"
 #include "session/frame_model.hpp"
+#include "session/light_probe.hpp"
 #include "session/line_devices.hpp"
 #include "session/model_fit.hpp"
 #include "session/object_tracker.hpp"
@@ -421,14 +422,6 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
     }
     flat = std::move(parsed.value());
   }
-  if (const auto& scheme = config.controller.scheme) {
-    std::ostringstream text;
-    text << "scheme auto: " << scheme->scheme << " (regime map cell " << scheme->cell_electrons
-         << " e-, read noise " << scheme->cell_read_noise << " e-, cap " << scheme->cell_cap
-         << ": best coded scheme " << (scheme->margin_db >= 0 ? "+" : "") << scheme->margin_db
-         << " dB against the best white strobe)";
-    say(text.str());
-  }
   const bool sim_camera = config.camera.spec == "sim" || config.camera.spec.rfind("sim:", 0) == 0;
   if (sim_camera && config.controller.spec != "sim") {
     outcome.error = "camera 'sim' needs the virtual controller: set controller.spec = \"sim\"";
@@ -441,10 +434,41 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
     return outcome;
   }
 
+  // One virtual controller for the light probe and the session.
+  SessionHooks line_hooks = hooks;
+  if (config.controller.spec == "sim" && !line_hooks.virtual_controller)
+    line_hooks.virtual_controller = std::make_shared<device::VirtualController>();
+
+  // Scheme auto: the light measured on the line picks the scheme (light_probe.hpp).
+  std::optional<SchemeLight> scheme_light;
+  if (config.controller.code == "auto") {
+    auto light = choose_scheme_from_light(config, line_hooks.virtual_controller,
+                                          [&](const std::string& m) { say("light probe: " + m); });
+    if (!light.ok()) {
+      outcome.error = light.error().message;
+      outcome.bad_input = light.error().bad_input;
+      return outcome;
+    }
+    scheme_light = light.value();
+    const codes::SchemeChoice& scheme = *config.controller.scheme;
+    std::ostringstream text;
+    text << "scheme auto: " << scheme.scheme << " at " << describe_scheme_light(*scheme_light)
+         << "; regime map cell " << scheme.cell_electrons << " e-, read noise "
+         << scheme.cell_read_noise << " e-, cap " << scheme.cell_cap << ": best coded scheme "
+         << (scheme.margin_db >= 0 ? "+" : "") << scheme.margin_db
+         << " dB against the best white strobe";
+    say(text.str());
+    if (const auto& l = scheme_light->level;
+        l && l->paper_electrons < 1.25 * l->background_electrons)
+      say("warning: scheme auto: the brightest paper is barely brighter than the rest of the "
+          "probe frames: if no label was in view, the belt was taken for paper and the light "
+          "is underestimated");
+  }
+
   // Controller first: the camera may need it (sim), and it must be ready before frames.
   ControllerLink link;
   bool bad_input = false;
-  if (auto problem = connect_controller(config, hooks, link, bad_input); !problem.empty()) {
+  if (auto problem = connect_controller(config, line_hooks, link, bad_input); !problem.empty()) {
     outcome.error = problem;
     outcome.bad_input = bad_input;
     return outcome;
@@ -783,6 +807,7 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
                            {{"electrons", scheme->cell_electrons},
                             {"read_noise_e", scheme->cell_read_noise},
                             {"cap", scheme->cell_cap}}}};
+  if (scheme_light) s["scheme_choice"]["light"] = scheme_light_json(*scheme_light);
   s["method"] = imaging::method_name(config.processing.method);
   s["frame_size"] = std::to_string(format.width) + "x" + std::to_string(format.height) + " " +
                     capture::pixel_format_name(format.pixel_format);

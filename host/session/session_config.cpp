@@ -152,7 +152,8 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
   }
   if (const toml::table* t = root["controller"].as_table()) {
     if (auto p = known_keys_problem(
-            *t, "controller.", {"spec", "code", "slot_time_us", "sync", "frame_period_us"}, origin);
+            *t, "controller.",
+            {"spec", "code", "slot_time_us", "sync", "frame_period_us", "probe_frames"}, origin);
         !p.empty())
       return Out::failure(p);
     TableReader r(t, "controller.", origin, error);
@@ -161,13 +162,14 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     r.get("slot_time_us", c.controller.slot_time_us);
     r.get("sync", c.controller.sync);
     r.get("frame_period_us", c.controller.frame_period_us);
+    r.get("probe_frames", c.controller.probe_frames);
   }
   if (const toml::table* t = root["optics"].as_table()) {
     if (auto p = known_keys_problem(
             *t, "optics.",
             {"px_per_count", "direction", "crosstalk", "electrons", "cap", "read_noise_e",
              "full_well_e", "black_level_dn", "gain_e_per_dn", "bit_depth", "encoder",
-             "nominal_blur_px", "line_time_us", "flat_field"},
+             "nominal_blur_px", "line_time_us", "flat_field", "paper_reflectance"},
             origin);
         !p.empty())
       return Out::failure(p);
@@ -175,6 +177,8 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     r.get("px_per_count", c.optics.px_per_count);
     r.get("direction", c.optics.direction);
     r.get("electrons", c.optics.electrons);
+    c.optics.electrons_given = t->contains("electrons");
+    r.get("paper_reflectance", c.optics.paper_reflectance);
     r.get("cap", c.optics.cap);
     r.get("read_noise_e", c.optics.read_noise_e);
     r.get("full_well_e", c.optics.full_well_e);
@@ -293,8 +297,13 @@ std::string check_config(SessionConfig& c) {
   if (c.controller.code == "auto") {
     if (!(c.optics.electrons > 0) || !(c.optics.read_noise_e > 0) || !(c.optics.cap >= 1))
       return problem("controller.code",
-                     "auto needs optics.electrons > 0, optics.read_noise_e > 0 "
-                     "and optics.cap >= 1 (calibrate them first)");
+                     "auto needs optics.read_noise_e > 0 (flutterscan calibrate noise) and "
+                     "optics.cap >= 1; optics.electrons, if given, > 0");
+    if (c.controller.probe_frames < 1 || c.controller.probe_frames > 100)
+      return problem("controller.probe_frames", "must be within 1..100");
+    if (!(c.optics.paper_reflectance > 0 && c.optics.paper_reflectance <= 1))
+      return problem("optics.paper_reflectance", "must be within (0, 1]");
+    // Provisional: the session measures the light and chooses again (light_probe.hpp).
     c.controller.scheme =
         codes::choose_scheme(c.optics.electrons, c.optics.read_noise_e, c.optics.cap);
     c.controller.parsed_code = c.controller.scheme->code;

@@ -28,10 +28,14 @@ struct CameraConfig {
 struct ControllerConfig {
   std::string spec = "sim";  ///< "sim", "auto" or a serial number
   /// Digits, a library name (docs/codes.md), or "auto": the scheme the regime
-  /// map says wins at optics.electrons, optics.read_noise_e and optics.cap.
+  /// map says wins at the light level the session measures before it starts
+  /// (session/light_probe.hpp), optics.read_noise_e and optics.cap.
   std::string code = "seed-maxmin-1";
-  LedCode parsed_code;                        ///< filled by check_config
-  std::optional<codes::SchemeChoice> scheme;  ///< check_config's choice for code "auto"
+  LedCode parsed_code;  ///< filled by check_config
+  /// Code "auto": check_config's provisional choice at optics.electrons, which
+  /// run_session replaces by the choice at the measured light.
+  std::optional<codes::SchemeChoice> scheme;
+  int probe_frames = 6;  ///< code "auto": frames lit by the light probe
   std::uint32_t slot_time_us = 100;
   std::string sync = "slave";         ///< "slave" (camera strobe) or "master" (controller triggers)
   std::uint32_t frame_period_us = 0;  ///< master mode
@@ -49,6 +53,12 @@ struct OpticsConfig {
   std::string direction = "+x";
   std::vector<double> crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
   double electrons = 3000;  ///< E: white e- per channel under rect-white (sets I_k with cap)
+  /// optics.electrons was in the config: code "auto" falls back to it when the
+  /// light cannot be measured, and the frames' model keeps it.
+  bool electrons_given = false;
+  /// Reflectance of the labels' paper (white = 1): code "auto" takes the
+  /// brightest paper in the probe frames as this.
+  double paper_reflectance = 1.0;
   double cap = 3;
   double read_noise_e = 4;
   double full_well_e = 12000;

@@ -219,6 +219,23 @@ TEST(SessionConfigFile, ReadsTheAnnotatedExampleAndNamesBadKeys) {
   EXPECT_FALSE(no_rotate.value().processing.try_rotate);
   EXPECT_TRUE(config.processing.try_rotate);  // the annotated example keeps it on
 
+  // Code "auto": optics.electrons is optional (the session measures the light).
+  EXPECT_TRUE(config.optics.electrons_given);  // the example gives it
+  const auto auto_light = parse_config(
+      "[controller]\ncode = \"auto\"\nprobe_frames = 4\n[optics]\npaper_reflectance = 0.85\n",
+      "line3.toml");
+  ASSERT_TRUE(auto_light.ok()) << auto_light.error();
+  SessionConfig measured = auto_light.value();
+  EXPECT_FALSE(measured.optics.electrons_given);
+  EXPECT_EQ(measured.optics.paper_reflectance, 0.85);
+  EXPECT_EQ(measured.controller.probe_frames, 4);
+  EXPECT_EQ(check_config(measured), "");
+  measured.optics.paper_reflectance = 1.5;
+  EXPECT_NE(check_config(measured).find("optics.paper_reflectance"), std::string::npos);
+  measured.optics.paper_reflectance = 1;
+  measured.controller.probe_frames = 0;
+  EXPECT_NE(check_config(measured).find("controller.probe_frames"), std::string::npos);
+
   SessionConfig unknown_symbology;
   unknown_symbology.processing.symbologies = "Code128,Code129";
   EXPECT_NE(check_config(unknown_symbology).find("processing.symbologies"), std::string::npos);
