@@ -148,8 +148,9 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
   capture::Frame frame;
   std::string error;
   if (!camera->start().empty()) return out;
-  // A frame with a label in the middle of the view.
-  for (int i = 0; i < 4; ++i) camera->next_frame(frame, std::chrono::milliseconds(1000), error);
+  // A frame with a whole label in view (one a deblur can read), after a few.
+  for (int i = 0; i < 40 && (i < 4 || frame.truth.empty()); ++i)
+    camera->next_frame(frame, std::chrono::milliseconds(1000), error);
   auto model = imaging::from_descriptor(nlohmann::json::parse(frame.descriptor_json));
   if (!model.ok()) return out;
   imaging::DeblurOptions options;

@@ -6,6 +6,7 @@
 #include <ZXing/MultiFormatWriter.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <fstream>
 #include <string>
 #include <thread>
@@ -83,6 +84,88 @@ TEST(BarcodeReader, ACodeTurnedBy90DegreesIsReadOnlyWithTryRotate) {
   ASSERT_EQ(with.codes.size(), 1u);
   EXPECT_EQ(with.codes[0].text, "FS-ROTATE-7");
   EXPECT_TRUE(read_barcodes(turned, "Code128", false).codes.empty());
+}
+
+/// A belt (0.35) with white labels, each carrying a Code 128 code, starting at
+/// `starts` (the last one may run past the right edge).
+imaging::Plane belt_with_labels(const std::vector<int>& starts, int width) {
+  imaging::Plane belt(width, 200, 0.35f);
+  int n = 0;
+  for (int start : starts) {
+    const std::wstring text = L"FS-WINDOW-" + std::to_wstring(++n);
+    const ZXing::BitMatrix bars = ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code128)
+                                      .setMargin(10)
+                                      .encode(text, 300, 120);
+    for (int y = 0; y < 160; ++y)
+      for (int x = 0; x < 320 && start + x < width; ++x) {
+        const int bx = x - 10, by = y - 20;
+        const bool bar =
+            bx >= 0 && by >= 0 && bx < bars.width() && by < bars.height() && bars.get(bx, by);
+        belt.at(start + x, 20 + y) = bar ? 0.05f : 0.9f;
+      }
+  }
+  return belt;
+}
+
+TEST(BarcodeReader, PaperRunsFindLabelsAndFlagThoseCutByTheFrame) {
+  const imaging::Plane image = belt_with_labels({60, 500, 980}, 1200);
+  const auto runs = find_paper_runs(image);
+  ASSERT_EQ(runs.size(), 3u);
+  EXPECT_EQ(runs[0].begin, 60);
+  EXPECT_EQ(runs[0].end, 380);
+  EXPECT_FALSE(runs[0].cut);
+  EXPECT_TRUE(runs[2].cut);  // runs to the right edge
+  EXPECT_EQ(runs[2].end, 1200);
+  const auto judged = find_label_regions(image);
+  ASSERT_EQ(judged.size(), 2u);
+  EXPECT_EQ(judged[1].begin, 500);
+}
+
+TEST(BarcodeReader, DecodingThePaperAloneReadsWhatTheWholeFrameReads) {
+  const imaging::Plane image = belt_with_labels({60, 500, 900}, 1240);
+  const auto windows =
+      decode_windows(find_paper_runs(image), image.width, image.height, imaging::Direction::kPlusX);
+  ASSERT_EQ(windows.size(), 3u);
+  EXPECT_EQ(windows[0].x, 60 - 24);
+  EXPECT_EQ(windows[0].width, 320 + 48);
+  EXPECT_EQ(windows[0].height, image.height);
+  const BarcodeReadout whole = read_barcodes(image, "Code128");
+  const BarcodeReadout paper = read_barcodes(image, "Code128", true, windows);
+  ASSERT_EQ(whole.codes.size(), 3u);
+  ASSERT_EQ(paper.codes.size(), 3u);
+  for (const DecodedCode& w : whole.codes) {
+    const auto same = std::find_if(paper.codes.begin(), paper.codes.end(),
+                                   [&](const DecodedCode& p) { return p.text == w.text; });
+    ASSERT_NE(same, paper.codes.end()) << w.text;
+    EXPECT_NEAR(same->centre_x, w.centre_x, 1.0) << w.text;  // in the frame's coordinates
+    EXPECT_NEAR(same->centre_y, w.centre_y, 1.0) << w.text;
+  }
+  // A window on the belt alone reads nothing.
+  const DecodeWindow belt_only{400, 0, 80, image.height};
+  EXPECT_TRUE(read_barcodes(image, "Code128", true, {&belt_only, 1}).codes.empty());
+}
+
+TEST(BarcodeReader, DecodeWindowsFollowTheMotionDirection) {
+  const std::vector<LabelRegion> runs = {{100, 300, false}};
+  // Along the motion the run is [100, 300) in the motion frame; 24 px margins.
+  const auto minus_x = decode_windows(runs, 1000, 400, imaging::Direction::kMinusX);
+  ASSERT_EQ(minus_x.size(), 1u);
+  EXPECT_EQ(minus_x[0].x, 1000 - 324);
+  EXPECT_EQ(minus_x[0].width, 248);
+  EXPECT_EQ(minus_x[0].y, 0);
+  EXPECT_EQ(minus_x[0].height, 400);
+  const auto plus_y = decode_windows(runs, 1000, 400, imaging::Direction::kPlusY);
+  EXPECT_EQ(plus_y[0].x, 0);
+  EXPECT_EQ(plus_y[0].width, 1000);
+  EXPECT_EQ(plus_y[0].y, 76);
+  EXPECT_EQ(plus_y[0].height, 248);
+  const auto minus_y = decode_windows(runs, 1000, 400, imaging::Direction::kMinusY);
+  EXPECT_EQ(minus_y[0].y, 400 - 324);
+  // Margins stop at the frame's edges.
+  const std::vector<LabelRegion> edge = {{0, 40, true}};
+  const auto clipped = decode_windows(edge, 1000, 400, imaging::Direction::kPlusX);
+  EXPECT_EQ(clipped[0].x, 0);
+  EXPECT_EQ(clipped[0].width, 64);
 }
 
 TEST(BarcodeReader, SymbologyListsAreCheckedByName) {

@@ -1,0 +1,98 @@
+// frame_to_electrons: the one-pass conversion the session's workers use gives
+// what the three-step path gives (frame_to_dn, saturated_share, dn_to_electrons).
+
+#include "capture/frame_pixels.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+
+#include "imaging/frame_conversion.hpp"
+#include "imaging/model_guards.hpp"
+
+namespace flutterscan::capture {
+namespace {
+
+/// A frame of random samples (some at the ceiling), rows padded to `stride_extra` bytes more.
+Frame random_frame(PixelFormat format, int bit_depth, int stride_extra) {
+  Frame frame;
+  frame.sequence = 9;
+  const int width = 37, height = 11;
+  const int bpp = bytes_per_pixel(format);
+  frame.format = {width, height, format, bit_depth,
+                  static_cast<std::size_t>(width * bpp + stride_extra)};
+  frame.data.resize(frame.format.row_bytes * height);
+  std::mt19937 random(static_cast<unsigned>(bpp * 100 + bit_depth));
+  const int top = (1 << bit_depth) - 1;
+  std::uniform_int_distribution<int> sample(0, top + top / 4);  // a fifth or so saturated
+  const bool wide = bpp == 2 || bpp == 6;
+  for (std::size_t i = 0; i + (wide ? 1 : 0) < frame.data.size(); i += wide ? 2 : 1) {
+    const int v = std::min(sample(random), top);
+    frame.data[i] = static_cast<std::uint8_t>(v & 0xff);
+    if (wide) frame.data[i + 1] = static_cast<std::uint8_t>(v >> 8);
+  }
+  return frame;
+}
+
+imaging::CaptureModel camera(int bit_depth, int channels) {
+  imaging::CaptureModel m;
+  m.channels = channels;
+  m.bit_depth = bit_depth;
+  m.black_level = bit_depth > 8 ? 64 : 16;
+  m.full_well = 9000;  // below the code ceiling for 12 bits: the well saturates first
+  m.gain = bit_depth > 8 ? 12000.0 / 4095.0 : 40;
+  return m;
+}
+
+TEST(FrameToElectrons, OnePassEqualsTheThreeStepsForEveryFastFormat) {
+  const struct {
+    PixelFormat format;
+    int bit_depth;
+    int channels;
+  } cases[] = {{PixelFormat::kRgb8, 8, 3},        {PixelFormat::kBgr8, 8, 3},
+               {PixelFormat::kRgb16, 12, 3},      {PixelFormat::kMono8, 8, 1},
+               {PixelFormat::kMono16, 12, 1},     {PixelFormat::kBayerRggb8, 8, 1},
+               {PixelFormat::kBayerRggb16, 12, 1}};
+  for (const auto& c : cases) {
+    SCOPED_TRACE(pixel_format_name(c.format));
+    const Frame frame = random_frame(c.format, c.bit_depth, 5);
+    const imaging::CaptureModel m = camera(c.bit_depth, c.channels);
+    const auto dn = frame_to_dn(frame);
+    ASSERT_TRUE(dn.ok()) << dn.error();
+    const imaging::Image expected = imaging::dn_to_electrons(dn.value(), m);
+    const auto fast = frame_to_electrons(frame, m);
+    ASSERT_TRUE(fast.ok()) << fast.error();
+    const double share = imaging::saturated_share(dn.value(), m);
+    EXPECT_GT(share, 0.05);  // the frames do have saturated samples
+    EXPECT_DOUBLE_EQ(fast.value().saturated_share, share);
+    ASSERT_EQ(fast.value().electrons.channel_count(), expected.channel_count());
+    for (int ch = 0; ch < expected.channel_count(); ++ch)
+      for (std::size_t i = 0; i < expected.channels[ch].pixels.size(); ++i)
+        ASSERT_NEAR(fast.value().electrons.channels[ch].pixels[i], expected.channels[ch].pixels[i],
+                    1e-3)
+            << "channel " << ch << ", sample " << i;
+  }
+}
+
+TEST(FrameToElectrons, NonLinearEncodingsTakeTheThreeStepPath) {
+  const Frame frame = random_frame(PixelFormat::kRgb8, 8, 0);
+  imaging::CaptureModel m = camera(8, 3);
+  m.encoding = imaging::Encoding::kSrgb;
+  const auto dn = frame_to_dn(frame);
+  const auto fast = frame_to_electrons(frame, m);
+  ASSERT_TRUE(dn.ok() && fast.ok());
+  const imaging::Image expected = imaging::dn_to_electrons(dn.value(), m);
+  EXPECT_EQ(fast.value().electrons.channels[1].pixels, expected.channels[1].pixels);
+}
+
+TEST(FrameToElectrons, ShortDataIsRefusedNamingTheFrame) {
+  Frame frame = random_frame(PixelFormat::kRgb16, 12, 0);
+  frame.data.resize(frame.data.size() - 1);
+  const auto fast = frame_to_electrons(frame, camera(12, 3));
+  ASSERT_FALSE(fast.ok());
+  EXPECT_NE(fast.error().find("frame 9"), std::string::npos) << fast.error();
+  EXPECT_NE(fast.error().find("needs more"), std::string::npos) << fast.error();
+}
+
+}  // namespace
+}  // namespace flutterscan::capture
