@@ -29,6 +29,26 @@ std::uint16_t read16(const std::uint8_t* p) {
   return static_cast<std::uint16_t>(p[0] | (p[1] << 8));
 }
 
+std::size_t row_stride(const FrameFormat& f) {
+  return f.row_bytes != 0 ? f.row_bytes
+                          : static_cast<std::size_t>(f.width) * bytes_per_pixel(f.pixel_format);
+}
+
+/// "" if the frame's data holds its format's rows (uncompressed formats), else what does not fit.
+std::string layout_problem(const Frame& frame) {
+  const FrameFormat& f = frame.format;
+  const std::string where = "frame " + std::to_string(frame.sequence);
+  const std::size_t row_bytes = row_stride(f);
+  const auto pixels_bytes = static_cast<std::size_t>(f.width) * bytes_per_pixel(f.pixel_format);
+  if (row_bytes < pixels_bytes)
+    return where + ": row stride " + std::to_string(row_bytes) + " shorter than a row of " +
+           std::to_string(f.width) + " pixels";
+  if (frame.data.size() < row_bytes * static_cast<std::size_t>(f.height - 1) + pixels_bytes)
+    return where + ": " + std::to_string(frame.data.size()) + " bytes, " + std::to_string(f.width) +
+           "x" + std::to_string(f.height) + " " + pixel_format_name(f.pixel_format) + " needs more";
+  return {};
+}
+
 /// Three interleaved samples per pixel into three float rows (vectorised).
 template <typename Sample>
 void deinterleave3(const Sample* __restrict in, int width, float* __restrict a, float* __restrict b,
@@ -79,17 +99,8 @@ Result<imaging::Image, std::string> frame_to_dn(const Frame& frame) {
       }
     return Out::success(std::move(image));
   }
-  const int bpp = bytes_per_pixel(f.pixel_format);
-  const std::size_t row_bytes =
-      f.row_bytes != 0 ? f.row_bytes : static_cast<std::size_t>(f.width) * bpp;
-  if (row_bytes < static_cast<std::size_t>(f.width) * bpp)
-    return Out::failure(where + ": row stride " + std::to_string(row_bytes) +
-                        " shorter than a row of " + std::to_string(f.width) + " pixels");
-  if (frame.data.size() <
-      row_bytes * static_cast<std::size_t>(f.height - 1) + static_cast<std::size_t>(f.width) * bpp)
-    return Out::failure(where + ": " + std::to_string(frame.data.size()) + " bytes, " +
-                        std::to_string(f.width) + "x" + std::to_string(f.height) + " " +
-                        pixel_format_name(f.pixel_format) + " needs more");
+  const std::size_t row_bytes = row_stride(f);
+  if (auto problem = layout_problem(frame); !problem.empty()) return Out::failure(problem);
   const bool colour = f.pixel_format == PixelFormat::kRgb8 ||
                       f.pixel_format == PixelFormat::kBgr8 ||
                       f.pixel_format == PixelFormat::kRgb16 || f.pixel_format == PixelFormat::kYuyv;
@@ -154,19 +165,10 @@ Result<ElectronFrame, std::string> frame_to_electrons(const Frame& frame,
     return Converted::success(
         {imaging::dn_to_electrons(dn.value(), model), imaging::saturated_share(dn.value(), model)});
   }
-  const std::string where = "frame " + std::to_string(frame.sequence);
-  if (f.width <= 0 || f.height <= 0) return Converted::failure(where + ": empty size");
-  const int bpp = bytes_per_pixel(p);
-  const std::size_t row_bytes =
-      f.row_bytes != 0 ? f.row_bytes : static_cast<std::size_t>(f.width) * bpp;
-  if (row_bytes < static_cast<std::size_t>(f.width) * bpp)
-    return Converted::failure(where + ": row stride " + std::to_string(row_bytes) +
-                              " shorter than a row of " + std::to_string(f.width) + " pixels");
-  if (frame.data.size() <
-      row_bytes * static_cast<std::size_t>(f.height - 1) + static_cast<std::size_t>(f.width) * bpp)
-    return Converted::failure(where + ": " + std::to_string(frame.data.size()) + " bytes, " +
-                              std::to_string(f.width) + "x" + std::to_string(f.height) + " " +
-                              pixel_format_name(p) + " needs more");
+  if (f.width <= 0 || f.height <= 0)
+    return Converted::failure("frame " + std::to_string(frame.sequence) + ": empty size");
+  if (auto problem = layout_problem(frame); !problem.empty()) return Converted::failure(problem);
+  const std::size_t row_bytes = row_stride(f);
   const int channels =
       p == PixelFormat::kRgb8 || p == PixelFormat::kBgr8 || p == PixelFormat::kRgb16 ? 3 : 1;
   const bool wide =
