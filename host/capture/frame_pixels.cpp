@@ -7,7 +7,6 @@
 
 #include <algorithm>
 #include <bit>
-#include <cmath>
 #include <cstring>
 #include <vector>
 
@@ -177,9 +176,7 @@ Result<ElectronFrame, std::string> frame_to_electrons(const Frame& frame,
   const int first = p == PixelFormat::kBgr8 ? 2 : 0;
   const auto black = static_cast<float>(model.black_level);
   const auto gain = static_cast<float>(model.gain);
-  const double code_ceiling = std::pow(2.0, model.bit_depth) - 1;
-  const double well_ceiling = model.black_level + model.full_well / model.gain;
-  const auto ceiling = static_cast<float>(std::min(code_ceiling, well_ceiling) - 0.5);
+  const auto ceiling = static_cast<float>(imaging::saturation_ceiling_dn(model));
   ElectronFrame out;
   out.electrons = planes(channels, f.width, f.height);
   std::vector<std::uint16_t> samples16(wide ? static_cast<std::size_t>(channels) * f.width : 0);

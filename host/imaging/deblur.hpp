@@ -47,8 +47,8 @@ struct DeblurOptions {
   /// (TotalVariationSettings::weight_per_noise).
   double tv_weight_per_noise = TotalVariationSettings{}.weight_per_noise;
   int threads = 2;
-  /// joint-wiener and wiener-avg: FFTW planning. A session that deblurs many frames
-  /// of one size measures once (FFTW keeps what it learnt for the process).
+  /// joint-wiener and wiener-avg: FFTW planning (row_fft.hpp). A session measures
+  /// before it streams and deblurs with kMeasuredIfKnown.
   PlanEffort plan_effort = PlanEffort::kEstimate;
 };
 

@@ -8,10 +8,14 @@
 
 namespace flutterscan::imaging {
 
-double saturated_share(const Image& dn, const CaptureModel& model) {
+double saturation_ceiling_dn(const CaptureModel& model) {
   const double code_ceiling = std::pow(2.0, model.bit_depth) - 1;
   const double well_ceiling = model.black_level + model.full_well / model.gain;
-  const double ceiling = std::min(code_ceiling, well_ceiling) - 0.5;
+  return std::min(code_ceiling, well_ceiling) - 0.5;
+}
+
+double saturated_share(const Image& dn, const CaptureModel& model) {
+  const double ceiling = saturation_ceiling_dn(model);
   std::size_t saturated = 0, total = 0;
   for (const auto& plane : dn.channels) {
     for (float v : plane.pixels) saturated += v >= ceiling ? 1 : 0;

@@ -25,8 +25,12 @@ inline constexpr double kSaturationGuardShare = 0.001;
 /// \brief Flag a frame when its residual exceeds the predicted noise variance this many times.
 inline constexpr double kMisfitGuardRatio = 3.0;
 
-/// \brief Share of samples of `dn` at or above the ceiling: the full well (in DN
-/// above the black level) or the largest code of the bit depth, whichever is lower.
+/// \brief The DN from which a sample counts as saturated: the full well (in DN
+/// above the black level) or the largest code of the bit depth, whichever is
+/// lower, less half a code.
+double saturation_ceiling_dn(const CaptureModel& model);
+
+/// \brief Share of samples of `dn` at or above saturation_ceiling_dn().
 double saturated_share(const Image& dn, const CaptureModel& model);
 
 /// \brief Mean squared residual of `electrons` against `latent` blurred through each

@@ -29,13 +29,16 @@ std::string check_symbologies(const std::string& symbologies) {
 
 namespace {
 
-/// The image as ZXing's 8-bit luminance.
-std::vector<std::uint8_t> luminance(const imaging::Plane& latent) {
-  std::vector<std::uint8_t> lum(latent.pixels.size());
-  std::transform(latent.pixels.begin(), latent.pixels.end(), lum.begin(), [](float v) {
-    return static_cast<std::uint8_t>(std::clamp(v, 0.0f, 1.0f) * 255.0f + 0.5f);
-  });
-  return lum;
+/// Columns [x0, x1) of rows [y0, y1) of `latent` into `lum` (same layout) as
+/// ZXing's 8-bit luminance.
+void to_luminance(const imaging::Plane& latent, int x0, int y0, int x1, int y1,
+                  std::vector<std::uint8_t>& lum) {
+  for (int y = y0; y < y1; ++y) {
+    const auto row = latent.row(y);
+    std::uint8_t* out = lum.data() + static_cast<std::size_t>(y) * latent.width;
+    for (int x = x0; x < x1; ++x)
+      out[x] = static_cast<std::uint8_t>(std::clamp(row[x], 0.0f, 1.0f) * 255.0f + 0.5f);
+  }
 }
 
 DecodedCode decoded_code(const ZXing::Result& result, int offset_x, int offset_y) {
@@ -73,7 +76,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
                              bool try_rotate, std::span<const DecodeWindow> windows) {
   BarcodeReadout out;
   if (latent.empty()) return out;
-  const std::vector<std::uint8_t> lum = luminance(latent);
+  std::vector<std::uint8_t> lum(latent.pixels.size());  // filled window by window
   ZXing::DecodeHints hints;
   hints.setFormats(ZXing::BarcodeFormatsFromString(symbologies))
       .setTryHarder(true)
@@ -85,6 +88,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
     const int x1 = std::clamp(w.x + w.width, x0, latent.width),
               y1 = std::clamp(w.y + w.height, y0, latent.height);
     if (x1 - x0 < 1 || y1 - y0 < 1) continue;
+    to_luminance(latent, x0, y0, x1, y1, lum);
     const ZXing::ImageView view(lum.data() + static_cast<std::size_t>(y0) * latent.width + x0,
                                 x1 - x0, y1 - y0, ZXing::ImageFormat::Lum, latent.width);
     ZXing::Results results;
@@ -143,6 +147,12 @@ std::vector<LabelRegion> find_label_regions(const imaging::Plane& latent, double
 
 std::string decode_area_name(DecodeArea area) {
   return area == DecodeArea::kFrame ? "frame" : "labels";
+}
+
+std::optional<DecodeArea> decode_area_from_name(const std::string& name) {
+  for (DecodeArea area : {DecodeArea::kFrame, DecodeArea::kLabels})
+    if (decode_area_name(area) == name) return area;
+  return std::nullopt;
 }
 
 std::vector<DecodeWindow> decode_windows(std::span<const LabelRegion> runs, int width, int height,

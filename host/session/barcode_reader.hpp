@@ -3,6 +3,7 @@
 // label regions (bright paper on the darker belt) whether a code was read on
 // them or not: a region without a decode is what becomes a NO-READ.
 
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -83,6 +84,8 @@ enum class DecodeArea { kFrame, kLabels };
 
 /// \brief "frame", "labels".
 std::string decode_area_name(DecodeArea area);
+/// \brief The decode area called `name` (see decode_area_name), if any.
+std::optional<DecodeArea> decode_area_from_name(const std::string& name);
 
 /// \brief Windows of a `width` x `height` latent around `runs` (found along
 /// the motion: x for +-x, y for +-y, in the motion frame of `direction`), each

@@ -244,12 +244,11 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     std::string area;
     r.get("decode_area", area);
     if (!area.empty()) {
-      if (area != decode_area_name(DecodeArea::kLabels) &&
-          area != decode_area_name(DecodeArea::kFrame))
+      const auto a = decode_area_from_name(area);
+      if (!a)
         return Out::failure(origin + ": processing.decode_area '" + area +
                             "' is neither labels nor frame");
-      c.processing.decode_area =
-          area == decode_area_name(DecodeArea::kFrame) ? DecodeArea::kFrame : DecodeArea::kLabels;
+      c.processing.decode_area = *a;
     }
   }
   if (const toml::table* t = root["output"].as_table()) {
