@@ -21,6 +21,7 @@
 #include "imaging/flat_field.hpp"
 #include "imaging/frame_conversion.hpp"
 #include "imaging/metrics.hpp"
+#include "imaging/motion_refinement.hpp"
 #include "sim/scene.hpp"
 
 namespace flutterscan::app {
@@ -31,6 +32,7 @@ struct DeblurFlags {
   std::string descriptor;
   std::string code;
   double blur = -1;
+  double blur_tolerance_pct = -1;  ///< -1: 10 for codes of two or more LEDs, else 0
   std::string direction = "+x";
   std::string crosstalk;
   double black_level = 0;
@@ -185,10 +187,12 @@ void run(const DeblurFlags& f) {
   auto start = std::chrono::steady_clock::now();
   const auto frame = read_frame(f.input);
   if (!frame.ok()) throw UsageError(frame.error());
-  const imaging::CaptureModel model = f.descriptor.empty()
-                                          ? model_from_flags(f, frame.value())
-                                          : model_from_descriptor(f, frame.value());
+  imaging::CaptureModel model = f.descriptor.empty() ? model_from_flags(f, frame.value())
+                                                     : model_from_descriptor(f, frame.value());
   const double read_ms = elapsed_ms(start);
+  if (f.blur_tolerance_pct >= 0 && !(f.blur_tolerance_pct < 100))
+    throw UsageError("--blur-tolerance must be a percentage >= 0 and < 100, not " +
+                     std::to_string(f.blur_tolerance_pct));
 
   start = std::chrono::steady_clock::now();
   imaging::DeblurOptions options;
@@ -206,6 +210,35 @@ void run(const DeblurFlags& f) {
     if (auto error = imaging::apply_flat_field(electrons, flat.value()); !error.empty())
       throw UsageError("flat field '" + f.flat + "': " + error);
   }
+  // The blur refined on the frame within the tolerance (RGB frames of a multi-LED code).
+  const double tolerance_pct =
+      f.blur_tolerance_pct >= 0 ? f.blur_tolerance_pct : (model.code.leds() >= 2 ? 10.0 : 0.0);
+  nlohmann::json motion;
+  start = std::chrono::steady_clock::now();
+  if (tolerance_pct > 0 && !model.bayer_rggb && model.code.leds() >= 2) {
+    imaging::MotionRefinementOptions refine;
+    refine.tolerance = tolerance_pct / 100;
+    const auto refined = imaging::refine_motion(electrons, model, refine);
+    if (!refined.ok()) throw UsageError("'" + f.input + "': refining the blur: " + refined.error());
+    const auto& r = refined.value();
+    motion = {{"given_blur_px", model.blur_px},
+              {"tolerance_pct", tolerance_pct},
+              {"edges", r.edges},
+              {"residual_per_sample", r.residual_per_sample}};
+    if (r.edges) {
+      motion["refined_blur_px"] = r.blur_px;
+      motion["standard_error_px"] = r.standard_error_px;
+      motion["speed_ratio"] = r.speed_ratio;
+      motion["at_tolerance_edge"] = r.at_range_edge;
+      if (!r.at_range_edge) {
+        model.blur_px = r.blur_px;
+        model.speed_ratio = r.speed_ratio;
+      }
+    }
+    motion["used"] = r.edges && !r.at_range_edge;
+  }
+  const double refine_ms = elapsed_ms(start);
+  start = std::chrono::steady_clock::now();
   const auto result =
       model.bayer_rggb ? imaging::deblur_bayer(electrons.channels[0], model, options, *bayer_mode)
                        : imaging::deblur(electrons, model, options);
@@ -241,8 +274,10 @@ void run(const DeblurFlags& f) {
         {"input", f.input},
         {"output", f.output},
         {"method", f.method},
-        {"timings_ms", {{"read", read_ms}, {"deblur", deblur_ms}, {"write", write_ms}}},
+        {"timings_ms",
+         {{"read", read_ms}, {"refine", refine_ms}, {"deblur", deblur_ms}, {"write", write_ms}}},
         {"noise_variance_e2", result.value().noise_variance}};
+    if (!motion.is_null()) report["motion"] = motion;
     if (f.decode) {
       report["timings_ms"]["decode"] = decode_ms;
       report["decoded"] = decoded;
@@ -253,6 +288,19 @@ void run(const DeblurFlags& f) {
   }
   std::cout << "wrote " << f.output << " (" << f.method << ", " << static_cast<int>(deblur_ms)
             << " ms)\n";
+  if (!motion.is_null()) {
+    if (!motion["edges"].get<bool>())
+      std::cout << "blur " << motion["given_blur_px"].get<double>()
+                << " px used as given: the frame has no edges along the motion to refine it\n";
+    else
+      std::cout << "blur " << motion["given_blur_px"].get<double>() << " px refined to "
+                << motion["refined_blur_px"].get<double>() << " +- "
+                << motion["standard_error_px"].get<double>() << " px"
+                << (motion["used"].get<bool>() ? ""
+                                               : " (on the edge of the tolerance: not used, "
+                                                 "check the blur or widen --blur-tolerance)")
+                << "\n";
+  }
   if (!f.truth.empty())
     std::cout << "against " << f.truth << ": PSNR " << psnr_db << " dB, SSIM " << ssim_index
               << "\n";
@@ -277,6 +325,11 @@ void add_deblur(CLI::App& app) {
   command->add_option("--code", f->code, "LED code (without a descriptor)");
   command->add_option("--blur", f->blur,
                       "motion during the exposure, pixels (without a descriptor)");
+  command
+      ->add_option("--blur-tolerance", f->blur_tolerance_pct,
+                   "refine the blur on the frame within +-PCT% of --blur or the descriptor's "
+                   "blur_px (0: use it exactly; default 10 for codes of two or more LEDs)")
+      ->check(CLI::Range(0.0, 1e9));
   command->add_option("--direction", f->direction, "+x, -x, +y or -y")->capture_default_str();
   command->add_option("--crosstalk", f->crosstalk, "LED-to-channel matrix \"m00,m01,m02;m10,...\"");
   command->add_option("--black-level", f->black_level, "DN")->capture_default_str();

@@ -12,6 +12,7 @@
 #include "app/image_io.hpp"
 #include "imaging/capture_descriptor.hpp"
 #include "sim/forward_model.hpp"
+#include "sim/pixel_integration.hpp"
 #include "sim/scene.hpp"
 
 namespace flutterscan::app {
@@ -97,21 +98,25 @@ void run(const SimulateOptions& o) {
                        model.direction == imaging::Direction::kMinusX;
   require(model.blur_px < (along_x ? o.width : o.height),
           "--blur must be shorter than the image along the motion");
-  const auto truth = sim::render_scene(spec.value());
-  if (!truth.ok()) throw UsageError("--scene: " + truth.error());
+  // The scene is rendered finer than the pixels so that it moves continuously
+  // within each pixel; the truth is what a sharp capture of it records.
+  const auto fine = sim::render_scene(spec.value(), sim::kSimSupersample);
+  if (!fine.ok()) throw UsageError("--scene: " + fine.error());
+  const imaging::Plane truth = sim::bin_pixels(fine.value(), sim::kSimSupersample);
 
-  const auto frame =
-      sim::record_frame(sim::expected_electrons(truth.value(), model), model, o.seed);
+  const auto frame = sim::record_frame(
+      sim::expected_electrons(fine.value(), model, sim::kSimSupersample), model, o.seed);
   const std::string descriptor_path = sibling_path(o.output, "", ".json");
   const std::string truth_path = sibling_path(o.output, ".truth", ".png");
   imaging::Image truth_image;
-  truth_image.channels.push_back(truth.value());
+  truth_image.channels.push_back(truth);
   for (float& v : truth_image.channels[0].pixels) v *= 65535.0f;
   nlohmann::json descriptor = imaging::to_descriptor(model);
   descriptor["simulation"] = {{"scene", o.scene},
                               {"seed", o.seed},
                               {"electrons", o.electrons},
                               {"cap", o.cap},
+                              {"supersample", sim::kSimSupersample},
                               {"truth", truth_path}};
   for (const auto& error :
        {write_png16(o.output, frame), write_text(descriptor_path, descriptor.dump(2) + "\n"),

@@ -32,6 +32,7 @@
 #include "plot/heat_map.hpp"
 #include "plot/line_chart.hpp"
 #include "sim/forward_model.hpp"
+#include "sim/pixel_integration.hpp"
 #include "sim/scene.hpp"
 
 namespace {
@@ -42,8 +43,9 @@ constexpr double kBlur = 52;
 
 struct Scene {
   std::string spec;
-  std::string content;  ///< what a decoder must read; empty for text
-  imaging::Plane reflectance;
+  std::string content;         ///< what a decoder must read; empty for text
+  imaging::Plane fine;         ///< rendered sim::kSimSupersample times finer than the pixels
+  imaging::Plane reflectance;  ///< the truth: what a sharp capture records
 };
 
 struct Case {
@@ -76,12 +78,13 @@ std::vector<Scene> scenes(double print_blur, double texture) {
     parsed.value().module_px = 3;
     parsed.value().print_blur_px = print_blur;
     parsed.value().texture = texture;
-    auto rendered = sim::render_scene(parsed.value());
+    auto rendered = sim::render_scene(parsed.value(), sim::kSimSupersample);
     if (!rendered.ok()) {
       std::fprintf(stderr, "accuracy_sweep: %s: %s\n", spec.c_str(), rendered.error().c_str());
       std::exit(1);
     }
-    out.push_back({spec, content, std::move(rendered.value())});
+    const imaging::Plane truth = sim::bin_pixels(rendered.value(), sim::kSimSupersample);
+    out.push_back({spec, content, std::move(rendered.value()), truth});
   }
   return out;
 }
@@ -168,7 +171,7 @@ int main(int argc, char** argv) {
           bench::bench_camera(schemes[k.scheme], k.electrons, k.cap, k.read_noise, kBlur);
       const Scene& scene = scene_set[k.scene];
       const auto frame = imaging::dn_to_electrons(
-          sim::record_frame(sim::expected_electrons(scene.reflectance, model), model,
+          sim::record_frame(sim::expected_electrons(scene.fine, model, sim::kSimSupersample), model,
                             static_cast<std::uint64_t>(k.seed) * 7919 + k.scene),
           model);
       const auto region = imaging::scored_region(scene.reflectance.width, scene.reflectance.height,

@@ -26,6 +26,7 @@
 #include "imaging/total_variation.hpp"
 #include "plot/line_chart.hpp"
 #include "sim/forward_model.hpp"
+#include "sim/pixel_integration.hpp"
 #include "sim/scene.hpp"
 
 namespace {
@@ -152,8 +153,9 @@ int main(int argc, char** argv) {
       auto spec = sim::parse_scene(spec_text).value();
       spec.width = 640;
       spec.height = 360;
-      const Plane truth = sim::render_scene(spec).value();
-      const auto expected = sim::expected_electrons(truth, model);
+      const Plane fine = sim::render_scene(spec, sim::kSimSupersample).value();
+      const Plane truth = sim::bin_pixels(fine, sim::kSimSupersample);
+      const auto expected = sim::expected_electrons(fine, model, sim::kSimSupersample);
       const auto region = imaging::scored_region(truth.width, truth.height, 52, model.direction);
       for (int seed = 1; seed <= seeds; ++seed, ++count) {
         const auto electrons = imaging::dn_to_electrons(

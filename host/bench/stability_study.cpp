@@ -23,6 +23,7 @@
 #include "plot/line_chart.hpp"
 #include "sim/colour_scene.hpp"
 #include "sim/forward_model.hpp"
+#include "sim/pixel_integration.hpp"
 #include "sim/scene.hpp"
 #include "sim/speed_profile.hpp"
 #include "sim/timeline_forward.hpp"
@@ -47,7 +48,8 @@ const std::vector<std::string> kStandardMethods = {"joint-wiener", "rl", "tv"};
 
 struct Scene {
   std::string content;
-  Plane grey;
+  Plane fine;  ///< grey, rendered sim::kSimSupersample times finer than the pixels
+  Plane grey;  ///< the truth: what a sharp capture of `fine` records
   std::vector<Plane> red, blue;  ///< colour versions (bands per LED)
 };
 
@@ -141,7 +143,7 @@ std::vector<Factor> make_factors() {
     f.log_x = true;
     f.run = [](double x, const Trial& t) {
       const auto m = nominal_model(t.scheme, x);
-      return nominal_run(m, m, sim::expected_electrons(t.scene.grey, m), t);
+      return nominal_run(m, m, sim::expected_electrons(t.scene.fine, m, sim::kSimSupersample), t);
     };
     factors.push_back(f);
   }
@@ -154,7 +156,8 @@ std::vector<Factor> make_factors() {
       const auto truth = nominal_model(t.scheme, kNominalElectrons);
       auto assumed = truth;
       assumed.blur_px = kBlur * (1 + x / 100);
-      return nominal_run(truth, assumed, sim::expected_electrons(t.scene.grey, truth), t);
+      return nominal_run(truth, assumed,
+                         sim::expected_electrons(t.scene.fine, truth, sim::kSimSupersample), t);
     };
     factors.push_back(f);
   }
@@ -167,7 +170,9 @@ std::vector<Factor> make_factors() {
       const auto boundaries =
           sim::jittered_slot_boundaries(m.code.length(), kBlur, x, t.noise_seed * 3 + 1);
       const auto segments = imaging::segments_from_boundaries(m.code, boundaries);
-      return nominal_run(m, m, sim::expected_electrons_timeline(t.scene.grey, m, segments), t);
+      return nominal_run(
+          m, m, sim::expected_electrons_timeline(t.scene.fine, m, segments, sim::kSimSupersample),
+          t);
     };
     factors.push_back(f);
   }
@@ -180,7 +185,9 @@ std::vector<Factor> make_factors() {
       const auto m = nominal_model(t.scheme, kNominalElectrons);
       const auto boundaries = sim::accelerated_slot_boundaries(m.code.length(), kBlur, x);
       const auto segments = imaging::segments_from_boundaries(m.code, boundaries);
-      return nominal_run(m, m, sim::expected_electrons_timeline(t.scene.grey, m, segments), t);
+      return nominal_run(
+          m, m, sim::expected_electrons_timeline(t.scene.fine, m, segments, sim::kSimSupersample),
+          t);
     };
     factors.push_back(f);
   }
@@ -193,7 +200,8 @@ std::vector<Factor> make_factors() {
       auto truth = assumed;
       std::mt19937_64 rng(t.noise_seed * 31 + 7);
       for (double& entry : truth.crosstalk) entry *= 1 + (rng() % 2 ? x : -x) / 100;
-      return nominal_run(truth, assumed, sim::expected_electrons(t.scene.grey, truth), t);
+      return nominal_run(truth, assumed,
+                         sim::expected_electrons(t.scene.fine, truth, sim::kSimSupersample), t);
     };
     factors.push_back(f);
   }
@@ -208,7 +216,7 @@ std::vector<Factor> make_factors() {
       for (int c = 0; c < 3; ++c)
         white = std::max(white, imaging::channel_white_electrons(unit, c));
       const auto m = nominal_model(t.scheme, x * unit.full_well / white);
-      return nominal_run(m, m, sim::expected_electrons(t.scene.grey, m), t);
+      return nominal_run(m, m, sim::expected_electrons(t.scene.fine, m, sim::kSimSupersample), t);
     };
     factors.push_back(f);
   }
@@ -221,7 +229,7 @@ std::vector<Factor> make_factors() {
       for (int c = 0; c < 3; ++c)
         m.ambient_electrons[static_cast<std::size_t>(c)] =
             x / 100 * imaging::channel_white_electrons(m, c);
-      return nominal_run(m, m, sim::expected_electrons(t.scene.grey, m), t);
+      return nominal_run(m, m, sim::expected_electrons(t.scene.fine, m, sim::kSimSupersample), t);
     };
     factors.push_back(f);
   }
@@ -236,7 +244,8 @@ std::vector<Factor> make_factors() {
       auto assumed = truth;
       if (x > 0.5) truth.encoding = imaging::Encoding::kSrgb;
       if (x > 1.5) assumed.encoding = imaging::Encoding::kSrgb;
-      return nominal_run(truth, assumed, sim::expected_electrons(t.scene.grey, truth), t);
+      return nominal_run(truth, assumed,
+                         sim::expected_electrons(t.scene.fine, truth, sim::kSimSupersample), t);
     };
     factors.push_back(f);
   }
@@ -495,13 +504,14 @@ std::string run_stability_study(const StabilityOptions& options, std::FILE* repo
     spec.width = options.width;
     spec.height = options.height;
     spec.module_px = 3;
-    auto grey = sim::render_scene(spec);
+    auto fine = sim::render_scene(spec, sim::kSimSupersample);
     auto red = sim::render_colour_scene(spec, sim::kRedInk);
     auto blue = sim::render_colour_scene(spec, sim::kBlueInk);
-    if (!grey.ok()) return spec_text + ": " + grey.error();
+    if (!fine.ok()) return spec_text + ": " + fine.error();
+    Plane grey = sim::bin_pixels(fine.value(), sim::kSimSupersample);
     if (!red.ok() || !blue.ok()) return spec_text + ": the colour scene failed";
-    scenes.push_back(
-        {content, std::move(grey.value()), std::move(red.value()), std::move(blue.value())});
+    scenes.push_back({content, std::move(fine.value()), std::move(grey), std::move(red.value()),
+                      std::move(blue.value())});
   }
 
   std::vector<Job> jobs;

@@ -85,6 +85,8 @@ nlohmann::json to_descriptor(const CaptureModel& m) {
       {"code_leds", m.code.leds()},
       {"led_of_bit", std::vector<int>(m.led_of_bit.begin(), m.led_of_bit.begin() + m.code.leds())},
       {"blur_px", m.blur_px},
+      {"speed_ratio", m.speed_ratio},
+      {"pixel_model", m.pixel_model == PixelModel::kTapGrid ? "tap-grid" : "box-aperture"},
       {"direction", direction_name(m.direction)},
       {"channels", m.channels},
       {"leds", m.leds},
@@ -132,6 +134,16 @@ Result<CaptureModel, std::string> from_descriptor(const nlohmann::json& d) {
     for (std::size_t k = 0; k < led_of_bit.size(); ++k)
       m.led_of_bit[k] = static_cast<int>(led_of_bit[k]);
     m.blur_px = number(d, "blur_px");
+    if (d.contains("speed_ratio")) m.speed_ratio = number(d, "speed_ratio");
+    if (d.contains("pixel_model")) {
+      const auto& pixel = d.at("pixel_model");
+      if (pixel == "box-aperture")
+        m.pixel_model = PixelModel::kBoxAperture;
+      else if (pixel == "tap-grid")
+        m.pixel_model = PixelModel::kTapGrid;
+      else
+        throw FieldError("field 'pixel_model' must be \"box-aperture\" or \"tap-grid\"");
+    }
     const auto& direction = field(d, "direction");
     if (!direction.is_string() || !parse_direction(direction.get<std::string>(), m.direction))
       throw FieldError("field 'direction' must be \"+x\", \"-x\", \"+y\" or \"-y\"");

@@ -1,5 +1,7 @@
 #include "imaging/capture_model.hpp"
 
+#include "imaging/exposure_timeline.hpp"
+
 #include <algorithm>
 #include <cmath>
 
@@ -8,25 +10,6 @@ namespace {
 
 bool finite_non_negative(double v) {
   return std::isfinite(v) && v >= 0;
-}
-
-/// Adds `weight` spread evenly over [start, start + width) to the taps it overlaps.
-void deposit_box(std::vector<double>& taps, double start, double width, double weight) {
-  if (width <= 1e-12) {
-    const auto j = static_cast<std::size_t>(std::floor(start));
-    taps[std::min(j, taps.size() - 1)] += weight;
-    return;
-  }
-  const double end = start + width;
-  for (auto j = static_cast<std::size_t>(std::floor(start)); j < taps.size(); ++j) {
-    const double lo = std::max(start, static_cast<double>(j));
-    const double hi = std::min(end, static_cast<double>(j + 1));
-    if (hi <= lo) {
-      if (static_cast<double>(j) >= end) break;
-      continue;
-    }
-    taps[j] += weight * (hi - lo) / width;
-  }
 }
 
 }  // namespace
@@ -43,6 +26,10 @@ std::string capture_model_problem(const CaptureModel& m) {
         m.led_of_bit[static_cast<std::size_t>(k)] >= m.leds)
       return "led_of_bit[" + std::to_string(k) + "] names no LED";
   if (!std::isfinite(m.blur_px) || m.blur_px < 0) return "blur must be a finite number >= 0 pixels";
+  if (!std::isfinite(m.speed_ratio) || m.speed_ratio < kMinSpeedRatio ||
+      m.speed_ratio > 1 / kMinSpeedRatio)
+    return "the speed ratio (end / start of the exposure) must be between " +
+           std::to_string(kMinSpeedRatio) + " and " + std::to_string(1 / kMinSpeedRatio);
   if (m.crosstalk.size() != static_cast<std::size_t>(m.channels * m.leds))
     return "the crosstalk matrix must have " + std::to_string(m.channels) + " rows of " +
            std::to_string(m.leds) + " entries";
@@ -76,24 +63,12 @@ std::vector<double> budgeted_led_electrons(const LedCode& code, double electrons
   return intensity;
 }
 
+std::vector<double> slot_edges(const CaptureModel& m) {
+  return accelerating_slot_edges(m.code.length(), m.blur_px, m.speed_ratio);
+}
+
 std::vector<double> channel_psf(const CaptureModel& m, int channel) {
-  const int length = m.code.length();
-  const double slot_width = m.blur_px / length;
-  std::vector<double> taps(static_cast<std::size_t>(std::floor(m.blur_px)) + 1, 0.0);
-  for (int t = 0; t < length; ++t) {
-    double weight = 0;
-    for (int k = 0; k < m.code.leds(); ++k) {
-      if (!m.code.is_on(t, k)) continue;
-      const int led = m.led_of_bit[static_cast<std::size_t>(k)];
-      weight += m.crosstalk[static_cast<std::size_t>(channel * m.leds + led)] *
-                m.led_electrons[static_cast<std::size_t>(led)];
-    }
-    if (weight > 0) deposit_box(taps, t * slot_width, slot_width, weight);
-  }
-  const double ambient = m.ambient_electrons[static_cast<std::size_t>(channel)];
-  if (ambient > 0) deposit_box(taps, 0.0, m.blur_px, ambient);
-  while (taps.size() > 1 && taps.back() == 0.0) taps.pop_back();
-  return taps;
+  return timeline_channel_psf(m, channel, slot_segments(m));
 }
 
 double channel_white_electrons(const CaptureModel& m, int channel) {

@@ -11,6 +11,7 @@
 
 #include "flutterscan/common/led_code.hpp"
 #include "imaging/image.hpp"
+#include "imaging/motion_psf.hpp"
 
 namespace flutterscan::imaging {
 
@@ -20,10 +21,18 @@ enum class Direction { kPlusX, kMinusX, kPlusY, kMinusY };
 /// \brief How stored pixel values relate to light.
 enum class Encoding { kLinear, kSrgb, kGamma };
 
+/// \brief Slowest end / start speed ratio a capture model takes (and 1 / it the
+/// fastest): a belt that stops or reverses within an exposure is outside the model.
+inline constexpr double kMinSpeedRatio = 0.2;
+
 struct CaptureModel {
   LedCode code;                                      ///< the exposure's LED pattern
   std::array<int, kMaxLeds> led_of_bit{0, 1, 2, 3};  ///< code bit k drives LED led_of_bit[k]
   double blur_px = 52;                               ///< total motion during the exposure, pixels
+  /// Speed at the end of the exposure / speed at its start (constant acceleration
+  /// between them, same total motion); 1 = constant speed.
+  double speed_ratio = 1;
+  PixelModel pixel_model = PixelModel::kBoxAperture;  ///< how motion meets the pixel grid
   Direction direction = Direction::kPlusX;
   int channels = 3;  ///< camera channels: 3 (RGB) or 1 (mono)
   /// crosstalk[c * leds + led]: share of LED `led`'s light in channel c (rows = channels).
@@ -49,10 +58,15 @@ std::string capture_model_problem(const CaptureModel& model);
 /// design.md: I = min(E / n, cap * E / L), n the bit's on-slots.
 std::vector<double> budgeted_led_electrons(const LedCode& code, double electrons, double cap);
 
+/// \brief Object displacement (pixels) at the L + 1 slot edges: blur_px in all,
+/// quadratic in the slot index when speed_ratio != 1 (motion_psf.hpp).
+std::vector<double> slot_edges(const CaptureModel& model);
+
 /// \brief Channel c's motion PSF along the motion, in e- per unit reflectance:
-/// tap j is the light that a white point deposits j pixels downstream. Each
-/// slot is a box of width blur / L (sub-pixel exact); ambient light is a box
-/// over the whole exposure. Sums to the white level of the channel.
+/// tap j is the light that a white point deposits j pixels downstream. Slot t
+/// spans [slot_edges[t], slot_edges[t + 1]] of motion (sub-pixel exact), laid
+/// onto the pixels by the model's pixel model; ambient light is spread over
+/// every slot alike. Sums to the white level of the channel.
 std::vector<double> channel_psf(const CaptureModel& model, int channel);
 
 /// \brief Expected electrons a white object gives channel c over the exposure.

@@ -6,27 +6,6 @@
 namespace flutterscan::imaging {
 namespace {
 
-/// Adds `weight` spread evenly over [start, start + width) to the taps it
-/// overlaps (the same arithmetic as channel_psf, so uniform timelines agree
-/// with it exactly).
-void deposit_box(std::vector<double>& taps, double start, double width, double weight) {
-  if (width <= 1e-12) {
-    const auto j = static_cast<std::size_t>(std::floor(std::max(0.0, start)));
-    taps[std::min(j, taps.size() - 1)] += weight;
-    return;
-  }
-  const double end = start + width;
-  for (auto j = static_cast<std::size_t>(std::floor(std::max(0.0, start))); j < taps.size(); ++j) {
-    const double lo = std::max(start, static_cast<double>(j));
-    const double hi = std::min(end, static_cast<double>(j + 1));
-    if (hi <= lo) {
-      if (static_cast<double>(j) >= end) break;
-      continue;
-    }
-    taps[j] += weight * (hi - lo) / width;
-  }
-}
-
 double timeline_end(std::span<const ExposureSegment> segments) {
   double end = 0;
   for (const auto& s : segments) end = std::max(end, s.start_px + s.width_px);
@@ -52,15 +31,13 @@ double mask_weight(const CaptureModel& m, std::uint8_t mask, int channel, int on
 
 std::vector<double> timeline_psf(const CaptureModel& m, int channel, int only_led,
                                  std::span<const ExposureSegment> segments) {
-  const double end = timeline_end(segments);
-  std::vector<double> taps(static_cast<std::size_t>(std::floor(end)) + 1, 0.0);
+  std::vector<double> taps(pixel_model_taps(timeline_end(segments), m.pixel_model), 0.0);
+  const double ambient_per_slot =
+      only_led < 0 ? m.ambient_electrons[static_cast<std::size_t>(channel)] / m.code.length() : 0;
   for (const auto& s : segments) {
-    const double weight = s.slot_fraction * mask_weight(m, s.mask, channel, only_led);
-    if (weight > 0) deposit_box(taps, s.start_px, s.width_px, weight);
-  }
-  if (only_led < 0) {
-    const double ambient = m.ambient_electrons[static_cast<std::size_t>(channel)];
-    if (ambient > 0) deposit_box(taps, 0.0, end, ambient);
+    const double weight =
+        s.slot_fraction * (mask_weight(m, s.mask, channel, only_led) + ambient_per_slot);
+    if (weight > 0) deposit_slot(taps, s.start_px, s.width_px, weight, m.pixel_model);
   }
   while (taps.size() > 1 && taps.back() == 0.0) taps.pop_back();
   return taps;
@@ -68,13 +45,8 @@ std::vector<double> timeline_psf(const CaptureModel& m, int channel, int only_le
 
 }  // namespace
 
-std::vector<ExposureSegment> uniform_segments(const CaptureModel& model) {
-  const int length = model.code.length();
-  const double slot_width = model.blur_px / length;
-  std::vector<ExposureSegment> segments;
-  for (int t = 0; t < length; ++t)
-    segments.push_back({t * slot_width, slot_width, model.code.mask(t), 1.0});
-  return segments;
+std::vector<ExposureSegment> slot_segments(const CaptureModel& model) {
+  return segments_from_boundaries(model.code, slot_edges(model));
 }
 
 std::vector<ExposureSegment> segments_from_boundaries(const LedCode& code,

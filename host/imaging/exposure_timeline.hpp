@@ -3,7 +3,7 @@
 // capture_model.hpp: a belt whose speed varies within the exposure (each slot
 // covers its own stretch of pixels) and a rolling-shutter row that sees the
 // cyclically repeated pattern from its own phase (fractional slots exact).
-// With uniform segments the PSFs equal channel_psf() tap for tap.
+// channel_psf() is the PSF of the model's own slot_segments().
 
 #include <cstdint>
 #include <span>
@@ -21,8 +21,9 @@ struct ExposureSegment {
   double slot_fraction = 1;  ///< share of a whole slot's light (1 = a whole slot)
 };
 
-/// \brief The nominal timeline: slot t from t s to (t + 1) s, s = blur / L.
-std::vector<ExposureSegment> uniform_segments(const CaptureModel& model);
+/// \brief The model's own timeline: slot t over [slot_edges[t], slot_edges[t + 1]]
+/// (t s to (t + 1) s, s = blur / L, at constant speed).
+std::vector<ExposureSegment> slot_segments(const CaptureModel& model);
 
 /// \brief Slot t covers [boundaries[t], boundaries[t + 1]) pixels (L + 1
 /// non-decreasing values): a speed that varies from slot to slot.
@@ -35,9 +36,10 @@ std::vector<ExposureSegment> segments_from_boundaries(const LedCode& code,
 /// the part of them it sees. Phase 0 gives uniform_segments().
 std::vector<ExposureSegment> cyclic_phase_segments(const CaptureModel& model, double phase_slots);
 
-/// \brief Channel c's PSF (e- per unit reflectance) for a timeline: as
-/// channel_psf(), with each segment's light spread over its pixels and the
-/// ambient light over [0, end of the last segment).
+/// \brief Channel c's PSF (e- per unit reflectance) for a timeline: each
+/// segment's light laid over the pixels it moved across by the model's pixel
+/// model, and the ambient light over every segment in proportion to its time
+/// (slot_fraction / L of the exposure).
 std::vector<double> timeline_channel_psf(const CaptureModel& model, int channel,
                                          std::span<const ExposureSegment> segments);
 

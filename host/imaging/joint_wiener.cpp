@@ -39,6 +39,13 @@ void filter_and_sum_channels(const RowFft& fft,
   }
 }
 
+double label_prior_power(double w) {
+  const double gradient = 2.0 - 2.0 * std::cos(w);
+  const double half = w / 2;  // pi f
+  const double aperture = half == 0 ? 1.0 : std::sin(half) / half;
+  return gradient / std::pow(aperture, 4);
+}
+
 std::vector<std::complex<double>> psf_spectrum(std::span<const double> taps, int n) {
   return real_dft_bins(taps, n);
 }
@@ -64,7 +71,7 @@ JointWiener::JointWiener(std::span<const ChannelPsf> channels, int width, double
   }
   for (std::size_t j = 0; j < bins; ++j) {
     const double w = 2.0 * std::numbers::pi * static_cast<double>(j) / n;
-    denominator[j] += lambda * (2.0 - 2.0 * std::cos(w));
+    denominator[j] += lambda * label_prior_power(w);
     if (denominator[j] <= 0) denominator[j] = 1e-30;
   }
   for (std::size_t c = 0; c < channels.size(); ++c) {

@@ -99,7 +99,7 @@ std::vector<Plane> solve_latents(const std::vector<Plane>& rows, const CaptureMo
                                  double lambda, int threads) {
   const int width = rows[0].width, height = rows[0].height;
   const int latents = static_cast<int>(bands.basis.size());
-  const auto segments = uniform_segments(model);
+  const auto segments = slot_segments(model);
   CaptureModel ambient_only = model;
   std::fill(ambient_only.led_electrons.begin(), ambient_only.led_electrons.end(), 0.0);
   std::vector<std::vector<double>> led_taps, ambient_taps;

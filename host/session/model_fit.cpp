@@ -24,6 +24,49 @@ double lap_ms(std::chrono::steady_clock::time_point& since) {
   return rounded(ms, 0.01);
 }
 
+/// Above this cross-channel residual per sample (about 1 when the grey model
+/// fits) a refined motion is not trusted: colour print, or no model fits.
+constexpr double kUnfitResidual = 3.0;
+
+/// Refines the encoder's motion on the frame (ModelFitConfig::blur_tolerance):
+/// `model` takes the refined motion when the frame has edges along it and the
+/// result is neither on the tolerance's edge nor unfit (then flagged).
+void refine_encoder_motion(const imaging::Image& electrons, imaging::CaptureModel& model,
+                           double tolerance, FittedFrame& out) {
+  imaging::MotionRefinementOptions options;
+  options.tolerance = tolerance;
+  const auto r = imaging::refine_motion(electrons, model, options);
+  if (!r.ok()) {
+    out.log["motion"] = {{"error", r.error()}};
+    return;
+  }
+  const auto& m = r.value();
+  nlohmann::json log = {{"encoder_blur_px", rounded(model.blur_px, 0.01)},
+                        {"edges", m.edges},
+                        {"residual", rounded(m.residual_per_sample, 0.01)}};
+  if (m.edges) {
+    log["refined_blur_px"] = rounded(m.blur_px, 0.001);
+    log["standard_error_px"] = rounded(m.standard_error_px, 0.001);
+    if (m.accelerating) log["speed_ratio"] = rounded(m.speed_ratio, 0.001);
+  }
+  out.refinement = m;
+  if (m.edges && m.at_range_edge) {
+    out.flags.emplace_back("blur-off-encoder");
+    log["used"] = false;
+  } else if (m.edges && m.residual_per_sample > kUnfitResidual) {
+    out.flags.emplace_back("motion-unfit");
+    log["used"] = false;
+  } else if (m.edges) {
+    model.blur_px = m.blur_px;
+    model.speed_ratio = m.speed_ratio;
+    out.refinement_used = true;
+    log["used"] = true;
+  } else {
+    log["used"] = false;
+  }
+  out.log["motion"] = std::move(log);
+}
+
 /// The blur searched around a nominal one: -20% to +25%, inside the frame.
 std::pair<double, double> blur_range(double nominal, int along) {
   return {std::max(2.0, 0.8 * nominal), std::min(1.25 * nominal, along / 2.0)};
@@ -47,6 +90,7 @@ Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
   nlohmann::json& times = out.log["fit_ms"];
 
   // 1. The blur.
+  out.encoder_blur_px = model.blur_px;
   const bool check_blur = config.encoder && config.blur_check_every > 0 &&
                           frame_index % static_cast<std::uint64_t>(config.blur_check_every) == 0;
   if ((!config.encoder || check_blur) && electrons.channel_count() >= 2) {
@@ -77,6 +121,12 @@ Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
 
   times["blur_estimate"] = lap_ms(lap);
 
+  // The encoder's motion refined on the frame (after the check, which judges the encoder).
+  if (config.encoder && config.blur_tolerance > 0 && electrons.channel_count() >= 2 &&
+      model.code.leds() >= 2)
+    refine_encoder_motion(electrons, model, config.blur_tolerance, out);
+  times["refine_motion"] = lap_ms(lap);
+
   // 2. The model, and the deblur under it.
   const auto choice =
       config.choose_latent
@@ -87,6 +137,7 @@ Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
   out.log["model"] = {{"chosen", choice.describe()},
                       {"grey_residual", rounded(choice.grey_residual, 0.01)},
                       {"blur_px", rounded(model.blur_px, 0.01)}};
+  if (model.speed_ratio != 1) out.log["model"]["speed_ratio"] = rounded(model.speed_ratio, 0.001);
   if (choice.latent == imaging::LatentModel::kPerChannel && electrons.channel_count() == 3) {
     auto result = imaging::deblur_per_channel(electrons, model, 1.0 / options.gradient_variance,
                                               options.threads);

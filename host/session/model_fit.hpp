@@ -4,7 +4,12 @@
 // fits: the session's worker calls this instead of deblurring directly.
 //
 // Per frame:
-// 1. blur: from the encoder when the line has one; otherwise estimated from
+// 1. blur: from the encoder when the line has one, refined on the frame within
+//    +-blur_tolerance of it (imaging/motion_refinement.hpp: also a speed change
+//    within the exposure when the data ask for it); a frame without edges
+//    along the motion keeps the encoder's blur, and a refinement on the edge of
+//    the tolerance ("blur-off-encoder") or with a residual that says the grey
+//    model does not fit ("motion-unfit") is flagged and not used. Otherwise estimated from
 //    the frame itself (imaging/blur_estimate.hpp) within -20%..+25% of the
 //    nominal blur, from about 90 rows; a frame without edges along the motion
 //    keeps the fallback (the last confident estimate) and is flagged
@@ -19,6 +24,7 @@
 // guard names that fired are returned as flags for session.jsonl.
 
 #include <nlohmann/json.hpp>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -26,16 +32,18 @@
 #include "imaging/capture_model.hpp"
 #include "imaging/deblur.hpp"
 #include "imaging/image.hpp"
+#include "imaging/motion_refinement.hpp"
 
 namespace flutterscan::session {
 
 /// \brief How a line is set up, as far as the model choice is concerned.
 struct ModelFitConfig {
-  bool encoder = true;        ///< the blur comes from the encoder
-  bool choose_latent = true;  ///< test each frame for colour print
-  double line_time_us = 0;    ///< > 0: rolling-shutter camera, per-row code phase
-  double slot_time_us = 100;  ///< the controller's slot time (for the row phases)
-  int blur_check_every = 0;   ///< > 0: estimate the blur every N frames and compare
+  bool encoder = true;           ///< the blur comes from the encoder
+  bool choose_latent = true;     ///< test each frame for colour print
+  double line_time_us = 0;       ///< > 0: rolling-shutter camera, per-row code phase
+  double slot_time_us = 100;     ///< the controller's slot time (for the row phases)
+  int blur_check_every = 0;      ///< > 0: estimate the blur every N frames and compare
+  double blur_tolerance = 0.10;  ///< with an encoder: refine within +-this fraction (0: off)
   /// Without an encoder: the blur to use when a frame gives no confident
   /// estimate (the session passes the last confident one; 0: the nominal blur).
   double fallback_blur_px = 0;
@@ -46,6 +54,11 @@ struct FittedFrame {
   std::vector<std::string> flags;  ///< guards that fired
   nlohmann::json log;              ///< {"model": ..., "guards": ...}
   double estimated_blur_px = 0;    ///< a confident estimate from this frame (0: none)
+  /// With an encoder and refinement on: what the refinement found, and whether
+  /// the frame was deblurred with it.
+  std::optional<imaging::MotionRefinement> refinement;
+  bool refinement_used = false;
+  double encoder_blur_px = 0;  ///< the blur the encoder gave
 };
 
 /// \brief Deblurs one frame (`electrons`; `saturated_share` of its samples at

@@ -290,6 +290,7 @@ FrameOutcome process(FrameJob& job, const SessionConfig& config, std::atomic<dou
     fit.line_time_us = config.optics.line_time_us;
     fit.slot_time_us = job.event.slot_time_us;
     fit.blur_check_every = config.processing.blur_check_every;
+    fit.blur_tolerance = config.processing.blur_tolerance_pct / 100;
     fit.fallback_blur_px = last_blur_px.load();
     auto r = deblur_fitting_model(converted.value().saturated_share, electrons, model.value(),
                                   options, fit, job.index);

@@ -216,7 +216,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
             *t, "processing.",
             {"method", "workers", "threads_per_worker", "queue_depth", "max_frames", "max_seconds",
              "match_tolerance_us", "object_match_px", "choose_model", "blur_check_every",
-             "symbologies", "try_rotate", "decode_area"},
+             "blur_tolerance", "symbologies", "try_rotate", "decode_area"},
             origin);
         !p.empty())
       return Out::failure(p);
@@ -239,6 +239,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     r.get("object_match_px", c.processing.object_match_px);
     r.get("choose_model", c.processing.choose_model);
     r.get("blur_check_every", c.processing.blur_check_every);
+    r.get("blur_tolerance", c.processing.blur_tolerance_pct);
     r.get("symbologies", c.processing.symbologies);
     r.get("try_rotate", c.processing.try_rotate);
     std::string area;
@@ -337,6 +338,9 @@ std::string check_config(SessionConfig& c) {
     return problem("optics.line_time_us", "must be 0 (global shutter) up to 1000 us");
   if (c.processing.blur_check_every < 0)
     return problem("processing.blur_check_every", "must be >= 0");
+  if (!(c.processing.blur_tolerance_pct >= 0 && c.processing.blur_tolerance_pct < 100))
+    return problem("processing.blur_tolerance",
+                   "must be a percentage >= 0 and < 100 (0: the encoder's blur exactly)");
   if (auto why = check_symbologies(c.processing.symbologies); !why.empty())
     return problem("processing.symbologies", "'" + c.processing.symbologies + "': " + why);
   imaging::Direction direction;

@@ -82,6 +82,9 @@ struct ProcessingConfig {
   /// With an encoder: every N-th frame, estimate the blur from the frame and flag a
   /// disagreement with the encoder (0: never; each check costs about one tv deblur).
   int blur_check_every = 0;
+  /// With an encoder: refine each frame's blur within +-this percentage of the
+  /// encoder's (imaging/motion_refinement.hpp); 0 = use the encoder's blur exactly.
+  double blur_tolerance_pct = 10;
   /// ZXing format names read on each fused frame, comma-separated (fewer is faster).
   std::string symbologies = kDefaultSymbologies;
   /// Also look for 1-D codes turned by 90 degrees; a line whose labels always

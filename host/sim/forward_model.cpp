@@ -5,29 +5,12 @@
 #include <random>
 
 #include "imaging/motion_frame.hpp"
+#include "sim/pixel_integration.hpp"
 
 namespace flutterscan::sim {
 namespace {
 
 using imaging::Plane;
-
-/// y[n] = sum_j taps[j] * r[n - j] along each row, r clamped at the left edge.
-Plane blur_rows(const Plane& r, const std::vector<double>& taps) {
-  Plane out(r.width, r.height);
-  for (int y = 0; y < r.height; ++y) {
-    const auto in = r.row(y);
-    auto dst = out.row(y);
-    for (int n = 0; n < r.width; ++n) {
-      double sum = 0;
-      for (std::size_t j = 0; j < taps.size(); ++j) {
-        const int source = std::max(0, n - static_cast<int>(j));
-        sum += taps[j] * in[static_cast<std::size_t>(source)];
-      }
-      dst[static_cast<std::size_t>(n)] = static_cast<float>(sum);
-    }
-  }
-  return out;
-}
 
 double linear_to_srgb(double v) {
   return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
@@ -35,12 +18,15 @@ double linear_to_srgb(double v) {
 
 }  // namespace
 
-imaging::Image expected_electrons(const Plane& reflectance, const imaging::CaptureModel& model) {
+imaging::Image expected_electrons(const Plane& reflectance, const imaging::CaptureModel& model,
+                                  int supersample) {
   const Plane moving = imaging::to_motion_frame(reflectance, model.direction);
+  imaging::CaptureModel fine = model;
+  fine.blur_px = model.blur_px * supersample;
   imaging::Image out;
   for (int c = 0; c < model.channels; ++c)
     out.channels.push_back(imaging::from_motion_frame(
-        blur_rows(moving, imaging::channel_psf(model, c)), model.direction));
+        blur_and_bin_rows(moving, imaging::channel_psf(fine, c), supersample), model.direction));
   return out;
 }
 

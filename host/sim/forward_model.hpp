@@ -10,11 +10,14 @@
 
 namespace flutterscan::sim {
 
-/// \brief Expected electrons per channel (no noise): channel_psf applied along
-/// the motion. Scene content upstream of the frame edge repeats the edge pixels
-/// (the belt continues).
+/// \brief Expected electrons per channel (no noise) of a scene rendered
+/// `supersample` times finer than the camera's pixels (render_scene): the
+/// model's PSF on that fine grid along the motion, then each block binned into
+/// one pixel (sim/pixel_integration.hpp). Scene content upstream of the frame
+/// edge repeats the edge pixels (the belt continues). With supersample 1 the
+/// scene is taken as constant over each pixel.
 imaging::Image expected_electrons(const imaging::Plane& reflectance,
-                                  const imaging::CaptureModel& model);
+                                  const imaging::CaptureModel& model, int supersample = 1);
 
 /// \brief One recorded frame in DN (integer-valued floats): Poisson shot noise,
 /// Gaussian read noise, saturation at the full well, DN = e / gain + black

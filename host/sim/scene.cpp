@@ -190,18 +190,28 @@ std::string spec_problem(const SceneSpec& spec) {
   return {};
 }
 
-/// Ink spread and paper texture over a rendered label (SceneSpec::print_blur_px, ::texture).
-imaging::Plane weather_print(imaging::Plane plane, const SceneSpec& spec) {
+/// Ink spread and paper texture over a label rendered `k` times finer than the
+/// camera's pixels (SceneSpec::print_blur_px, ::texture, both in camera pixels):
+/// the texture varies from camera pixel to camera pixel.
+imaging::Plane weather_print(imaging::Plane plane, const SceneSpec& spec, int k) {
   if (spec.print_blur_px > 0) {
     cv::Mat view(plane.height, plane.width, CV_32F, plane.pixels.data());
-    cv::GaussianBlur(view, view, cv::Size(0, 0), spec.print_blur_px, spec.print_blur_px,
-                     cv::BORDER_REPLICATE);
+    const double sigma = spec.print_blur_px * k;
+    cv::GaussianBlur(view, view, cv::Size(0, 0), sigma, sigma, cv::BORDER_REPLICATE);
   }
   if (spec.texture > 0) {
     std::mt19937_64 rng(spec.texture_seed);
     std::normal_distribution<float> normal(0.0f, 1.0f);
     const auto texture = static_cast<float>(spec.texture);
-    for (float& v : plane.pixels) v = std::clamp(v * (1.0f + texture * normal(rng)), 0.0f, 1.0f);
+    for (int y = 0; y < plane.height / k; ++y)
+      for (int x = 0; x < plane.width / k; ++x) {
+        const float factor = 1.0f + texture * normal(rng);
+        for (int dy = 0; dy < k; ++dy)
+          for (int dx = 0; dx < k; ++dx) {
+            float& v = plane.at(x * k + dx, y * k + dy);
+            v = std::clamp(v * factor, 0.0f, 1.0f);
+          }
+      }
   }
   return plane;
 }
@@ -577,10 +587,16 @@ Result<SceneSpec, std::string> parse_scene(const std::string& text) {
   return SpecResult::success(std::move(spec));
 }
 
-PlaneResult render_scene(const SceneSpec& spec) {
-  if (std::string problem = spec_problem(spec); !problem.empty()) {
+PlaneResult render_scene(const SceneSpec& camera_spec, int supersample) {
+  if (std::string problem = spec_problem(camera_spec); !problem.empty()) {
     return PlaneResult::failure(problem);
   }
+  if (supersample < 1 || supersample > 16)
+    return PlaneResult::failure("supersampling must be 1 to 16");
+  SceneSpec spec = camera_spec;  // on the fine grid
+  spec.width *= supersample;
+  spec.height *= supersample;
+  spec.module_px *= supersample;
   // The checks parse_scene() makes, for specs built in code. (Hershey fonts
   // have glyphs for printable ASCII only.)
   if (std::string problem = content_problem(spec.kind, spec.content); !problem.empty()) {
@@ -591,8 +607,7 @@ PlaneResult render_scene(const SceneSpec& spec) {
     return PlaneResult::success(imaging::Plane(spec.width, spec.height, std::stof(spec.content)));
   PlaneResult label = spec.kind == SceneKind::kText ? render_text(spec) : render_barcode(spec);
   if (!label.ok()) return label;
-  return PlaneResult::success(weather_print(std::move(label.value()), spec));
-  return PlaneResult::failure("unknown scene kind");
+  return PlaneResult::success(weather_print(std::move(label.value()), camera_spec, supersample));
 }
 
 std::vector<std::string> decode_barcodes(const imaging::Plane& image) {

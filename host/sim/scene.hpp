@@ -74,11 +74,13 @@ std::string_view scene_kind_name(SceneKind kind);
 /// Code 128 and text take printable ASCII. The error names the problem.
 Result<SceneSpec, std::string> parse_scene(const std::string& text);
 
-/// \brief Renders the reflectance image of `spec` (values in [0, 1]). Errors:
-/// bad sizes or reflectances, content the barcode format rejects, a label
-/// that does not fit (the message gives the image size needed), an image file
-/// that cannot be read.
-Result<imaging::Plane, std::string> render_scene(const SceneSpec& spec);
+/// \brief Renders the reflectance image of `spec` (values in [0, 1]),
+/// `supersample` (1 to 16) times finer than its size in both directions, for
+/// sim::expected_electrons(); sim::bin_pixels() gives the camera's sharp view.
+/// Errors: bad sizes or reflectances, content the barcode format rejects, a
+/// label that does not fit (the message gives the image size needed), an image
+/// file that cannot be read.
+Result<imaging::Plane, std::string> render_scene(const SceneSpec& spec, int supersample = 1);
 
 /// \brief Decodes every barcode ZXing finds in `image` (reflectance or grey,
 /// values clipped to [0, 1]; any format, trying harder and rotated), returning

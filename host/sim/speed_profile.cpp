@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <random>
 
+#include "imaging/motion_psf.hpp"
+
 namespace flutterscan::sim {
 
 std::vector<double> jittered_slot_boundaries(int slots, double blur_px, double rms,
@@ -29,15 +31,8 @@ std::vector<double> jittered_slot_boundaries(int slots, double blur_px, double r
 }
 
 std::vector<double> accelerated_slot_boundaries(int slots, double blur_px, double relative_change) {
-  // Position at time u in [0, 1] of the exposure: blur (u + a (u^2 - u) / 2),
-  // the integral of v (1 - a / 2 + a u); it is blur at u = 1 whatever a.
-  const double a = std::clamp(relative_change, -2.0, 2.0);
-  std::vector<double> boundaries(static_cast<std::size_t>(slots) + 1);
-  for (int t = 0; t <= slots; ++t) {
-    const double u = static_cast<double>(t) / slots;
-    boundaries[static_cast<std::size_t>(t)] = blur_px * (u + 0.5 * a * (u * u - u));
-  }
-  return boundaries;
+  const double a = std::clamp(relative_change, -1.99, 1.99);
+  return imaging::accelerating_slot_edges(slots, blur_px, (2 + a) / (2 - a));
 }
 
 }  // namespace flutterscan::sim

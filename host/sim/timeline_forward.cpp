@@ -4,47 +4,37 @@
 #include <cmath>
 
 #include "imaging/motion_frame.hpp"
+#include "sim/pixel_integration.hpp"
 
 namespace flutterscan::sim {
 namespace {
 
 using imaging::Plane;
 
-/// out[n] = sum_j taps[j] in[n - j], `in` clamped at its left edge (the belt
-/// continues upstream); the same loop as the plain forward model.
-void blur_row(std::span<const float> in, std::span<float> out, const std::vector<double>& taps) {
-  const int width = static_cast<int>(in.size());
-  for (int n = 0; n < width; ++n) {
-    double sum = 0;
-    for (std::size_t j = 0; j < taps.size(); ++j) {
-      const int source = std::max(0, n - static_cast<int>(j));
-      sum += taps[j] * in[static_cast<std::size_t>(source)];
-    }
-    out[static_cast<std::size_t>(n)] = static_cast<float>(sum);
+/// The segments on a grid `k` times finer.
+std::vector<imaging::ExposureSegment> finer(std::span<const imaging::ExposureSegment> segments,
+                                            int k) {
+  std::vector<imaging::ExposureSegment> out(segments.begin(), segments.end());
+  for (auto& s : out) {
+    s.start_px *= k;
+    s.width_px *= k;
   }
-}
-
-/// Adds taps * in to out (double accumulation per row, stored as float).
-void blur_row_add(std::span<const float> in, std::span<float> out,
-                  const std::vector<double>& taps) {
-  std::vector<float> part(in.size());
-  blur_row(in, part, taps);
-  for (std::size_t i = 0; i < part.size(); ++i) out[i] += part[i];
+  return out;
 }
 
 }  // namespace
 
 imaging::Image expected_electrons_timeline(const Plane& reflectance,
                                            const imaging::CaptureModel& model,
-                                           std::span<const imaging::ExposureSegment> segments) {
+                                           std::span<const imaging::ExposureSegment> segments,
+                                           int supersample) {
   const Plane moving = imaging::to_motion_frame(reflectance, model.direction);
+  const auto fine = finer(segments, supersample);
   imaging::Image out;
-  for (int c = 0; c < model.channels; ++c) {
-    const auto taps = imaging::timeline_channel_psf(model, c, segments);
-    Plane blurred(moving.width, moving.height);
-    for (int y = 0; y < moving.height; ++y) blur_row(moving.row(y), blurred.row(y), taps);
-    out.channels.push_back(imaging::from_motion_frame(blurred, model.direction));
-  }
+  for (int c = 0; c < model.channels; ++c)
+    out.channels.push_back(imaging::from_motion_frame(
+        blur_and_bin_rows(moving, imaging::timeline_channel_psf(model, c, fine), supersample),
+        model.direction));
   return out;
 }
 
@@ -69,19 +59,25 @@ Result<imaging::Image, std::string> expected_rolling_shutter_electrons(
   const Plane moving = imaging::to_motion_frame(reflectance, model.direction);
   imaging::Image out;
   for (int c = 0; c < model.channels; ++c) out.channels.emplace_back(moving.width, moving.height);
+  Plane row(moving.width, 1);
   for (int y = 0; y < moving.height; ++y) {
     const auto segments = imaging::cyclic_phase_segments(
         model, rolling_shutter_phase(y, line_time, slot_time, model.code.length()));
-    for (int c = 0; c < model.channels; ++c)
-      blur_row(moving.row(y), out.channels[static_cast<std::size_t>(c)].row(y),
-               imaging::timeline_channel_psf(model, c, segments));
+    std::copy(moving.row(y).begin(), moving.row(y).end(), row.pixels.begin());
+    for (int c = 0; c < model.channels; ++c) {
+      const Plane blurred =
+          blur_and_bin_rows(row, imaging::timeline_channel_psf(model, c, segments), 1);
+      std::copy(blurred.pixels.begin(), blurred.pixels.end(),
+                out.channels[static_cast<std::size_t>(c)].row(y).begin());
+    }
   }
   for (auto& plane : out.channels) plane = imaging::from_motion_frame(plane, model.direction);
   return Out::success(std::move(out));
 }
 
 Result<imaging::Image, std::string> expected_colour_electrons(std::span<const Plane> bands,
-                                                              const imaging::CaptureModel& model) {
+                                                              const imaging::CaptureModel& model,
+                                                              int supersample) {
   using Out = Result<imaging::Image, std::string>;
   if (model.channels != 3 || model.leds != 3)
     return Out::failure("colour scene: the capture model needs 3 channels and 3 LEDs");
@@ -89,14 +85,14 @@ Result<imaging::Image, std::string> expected_colour_electrons(std::span<const Pl
   for (const auto& b : bands)
     if (b.width != bands[0].width || b.height != bands[0].height || b.empty())
       return Out::failure("colour scene: the band planes must be non-empty and of equal size");
-  const auto segments = imaging::uniform_segments(model);
+  const auto segments = finer(imaging::slot_segments(model), supersample);
   std::vector<Plane> moving;
   for (const auto& b : bands) moving.push_back(imaging::to_motion_frame(b, model.direction));
   std::vector<std::vector<double>> led_taps;
   for (int k = 0; k < 3; ++k) led_taps.push_back(imaging::timeline_led_psf(model, k, segments));
   imaging::Image out;
   for (int c = 0; c < 3; ++c) {
-    Plane sum(moving[0].width, moving[0].height);
+    Plane sum(moving[0].width / supersample, moving[0].height / supersample);
     for (int k = 0; k < 3; ++k) {
       auto taps = led_taps[static_cast<std::size_t>(k)];
       const double mix = model.crosstalk[static_cast<std::size_t>(c * 3 + k)];
@@ -108,8 +104,8 @@ Result<imaging::Image, std::string> expected_colour_electrons(std::span<const Pl
         if (ambient.size() > taps.size()) taps.resize(ambient.size(), 0.0);
         for (std::size_t j = 0; j < ambient.size(); ++j) taps[j] += ambient[j];
       }
-      for (int y = 0; y < sum.height; ++y)
-        blur_row_add(moving[static_cast<std::size_t>(k)].row(y), sum.row(y), taps);
+      const Plane part = blur_and_bin_rows(moving[static_cast<std::size_t>(k)], taps, supersample);
+      for (std::size_t i = 0; i < part.pixels.size(); ++i) sum.pixels[i] += part.pixels[i];
     }
     out.channels.push_back(imaging::from_motion_frame(sum, model.direction));
   }

@@ -23,11 +23,14 @@
 
 namespace flutterscan::sim {
 
-/// \brief Expected electrons of a grey scene when every row sees `segments`.
-/// Uniform segments give sim::expected_electrons() (same arithmetic).
+/// \brief Expected electrons of a grey scene when every row sees `segments`
+/// (camera pixels of motion), the scene rendered `supersample` times finer
+/// than the camera's pixels as for sim::expected_electrons(). The model's own
+/// slot_segments() give sim::expected_electrons() (same arithmetic).
 imaging::Image expected_electrons_timeline(const imaging::Plane& reflectance,
                                            const imaging::CaptureModel& model,
-                                           std::span<const imaging::ExposureSegment> segments);
+                                           std::span<const imaging::ExposureSegment> segments,
+                                           int supersample = 1);
 
 /// \brief Code phase in slots of rolling-shutter row `row`: row * line_time /
 /// slot_time modulo `slots` (line_time and slot_time in the same unit).
@@ -44,8 +47,10 @@ Result<imaging::Image, std::string> expected_rolling_shutter_electrons(
 /// \brief Expected electrons of a colour scene: `bands[k]` is the reflectance
 /// under LED k (equal sizes). Needs 3 channels and 3 LEDs; the ambient light
 /// of channel c falls on band c. With three equal bands it equals
-/// sim::expected_electrons() of that band to float rounding.
+/// sim::expected_electrons() of that band to float rounding. `supersample` as
+/// for sim::expected_electrons().
 Result<imaging::Image, std::string> expected_colour_electrons(std::span<const imaging::Plane> bands,
-                                                              const imaging::CaptureModel& model);
+                                                              const imaging::CaptureModel& model,
+                                                              int supersample = 1);
 
 }  // namespace flutterscan::sim

@@ -793,7 +793,12 @@ TEST_F(CalibrateCliTest, SpeedGivesPixelsPerEncoderCount) {
   EXPECT_NEAR(report["frames"][0]["blur_px"].get<double>(), 40.0, 0.25);
   EXPECT_NEAR(report["frames"][1]["blur_px"].get<double>(), 52.5, 0.25);
   EXPECT_NEAR(report["px_per_count"].get<double>(), 0.5, 0.005);
-  EXPECT_TRUE(contains(read_file(config()), "px_per_count = 0.5")) << read_file(config());
+  // The config carries the measured value (written to 6 significant digits).
+  const std::string written = read_file(config());
+  const auto key = written.find("px_per_count = ");
+  ASSERT_NE(key, std::string::npos) << written;
+  EXPECT_NEAR(std::stod(written.substr(key + 15)), 0.5, 0.001) << written;
+  EXPECT_NEAR(std::stod(written.substr(key + 15)), report["px_per_count"].get<double>(), 1e-5);
   EXPECT_FALSE(contains(read_file(config()), "from the drawing"));
   expect_usage_error({"calibrate", "speed", slow, fast, "--encoder-counts", "80"},
                      {"one count per frame"});
@@ -823,15 +828,15 @@ class CalibrateLiveCliTest : public CalibrateCliTest {
 
 // True crosstalk (rows: channels, columns: LEDs) and black level of the sim below.
 // Columns sum to 1.0, 0.95 and 0.92: the calibration must normalise them.
-constexpr double kLiveCrosstalk[3][3] = {{0.80, 0.15, 0.02}, {0.15, 0.70, 0.10}, {0.05, 0.10, 0.80}};
+constexpr double kLiveCrosstalk[3][3] = {
+    {0.80, 0.15, 0.02}, {0.15, 0.70, 0.10}, {0.05, 0.10, 0.80}};
 
 TEST_F(CalibrateLiveCliTest, CrosstalkRecoversTheSimulatorsMatrixAndBlackLevel) {
   write_config();
-  const RunResult result =
-      live("crosstalk",
-           {"target=white:0.9", "width=256", "height=192", "black_level=80",
-            "crosstalk=0.80,0.15,0.02,0.15,0.70,0.10,0.05,0.10,0.80"},
-           {"--frames", "4", "--config", config(), "--json"});
+  const RunResult result = live("crosstalk",
+                                {"target=white:0.9", "width=256", "height=192", "black_level=80",
+                                 "crosstalk=0.80,0.15,0.02,0.15,0.70,0.10,0.05,0.10,0.80"},
+                                {"--frames", "4", "--config", config(), "--json"});
   ASSERT_EQ(result.exit_code, 0) << result;
   const json report = json::parse(result.out.substr(0, result.out.find('\n')));
   for (int k = 0; k < 3; ++k) {
@@ -844,8 +849,7 @@ TEST_F(CalibrateLiveCliTest, CrosstalkRecoversTheSimulatorsMatrixAndBlackLevel) 
                 0.01 * 3000 * 0.9 * column * 4095 / 12000)
         << k;
   }
-  for (int c = 0; c < 3; ++c)
-    EXPECT_NEAR(report["black_level_dn"][c].get<double>(), 80, 0.5) << c;
+  for (int c = 0; c < 3; ++c) EXPECT_NEAR(report["black_level_dn"][c].get<double>(), 80, 0.5) << c;
   const std::string written = read_file(config());
   EXPECT_TRUE(contains(written, "px_per_count = 0.5 # from the drawing")) << written;
   EXPECT_TRUE(contains(written, "crosstalk = [[0.8")) << written;
@@ -880,9 +884,10 @@ TEST_F(CalibrateLiveCliTest, FlatMeasuresTheLightFallingOffTowardTheCorners) {
   for (int k = 0; k < 3; ++k)
     for (int t = 0; t < 12; ++t) {
       // Relative to tile 5 (second row, second column), each LED's own channel.
-      const double measured = mixing[t * 9 + k * 3 + k].get<double>() /
-                              mixing[5 * 9 + k * 3 + k].get<double>();
-      EXPECT_NEAR(measured, light(t % 4, t / 4) / light(1, 1), 0.02) << "LED " << k << " tile " << t;
+      const double measured =
+          mixing[t * 9 + k * 3 + k].get<double>() / mixing[5 * 9 + k * 3 + k].get<double>();
+      EXPECT_NEAR(measured, light(t % 4, t / 4) / light(1, 1), 0.02)
+          << "LED " << k << " tile " << t;
     }
   EXPECT_GT(file["largest_deviation"].get<double>(), 0.08);  // 10.5% here
   EXPECT_TRUE(contains(read_file(config()), "flat_field = ")) << read_file(config());
@@ -890,16 +895,14 @@ TEST_F(CalibrateLiveCliTest, FlatMeasuresTheLightFallingOffTowardTheCorners) {
 
 TEST_F(CalibrateLiveCliTest, NoiseRecoversGainReadNoiseAndBlackLevel) {
   write_config();
-  const RunResult result =
-      live("noise",
-           {"target=white:1", "width=256", "height=192", "electrons=8000", "full_well=15000",
-            "read_noise=6", "black_level=100"},
-           {"--config", config(), "--json"});
+  const RunResult result = live("noise",
+                                {"target=white:1", "width=256", "height=192", "electrons=8000",
+                                 "full_well=15000", "read_noise=6", "black_level=100"},
+                                {"--config", config(), "--json"});
   ASSERT_EQ(result.exit_code, 0) << result;
   const json report = json::parse(result.out.substr(0, result.out.find('\n')));
   for (int c = 0; c < 3; ++c) {
-    EXPECT_NEAR(report["gain_e_per_dn"][c].get<double>(), 15000.0 / 4095.0,
-                0.03 * 15000.0 / 4095.0)
+    EXPECT_NEAR(report["gain_e_per_dn"][c].get<double>(), 15000.0 / 4095.0, 0.03 * 15000.0 / 4095.0)
         << c;
     EXPECT_NEAR(report["read_noise_e"][c].get<double>(), 6.0, 0.4) << c;
     EXPECT_NEAR(report["black_level_dn"][c].get<double>(), 100, 0.5) << c;
@@ -915,10 +918,9 @@ TEST_F(CalibrateLiveCliTest, NoiseRecoversGainReadNoiseAndBlackLevel) {
 TEST_F(CalibrateLiveCliTest, SpeedRecoversTheBlurAndPixelsPerEncoderCount) {
   write_config();
   // 10000 px/s over 52 slots of 100 us: 52 px of blur; 4 counts per px: 0.25 px per count.
-  const RunResult result =
-      live("speed", {"width=640", "height=200", "counts_per_px=4"},
-           {"--frames", "6", "--min-blur", "20", "--max-blur", "100", "--config", config(),
-            "--json"});
+  const RunResult result = live(
+      "speed", {"width=640", "height=200", "counts_per_px=4"},
+      {"--frames", "6", "--min-blur", "20", "--max-blur", "100", "--config", config(), "--json"});
   ASSERT_EQ(result.exit_code, 0) << result;
   const json report = json::parse(result.out.substr(0, result.out.find('\n')));
   EXPECT_NEAR(report["blur_px"].get<double>(), 52.0, 0.25);
@@ -933,9 +935,8 @@ TEST_F(CalibrateLiveCliTest, SpeedRecoversTheBlurAndPixelsPerEncoderCount) {
 
 TEST_F(CalibrateLiveCliTest, ALineThatFailsExitsOneNamingCameraControllerAndStep) {
   // The camera ends after 3 frames: the dark frames (1 dropped + 4) never complete.
-  const RunResult result = live("crosstalk", {"target=white", "width=128", "height=96",
-                                              "max_frames=3"},
-                                {"--frames", "4"});
+  const RunResult result = live(
+      "crosstalk", {"target=white", "width=128", "height=96", "max_frames=3"}, {"--frames", "4"});
   EXPECT_EQ(result.exit_code, 1) << result;
   for (const char* needle : {"camera sim", "virtual controller", "dark frames", "ended after 3"})
     EXPECT_TRUE(contains(result.err, needle)) << "stderr lacks \"" << needle << "\"\n" << result;
@@ -945,7 +946,8 @@ TEST_F(CalibrateLiveCliTest, BadUsageIsRefusedNamingTheProblem) {
   const std::string dark = simulate("dark", "flat:0.9", std::string(52, '7'), "0", "1", 1);
   expect_usage_error({"calibrate", "crosstalk", "--dark", dark, "--camera", "sim"},
                      {"--dark and --led", "--camera", "not both"});
-  expect_usage_error({"calibrate", "crosstalk", "--controller", "sim"}, {"--controller", "--camera"});
+  expect_usage_error({"calibrate", "crosstalk", "--controller", "sim"},
+                     {"--controller", "--camera"});
   expect_usage_error({"calibrate", "crosstalk"}, {"--dark and --led", "--camera"});
   expect_usage_error({"calibrate", "noise", "--camera", "sim", "--dark", dark, dark},
                      {"--dark and --flat", "not both"});

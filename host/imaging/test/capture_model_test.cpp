@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
+
 #include <numeric>
 
 #include "imaging/capture_descriptor.hpp"
@@ -37,24 +39,52 @@ TEST(CaptureModel, PsfCarriesTheWhiteLevelOfItsChannel) {
   for (int c = 0; c < 3; ++c) {
     const auto psf = channel_psf(m, c);
     EXPECT_NEAR(sum(psf), m.code.on_slots(c) * m.led_electrons[static_cast<std::size_t>(c)], 1e-9);
-    EXPECT_LE(psf.size(), 53u);
+    EXPECT_LE(psf.size(), 54u);
   }
-  // One slot per pixel: tap t is lit exactly when the code lights that LED in slot t.
+  // One slot per pixel through the box aperture: slot t gives half its light to
+  // tap t and half to tap t + 1.
   const auto red = channel_psf(m, 0);
+  const auto lit = [&](int t) { return t >= 0 && t < 52 && m.code.is_on(t, 0) ? 1.0 : 0.0; };
   for (int t = 0; t < static_cast<int>(red.size()); ++t)
-    EXPECT_NEAR(red[static_cast<std::size_t>(t)], m.code.is_on(t, 0) ? m.led_electrons[0] : 0.0,
+    EXPECT_NEAR(red[static_cast<std::size_t>(t)], 0.5 * (lit(t) + lit(t - 1)) * m.led_electrons[0],
                 1e-9)
+        << t;
+  // The tap-grid model: tap t is lit exactly when the code lights that LED in slot t.
+  CaptureModel grid = m;
+  grid.pixel_model = PixelModel::kTapGrid;
+  const auto red_grid = channel_psf(grid, 0);
+  EXPECT_LE(red_grid.size(), 53u);
+  for (int t = 0; t < static_cast<int>(red_grid.size()); ++t)
+    EXPECT_NEAR(red_grid[static_cast<std::size_t>(t)],
+                m.code.is_on(t, 0) ? m.led_electrons[0] : 0.0, 1e-9)
         << t;
 }
 
 TEST(CaptureModel, SubPixelSlotsAreExact) {
-  const CaptureModel m = seed_capture(13);  // four slots per pixel
+  CaptureModel m = seed_capture(13);  // four slots per pixel
+  m.pixel_model = PixelModel::kTapGrid;
   const auto blue = channel_psf(m, 2);
   EXPECT_EQ(blue.size(), 13u);
   for (int p = 0; p < 13; ++p) {
     int lit = 0;
     for (int t = 4 * p; t < 4 * p + 4; ++t) lit += m.code.is_on(t, 2);
     EXPECT_NEAR(blue[static_cast<std::size_t>(p)], lit * m.led_electrons[2], 1e-9);
+  }
+  // Through the box aperture each quarter-pixel slot spreads over two taps as
+  // the mean of the triangle over it (motion_psf_test checks that integral).
+  m.pixel_model = PixelModel::kBoxAperture;
+  const auto aperture = channel_psf(m, 2);
+  EXPECT_EQ(aperture.size(), 14u);
+  for (int p = 0; p < 14; ++p) {
+    double expected = 0;
+    for (int t = 0; t < 52; ++t) {
+      if (!m.code.is_on(t, 2)) continue;
+      // The slot [t / 4, (t + 1) / 4] lies within one pixel, where tri(p - d) is
+      // linear in d: its mean over the slot is its value at the slot's middle.
+      const double middle = (t + 0.5) * 0.25;
+      expected += std::max(0.0, 1 - std::abs(p - middle));
+    }
+    EXPECT_NEAR(aperture[static_cast<std::size_t>(p)], expected * m.led_electrons[2], 1e-9) << p;
   }
   const CaptureModel still = seed_capture(0);
   EXPECT_EQ(channel_psf(still, 1).size(), 1u);

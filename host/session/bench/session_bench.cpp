@@ -27,6 +27,7 @@
 #include "imaging/deblur.hpp"
 #include "imaging/model_choice.hpp"
 #include "imaging/model_guards.hpp"
+#include "imaging/motion_refinement.hpp"
 #include "session/barcode_reader.hpp"
 #include "session/session.hpp"
 
@@ -168,6 +169,10 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
     auto converted = capture::frame_to_electrons(frame, model.value());
     const imaging::Image& electrons = converted.value().electrons;
     lap("convert");
+    imaging::MotionRefinementOptions refinement;  // the session's default tolerance
+    refinement.tolerance = session::ProcessingConfig{}.blur_tolerance_pct / 100;
+    const auto refined = imaging::refine_motion(electrons, model.value(), refinement);
+    lap("refine_motion");
     const auto choice = imaging::choose_frame_model(electrons, model.value(), false, true);
     lap("model_choice");
     auto deblurred = imaging::deblur(electrons, model.value(), options);
@@ -182,8 +187,11 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
         session::read_barcodes(latent, session::kDefaultSymbologies, true, windows);
     lap("decode");
     if (r == 0)
-      std::cout << "stage frame: model " << choice.describe() << ", residual ratio " << ratio
-                << ", saturated " << saturated << ", " << readout.codes.size() << " code(s) read"
+      std::cout << "stage frame: blur " << model.value().blur_px << " px refined to "
+                << (refined.ok() ? refined.value().blur_px : -1) << " +- "
+                << (refined.ok() ? refined.value().standard_error_px : -1) << " px; model "
+                << choice.describe() << ", residual ratio " << ratio << ", saturated " << saturated
+                << ", " << readout.codes.size() << " code(s) read"
                 << (readout.decoder_fault.empty() ? "" : ", decoder fault") << "\n";
   }
   for (auto& [stage, v] : samples) out[stage] = median(v);
@@ -237,7 +245,8 @@ int main(int argc, char** argv) {
   double total = 0;
   std::cout << "one worker, one frame, stage by stage (thread CPU time, median of 9):\n\n"
                "| stage | ms |\n|---|---|\n";
-  for (const char* stage : {"convert", "model_choice", "deblur", "guards", "decode"}) {
+  for (const char* stage :
+       {"convert", "refine_motion", "model_choice", "deblur", "guards", "decode"}) {
     const auto it = costs.find(stage);
     const double ms = it == costs.end() ? 0.0 : it->second;
     total += ms;
@@ -286,8 +295,8 @@ int main(int argc, char** argv) {
   }
   std::cout << "\nper frame, median ms on one worker thread (model_choice: grey or colour print; "
                "guards: residual and saturation checks):\n\n| input |";
-  const std::vector<std::string> stages = {"convert", "blur_estimate", "model_choice",
-                                           "deblur",  "guards",        "decode"};
+  const std::vector<std::string> stages = {
+      "convert", "refine_motion", "blur_estimate", "model_choice", "deblur", "guards", "decode"};
   for (const auto& stage : stages) std::cout << " " << stage << " |";
   std::cout << "\n|---|";
   for (std::size_t i = 0; i < stages.size(); ++i) std::cout << "---|";

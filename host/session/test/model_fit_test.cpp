@@ -109,6 +109,7 @@ TEST(ModelFit, TheBlurCheckCatchesAWrongEncoderReading) {
   const Frame f = record(sim::expected_electrons(scene, truth), truth);
   ModelFitConfig config;
   config.blur_check_every = 1;
+  config.blur_tolerance = 0;  // the encoder's blur used as it is
   const auto right = deblur_fitting_model(imaging::saturated_share(f.dn, capture(52)), f.electrons,
                                           capture(52), tv(), config, 1);
   ASSERT_TRUE(right.ok());
@@ -118,6 +119,36 @@ TEST(ModelFit, TheBlurCheckCatchesAWrongEncoderReading) {
   ASSERT_TRUE(wrong.ok());
   EXPECT_TRUE(has(wrong.value().flags, "blur-disagrees")) << wrong.value().log.dump();
   EXPECT_TRUE(has(wrong.value().flags, "misfit")) << wrong.value().log.dump();
+}
+
+TEST(ModelFit, RefinementCorrectsAWrongEncoderReading) {
+  const auto truth = capture(52);
+  const auto scene = sim::render_scene(code128()).value();
+  const Frame f = record(sim::expected_electrons(scene, truth), truth);
+  ModelFitConfig config;  // refinement on by default (10%)
+  config.blur_check_every = 1;
+  const auto wrong = deblur_fitting_model(imaging::saturated_share(f.dn, capture(57)), f.electrons,
+                                          capture(57), tv(), config, 1);
+  ASSERT_TRUE(wrong.ok());
+  const auto& log = wrong.value().log;
+  // The check still judges the encoder; the frame is deblurred with the refined blur.
+  EXPECT_TRUE(has(wrong.value().flags, "blur-disagrees")) << log.dump();
+  EXPECT_FALSE(has(wrong.value().flags, "misfit")) << log.dump();
+  EXPECT_TRUE(log["motion"]["used"].get<bool>()) << log.dump();
+  EXPECT_EQ(log["motion"]["encoder_blur_px"].get<double>(), 57.0);
+  EXPECT_NEAR(log["motion"]["refined_blur_px"].get<double>(), 52.0, 0.05) << log.dump();
+  EXPECT_NEAR(log["model"]["blur_px"].get<double>(), 52.0, 0.05) << log.dump();
+  ASSERT_TRUE(wrong.value().refinement.has_value());
+  EXPECT_TRUE(wrong.value().refinement_used);
+  EXPECT_EQ(sim::decode_barcodes(wrong.value().latent), std::vector<std::string>{"FIT-0042"});
+
+  // Told 30% wrong, the truth lies outside the tolerance: flagged and not used.
+  const auto far = deblur_fitting_model(imaging::saturated_share(f.dn, capture(68)), f.electrons,
+                                        capture(68), tv(), config, 1);
+  ASSERT_TRUE(far.ok());
+  EXPECT_TRUE(has(far.value().flags, "blur-off-encoder")) << far.value().log.dump();
+  EXPECT_FALSE(far.value().refinement_used);
+  EXPECT_NEAR(far.value().log["model"]["blur_px"].get<double>(), 68.0, 1e-9);
 }
 
 TEST(ModelFit, SaturationIsFlagged) {

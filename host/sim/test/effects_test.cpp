@@ -56,7 +56,7 @@ double sum_of(const std::vector<double>& v) {
 TEST(ExposureTimeline, UniformSegmentsGiveChannelPsfTapForTap) {
   CaptureModel m = triplet_capture(37.3);  // a fractional slot width
   m.ambient_electrons = {50, 20, 10};
-  const auto segments = imaging::uniform_segments(m);
+  const auto segments = imaging::slot_segments(m);
   for (int c = 0; c < 3; ++c) {
     const auto plain = imaging::channel_psf(m, c);
     const auto timed = imaging::timeline_channel_psf(m, c, segments);

@@ -1,0 +1,45 @@
+#pragma once
+// How a moving scene reaches the pixel grid (docs/algorithms.md, "Pixel model").
+//
+// The scene moves continuously while a slot is lit, and every pixel integrates
+// the light over its square aperture. The model takes the latent image as
+// piecewise constant on the pixels (each pixel's value is the scene's average
+// over its square: what a sharp capture of it records) and the aperture as a
+// box of one pixel. A pixel then sees the latent shifted by d pixels as
+// (1 - f) x[i - n] + f x[i - n - 1] (n = floor(d), f = d - n): linear
+// interpolation, whose kernel is the triangle tri(u) = max(0, 1 - |u|). A slot
+// during which the scene moves from a to b pixels contributes its light spread
+// over the taps as the average of tri(j - d) over d in [a, b]: at one pixel of
+// motion per slot that is [0.5, 0.5] per slot, not one whole tap.
+//
+// PixelModel::kTapGrid keeps the older model that deposits each slot's box
+// straight onto the taps (no aperture): only for comparisons with it.
+
+#include <span>
+#include <vector>
+
+namespace flutterscan::imaging {
+
+/// \brief How a slot's motion is laid onto the pixel grid.
+enum class PixelModel {
+  kBoxAperture,  ///< box pixel aperture over a pixel-wise constant latent (the default)
+  kTapGrid,      ///< each slot's box deposited on whole taps (the model before the aperture)
+};
+
+/// \brief Adds the light `weight` of one slot, during which the scene moved
+/// from `start_px` to `start_px + width_px` (>= 0), to `taps` (tap j: light a
+/// white point deposits j pixels downstream). Light that would fall past the
+/// last tap lands on it; `taps` must hold pixel_model_taps(end) entries.
+void deposit_slot(std::vector<double>& taps, double start_px, double width_px, double weight,
+                  PixelModel model);
+
+/// \brief Taps a PSF needs for motion up to `end_px` under `model`.
+std::size_t pixel_model_taps(double end_px, PixelModel model);
+
+/// \brief Object displacement (pixels) at the L + 1 slot edges of an exposure
+/// that travels `blur_px` in total while the speed changes linearly in time
+/// from v0 to v1 = speed_ratio x v0 (constant acceleration; 1 = constant
+/// speed, edges at t blur / L). The displacement of slot t is quadratic in t.
+std::vector<double> accelerating_slot_edges(int slots, double blur_px, double speed_ratio);
+
+}  // namespace flutterscan::imaging

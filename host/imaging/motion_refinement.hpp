@@ -1,0 +1,73 @@
+#pragma once
+// The motion of one frame refined from the frame itself, cheaply enough for
+// every frame (docs/algorithms.md, "Motion refinement").
+//
+// Principle: as imaging/blur_estimate.hpp (cross-channel consistency): every
+// channel sees the same grey scene x through its own PSF, so for the true
+// motion e_cd = h_d * y_c - h_c * y_d is noise for every pair of channels,
+// and for a wrong one the scene's edges leave a residual. Here the rows are
+// differenced first (e becomes its difference, still noise at the true
+// motion; the flat parts of the frame then carry no weight and the sums keep
+// their precision in float FFTs), and the residual over the valid samples of
+// the sampled rows is a quadratic form in the taps:
+//   sum_n e_cd[n]^2 = h_d' G_cc h_d + h_c' G_dd h_c - 2 h_d' G_cd h_c,
+//   G_ab[i][j] = sum over valid n of a[n - i] b[n - j],
+// so the rows are read and transformed once per frame, and each candidate
+// motion costs a few P x P products (P taps), whatever the frame size. The
+// G's come from one FFT cross-correlation per block of rows plus exact
+// corrections at the rows' ends.
+//
+// Per frame: the rows with the most edge energy along the motion (a label's
+// rows) are kept; a grid and golden section over blur_px within the tolerance
+// find the constant-speed motion; when its residual stays above the noise,
+// a two-parameter motion (blur and the end / start speed ratio, constant
+// acceleration) is fitted as well and kept only if it explains the frame
+// clearly better. Standard errors are sandwich estimates over blocks of rows;
+// a frame whose residual hardly depends on the blur (no edges along the
+// motion) gets none and keeps the given motion.
+
+#include <string>
+
+#include "flutterscan/common/result.hpp"
+#include "imaging/capture_model.hpp"
+#include "imaging/image.hpp"
+
+namespace flutterscan::imaging {
+
+/// \brief Largest relative tolerance refine_motion() takes (exclusive).
+inline constexpr double kMaxBlurTolerance = 1.0;
+
+struct MotionRefinementOptions {
+  double tolerance = 0.10;   ///< search blur_px (1 +- tolerance); 0 <= tolerance < 1
+  int rows = 128;            ///< rows along the motion to use (the most edgy ones)
+  bool speed_change = true;  ///< try the two-parameter (accelerating) motion
+};
+
+struct MotionRefinement {
+  double blur_px = 0;            ///< refined (the given value when !edges)
+  double standard_error_px = 0;  ///< sandwich over row blocks; infinite when !edges
+  double speed_ratio = 1;        ///< end / start speed; 1 unless `accelerating`
+  /// Whether the frame constrained the motion: edges along it (a residual that
+  /// depends on the blur) and a finite standard error.
+  bool edges = false;
+  bool accelerating = false;   ///< the two-parameter motion explained the frame better
+  bool at_range_edge = false;  ///< the best blur lies on the edge of the tolerance
+  double contrast = 0;         ///< median residual over the searched blurs / the best one - 1
+  /// How far the best blur stands out: (median - best residual) over the noise
+  /// of the residual; edges need 20 or more (a flat frame gives a few).
+  double significance = 0;
+  double residual_per_sample = 0;      ///< at the refined motion: about 1 when the model fits
+  double constant_speed_residual = 0;  ///< at the best constant-speed motion
+  int rows_used = 0;
+};
+
+/// \brief Refines the motion of `electrons` (one plane per channel, black
+/// level removed) around `model` (its blur_px and speed_ratio are the start;
+/// everything else is taken as known). Fails for fewer than two channels,
+/// channels that share one code, a tolerance outside [0, 1), or a search
+/// range that does not fit the frame along the motion.
+Result<MotionRefinement, std::string> refine_motion(const Image& electrons,
+                                                    const CaptureModel& model,
+                                                    const MotionRefinementOptions& options);
+
+}  // namespace flutterscan::imaging

@@ -1,0 +1,123 @@
+// The pixel model (motion_psf.hpp): a slot's light laid onto the pixels
+// through a box aperture, checked against its definition by numerical
+// integration, and the motion of a constant acceleration.
+
+#include "imaging/motion_psf.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numeric>
+#include <random>
+
+#include "imaging/capture_model.hpp"
+
+namespace flutterscan::imaging {
+namespace {
+
+double sum(const std::vector<double>& v) {
+  return std::accumulate(v.begin(), v.end(), 0.0);
+}
+
+TEST(MotionPsf, OnePixelPerSlotGivesHalfTapsAtTheEnds) {
+  // One LED on in all four slots, one pixel of motion per slot: each slot is
+  // [0.5, 0.5] over its two pixels, so the PSF is [0.5, 1, 1, 1, 0.5].
+  CaptureModel m;
+  m.code = LedCode::parse("1111", 1).value();
+  m.channels = 1;
+  m.leds = 1;
+  m.crosstalk = {1};
+  m.led_electrons = {1};
+  m.ambient_electrons = {0};
+  m.blur_px = 4;
+  const auto taps = channel_psf(m, 0);
+  const std::vector<double> expected = {0.5, 1, 1, 1, 0.5};
+  ASSERT_EQ(taps.size(), expected.size());
+  for (std::size_t j = 0; j < taps.size(); ++j) EXPECT_NEAR(taps[j], expected[j], 1e-12) << j;
+
+  m.pixel_model = PixelModel::kTapGrid;  // the older model: one whole tap per slot
+  const auto grid = channel_psf(m, 0);
+  ASSERT_EQ(grid.size(), 4u);
+  for (double t : grid) EXPECT_NEAR(t, 1.0, 1e-12);
+}
+
+TEST(MotionPsf, AStillSceneIsTheIdentityOrALinearInterpolation) {
+  std::vector<double> taps(pixel_model_taps(0, PixelModel::kBoxAperture), 0.0);
+  deposit_slot(taps, 0, 0, 2.0, PixelModel::kBoxAperture);
+  EXPECT_NEAR(taps[0], 2.0, 1e-12);
+  EXPECT_NEAR(taps[1], 0.0, 1e-12);
+  std::vector<double> shifted(pixel_model_taps(3.25, PixelModel::kBoxAperture), 0.0);
+  deposit_slot(shifted, 3.25, 0, 1.0, PixelModel::kBoxAperture);
+  EXPECT_NEAR(shifted[3], 0.75, 1e-12);
+  EXPECT_NEAR(shifted[4], 0.25, 1e-12);
+}
+
+TEST(MotionPsf, EachTapIsTheMeanOfTheTriangleOverTheSlot) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> start(0, 20), width(0.01, 6);
+  for (int trial = 0; trial < 50; ++trial) {
+    const double a = start(rng), w = width(rng);
+    std::vector<double> taps(pixel_model_taps(a + w, PixelModel::kBoxAperture), 0.0);
+    deposit_slot(taps, a, w, 1.0, PixelModel::kBoxAperture);
+    EXPECT_NEAR(sum(taps), 1.0, 1e-12);  // light is conserved
+    for (std::size_t j = 0; j < taps.size(); ++j) {
+      constexpr int kSteps = 20000;  // midpoint rule
+      double integral = 0;
+      for (int s = 0; s < kSteps; ++s) {
+        const double d = a + w * (s + 0.5) / kSteps;
+        integral += std::max(0.0, 1 - std::abs(static_cast<double>(j) - d));
+      }
+      EXPECT_NEAR(taps[j], integral / kSteps, 1e-6) << a << " " << w << " tap " << j;
+    }
+  }
+}
+
+TEST(MotionPsf, AcceleratingEdgesTravelTheBlurWithTheSpeedRatio) {
+  for (double ratio : {0.5, 1.0, 1.5, 2.0}) {
+    const auto edges = accelerating_slot_edges(52, 52, ratio);
+    ASSERT_EQ(edges.size(), 53u);
+    EXPECT_NEAR(edges.front(), 0, 1e-12);
+    EXPECT_NEAR(edges.back(), 52, 1e-9);
+    // Slot widths are the speed at the slot's middle: last / first -> ratio.
+    const double first = edges[1] - edges[0], last = edges[52] - edges[51];
+    const double expected = (1 + (ratio - 1) * 51.5 / 52) / (1 + (ratio - 1) * 0.5 / 52);
+    EXPECT_NEAR(last / first, expected, 1e-9) << ratio;
+    for (std::size_t t = 1; t < edges.size(); ++t) EXPECT_GT(edges[t], edges[t - 1]);
+  }
+}
+
+TEST(MotionPsf, ChannelPsfKeepsTheWhiteLevelWhateverTheMotion) {
+  CaptureModel m;
+  m.code = LedCode::parse("4242221144411121214241142422112112214412414144224412", 3).value();
+  m.led_electrons = budgeted_led_electrons(m.code, 3000, 3);
+  m.ambient_electrons = {40, 0, 10};
+  for (double blur : {0.0, 13.3, 52.0, 77.7})
+    for (double ratio : {1.0, 1.5, 0.7})
+      for (PixelModel pixel : {PixelModel::kBoxAperture, PixelModel::kTapGrid}) {
+        m.blur_px = blur;
+        m.speed_ratio = ratio;
+        m.pixel_model = pixel;
+        for (int c = 0; c < 3; ++c) {
+          double white = m.ambient_electrons[static_cast<std::size_t>(c)];
+          for (int k = 0; k < 3; ++k)
+            white += m.crosstalk[static_cast<std::size_t>(c * 3 + k)] *
+                     m.led_electrons[static_cast<std::size_t>(k)] * m.code.on_slots(k);
+          EXPECT_NEAR(sum(channel_psf(m, c)), white, 1e-6 * white) << blur << " " << ratio;
+        }
+      }
+}
+
+TEST(MotionPsf, SpeedRatioOutsideTheModelIsRefused) {
+  CaptureModel m;
+  m.code = LedCode::parse("124", 3).value();
+  m.led_electrons = {1, 1, 1};
+  for (double bad : {0.0, -1.0, 0.1, 6.0, double{NAN}, double{INFINITY}}) {
+    m.speed_ratio = bad;
+    EXPECT_NE(capture_model_problem(m).find("speed ratio"), std::string::npos) << bad;
+  }
+  m.speed_ratio = 1.5;
+  EXPECT_EQ(capture_model_problem(m), "");
+}
+
+}  // namespace
+}  // namespace flutterscan::imaging

@@ -1,0 +1,151 @@
+// Per-frame motion refinement (imaging/motion_refinement.hpp) on frames of a
+// scene that moves continuously within each pixel (rendered finer than the
+// pixels): the blur told wrong by up to the tolerance is refined to the true
+// one, a speed change within the exposure is found, and frames without edges
+// along the motion keep the motion they were given.
+
+#include "imaging/motion_refinement.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "imaging/capture_descriptor.hpp"
+#include "imaging/frame_conversion.hpp"
+#include "imaging/motion_frame.hpp"
+#include "sim/forward_model.hpp"
+#include "sim/pixel_integration.hpp"
+#include "sim/scene.hpp"
+
+namespace flutterscan::sim {
+namespace {
+
+using imaging::CaptureModel;
+using imaging::Direction;
+
+CaptureModel triplet_capture(double blur_px, double electrons) {
+  CaptureModel m;
+  m.code = LedCode::parse("4242221144411121214241142422112112214412414144224412", 3).value();
+  m.blur_px = blur_px;
+  m.led_electrons = imaging::budgeted_led_electrons(m.code, electrons, 3);
+  m.crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
+  m.read_noise = 4;
+  m.full_well = 12000;
+  m.bit_depth = 12;
+  m.gain = 12000.0 / 4095.0;
+  return m;
+}
+
+imaging::Plane fine_label(SceneKind kind, const char* content, double module_px = 3) {
+  SceneSpec spec;
+  spec.kind = kind;
+  spec.content = content;
+  spec.module_px = module_px;
+  const auto scene = render_scene(spec, kSimSupersample);
+  EXPECT_TRUE(scene.ok());
+  return scene.value();
+}
+
+imaging::Image recorded(const imaging::Plane& fine, const CaptureModel& m, std::uint64_t seed) {
+  return imaging::dn_to_electrons(
+      record_frame(expected_electrons(fine, m, kSimSupersample), m, seed), m);
+}
+
+TEST(MotionRefinement, FindsTheTrueBlurFromOneTenPercentOff) {
+  const auto scene = fine_label(SceneKind::kCode128, "FLUTTER-0042");
+  for (double electrons : {300.0, 1000.0, 3000.0, 10000.0}) {
+    double squared = 0;
+    int count = 0;
+    for (double told : {48.0, 49.5, 54.0, 56.5}) {  // 52 within +-10% of each
+      const CaptureModel truth = triplet_capture(52.0, electrons);
+      CaptureModel assumed = truth;
+      assumed.blur_px = told;
+      const auto r = imaging::refine_motion(recorded(scene, truth, count + 11), assumed, {});
+      ASSERT_TRUE(r.ok()) << r.error();
+      EXPECT_TRUE(r.value().edges) << electrons << " " << told;
+      EXPECT_FALSE(r.value().accelerating) << electrons << " " << told;
+      squared += std::pow(r.value().blur_px - 52.0, 2);
+      std::printf("%g e- told %g: %.3f +- %.3f px contrast %.2f residual %.3f\n", electrons, told,
+                  r.value().blur_px, r.value().standard_error_px, r.value().contrast,
+                  r.value().residual_per_sample);
+      ++count;
+      // An honest confidence: within 4 standard errors (or 0.05 px).
+      EXPECT_LT(std::abs(r.value().blur_px - 52.0), std::max(0.05, 4 * r.value().standard_error_px))
+          << electrons << " " << told;
+    }
+    EXPECT_LT(std::sqrt(squared / count), 0.05) << electrons << " e-";
+  }
+}
+
+TEST(MotionRefinement, WorksAlongEveryDirection) {
+  const auto along_x = fine_label(SceneKind::kEan13, "4006381333931");
+  for (Direction d : {Direction::kMinusX, Direction::kPlusY, Direction::kMinusY}) {
+    CaptureModel m = triplet_capture(48.5, 3000);
+    m.direction = d;
+    const auto scene = imaging::from_motion_frame(along_x, d);
+    CaptureModel assumed = m;
+    assumed.blur_px = 51;
+    const auto r = imaging::refine_motion(recorded(scene, m, 3), assumed, {});
+    ASSERT_TRUE(r.ok()) << r.error();
+    EXPECT_NEAR(r.value().blur_px, 48.5, 0.1) << imaging::direction_name(d);
+  }
+}
+
+TEST(MotionRefinement, FramesWithoutEdgesKeepTheirMotion) {
+  const imaging::Plane flat(640 * kSimSupersample, 360 * kSimSupersample, 0.8f);
+  CaptureModel m = triplet_capture(52, 3000);
+  CaptureModel assumed = m;
+  assumed.blur_px = 50;
+  const auto r = imaging::refine_motion(recorded(flat, m, 5), assumed, {});
+  ASSERT_TRUE(r.ok()) << r.error();
+  EXPECT_FALSE(r.value().edges);
+  EXPECT_FALSE(r.value().accelerating);
+  EXPECT_EQ(r.value().blur_px, 50);
+  EXPECT_TRUE(std::isinf(r.value().standard_error_px));
+}
+
+TEST(MotionRefinement, FindsASpeedChangeOnlyWhenThereIsOne) {
+  const auto scene = fine_label(SceneKind::kCode128, "FLUTTER-0042");
+  for (double ratio : {1.5, 0.7}) {
+    CaptureModel truth = triplet_capture(52, 3000);
+    truth.speed_ratio = ratio;
+    CaptureModel assumed = truth;
+    assumed.speed_ratio = 1;
+    assumed.blur_px = 50;
+    const auto r = imaging::refine_motion(recorded(scene, truth, 9), assumed, {});
+    ASSERT_TRUE(r.ok()) << r.error();
+    EXPECT_TRUE(r.value().accelerating) << ratio;
+    EXPECT_NEAR(r.value().speed_ratio, ratio, 0.1 * ratio) << ratio;
+    EXPECT_NEAR(r.value().blur_px, 52, 0.5) << ratio;
+    EXPECT_LT(r.value().residual_per_sample, r.value().constant_speed_residual) << ratio;
+  }
+  const CaptureModel steady = triplet_capture(52, 3000);
+  const auto r = imaging::refine_motion(recorded(scene, steady, 9), steady, {});
+  ASSERT_TRUE(r.ok()) << r.error();
+  EXPECT_FALSE(r.value().accelerating);
+  EXPECT_EQ(r.value().speed_ratio, 1);
+}
+
+TEST(MotionRefinement, RefusesWhatItCannotDo) {
+  const auto scene = fine_label(SceneKind::kCode128, "FLUTTER-0042");
+  const CaptureModel m = triplet_capture(52, 3000);
+  const auto frame = recorded(scene, m, 1);
+  for (double bad : {-0.1, 1.0, 1.5, double{NAN}, double{INFINITY}}) {
+    imaging::MotionRefinementOptions options;
+    options.tolerance = bad;
+    const auto r = imaging::refine_motion(frame, m, options);
+    ASSERT_FALSE(r.ok()) << bad;
+    EXPECT_NE(r.error().find("tolerance"), std::string::npos) << r.error();
+  }
+  CaptureModel white = m;
+  white.code = LedCode::parse(std::string(52, '7'), 3).value();
+  EXPECT_FALSE(imaging::refine_motion(frame, white, {}).ok());
+  CaptureModel huge = m;
+  huge.blur_px = 600;
+  const auto r = imaging::refine_motion(frame, huge, {});
+  ASSERT_FALSE(r.ok());
+  EXPECT_NE(r.error().find("does not fit"), std::string::npos) << r.error();
+}
+
+}  // namespace
+}  // namespace flutterscan::sim
