@@ -10,7 +10,7 @@
 #include "imaging/capture_descriptor.hpp"
 #include "imaging/deblur.hpp"
 #include "imaging/motion_frame.hpp"
-#include "session/barcode_reader.hpp"
+#include "reader/barcode_reader.hpp"
 #include "session/frame_model.hpp"
 #include "session/model_fit.hpp"
 #include "session/session_clock.hpp"
@@ -126,28 +126,28 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
   // Paper along the motion: where codes are looked for (processing.decode_area) and
   // the labels judged (read, or NO-READ).
   const imaging::Direction direction = model.value().direction;
-  const std::vector<LabelRegion> paper =
-      find_paper_runs(imaging::to_motion_frame(latent, direction));
-  const bool labels_only = config.processing.decode_area == DecodeArea::kLabels;
-  const std::vector<DecodeWindow> windows =
-      labels_only ? decode_windows(paper, latent.width, latent.height, direction)
-                  : std::vector<DecodeWindow>{};
-  BarcodeReadout readout;
+  const std::vector<reader::LabelRegion> paper =
+      reader::find_paper_runs(imaging::to_motion_frame(latent, direction));
+  const bool labels_only = config.processing.decode_area == reader::DecodeArea::kLabels;
+  const std::vector<reader::DecodeWindow> windows =
+      labels_only ? reader::decode_windows(paper, latent.width, latent.height, direction)
+                  : std::vector<reader::DecodeWindow>{};
+  reader::BarcodeReadout readout;
   if (!labels_only || !windows.empty())
-    readout =
-        read_barcodes(latent, config.processing.symbologies, config.processing.try_rotate, windows);
-  if (labels_only) log["decode_windows"] = windows.size();
-  const std::vector<DecodedCode>& codes = readout.codes;
+    readout = reader::read_barcodes(latent, config.processing.symbologies,
+                                    config.processing.try_rotate, windows);
+  if (labels_only) log["reader::decode_windows"] = windows.size();
+  const std::vector<reader::DecodedCode>& codes = readout.codes;
   if (!readout.decoder_fault.empty()) {
     // ZXing failed an internal assertion on this image: nothing read, the session goes on.
     log["decoder_fault"] = readout.decoder_fault;
     flags.push_back("decoder-fault");
   }
-  std::vector<LabelRegion> regions = paper;
+  std::vector<reader::LabelRegion> regions = paper;
   // A label cut by the frame is not judged; near the upstream edge the deblurred
   // image has no support: no judging there either.
   const double upstream = model.value().blur_px + 4;
-  std::erase_if(regions, [&](const LabelRegion& r) { return r.cut || r.begin < upstream; });
+  std::erase_if(regions, [&](const reader::LabelRegion& r) { return r.cut || r.begin < upstream; });
   const std::int64_t t3 = now_ns();
 
   std::vector<bool> used(codes.size(), false);
@@ -157,7 +157,7 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
                        {"format", codes[i].format},
                        {"x", std::lround(codes[i].centre_x)},
                        {"y", std::lround(codes[i].centre_y)}});
-  for (const LabelRegion& r : regions) {
+  for (const reader::LabelRegion& r : regions) {
     bool any = false;
     for (std::size_t i = 0; i < codes.size(); ++i) {
       const double p = along_motion(codes[i].centre_x, codes[i].centre_y, latent.width,

@@ -244,7 +244,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     std::string area;
     r.get("decode_area", area);
     if (!area.empty()) {
-      const auto a = decode_area_from_name(area);
+      const auto a = reader::decode_area_from_name(area);
       if (!a)
         return Out::failure(origin + ": processing.decode_area '" + area +
                             "' is neither labels nor frame");
@@ -337,7 +337,7 @@ std::string check_config(SessionConfig& c) {
     return problem("optics.line_time_us", "must be 0 (global shutter) up to 1000 us");
   if (c.processing.blur_check_every < 0)
     return problem("processing.blur_check_every", "must be >= 0");
-  if (auto why = check_symbologies(c.processing.symbologies); !why.empty())
+  if (auto why = reader::check_symbologies(c.processing.symbologies); !why.empty())
     return problem("processing.symbologies", "'" + c.processing.symbologies + "': " + why);
   imaging::Direction direction;
   if (!imaging::parse_direction(c.optics.direction, direction))
