@@ -66,10 +66,12 @@ inline DfuStatusReply dfu_get_status(SimBoard& board, std::uint16_t interface = 
                              0, interface, usb::kDfuStatusSize);
   DfuStatusReply s;
   if (r.stalled || r.data.size() != usb::kDfuStatusSize) return s;
+  const proto::DfuStatusReply reply = proto::parse_dfu_status(
+      std::span<const std::uint8_t, usb::kDfuStatusSize>(r.data.data(), usb::kDfuStatusSize));
   s.stalled = false;
-  s.status = static_cast<DfuStatus>(r.data[0]);
-  s.poll_timeout_ms = static_cast<std::uint32_t>(r.data[1] | r.data[2] << 8 | r.data[3] << 16);
-  s.state = static_cast<DfuState>(r.data[4]);
+  s.status = reply.status;
+  s.poll_timeout_ms = reply.poll_timeout_ms;
+  s.state = reply.state;
   return s;
 }
 

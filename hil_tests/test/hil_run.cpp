@@ -5,8 +5,11 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <gtest/gtest.h>
+
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -73,12 +76,21 @@ HarnessRun run_harness(const std::vector<std::string>& harness_options,
   return run;
 }
 
-std::string make_work_dir(const std::string& name) {
+WorkDir::~WorkDir() {
+  if (::testing::Test::HasFailure()) {
+    std::printf("work directory kept for a look: %s\n", path_text_.c_str());
+    return;
+  }
+  std::error_code ignored;
+  std::filesystem::remove_all(path_, ignored);
+}
+
+WorkDir make_work_dir(const std::string& name) {
   const auto dir = std::filesystem::temp_directory_path() /
                    ("flutterscan_hil_" + name + "_" + std::to_string(getpid()));
   std::filesystem::remove_all(dir);
   std::filesystem::create_directories(dir);
-  return dir.string();
+  return WorkDir(dir);
 }
 
 std::vector<std::pair<std::uint64_t, std::uint8_t>> led_timeline(const nlohmann::json& record) {

@@ -4,6 +4,7 @@
 // JSON records; plus helpers to read the records (LED timeline, reports).
 
 #include <cstdint>
+#include <filesystem>
 #include <map>
 #include <string>
 #include <utility>
@@ -29,8 +30,25 @@ HarnessRun run_harness(const std::vector<std::string>& harness_options,
 /// \brief Runs `argv` (no harness) and returns its exit status and merged output.
 std::pair<int, std::string> run_plain(const std::vector<std::string>& argv);
 
-/// \brief A fresh directory for one test's files.
-std::string make_work_dir(const std::string& name);
+/// \brief A test's own directory under the temp directory, removed with the
+/// object when the test has not failed (a failed test's stays, its path printed).
+class WorkDir {
+ public:
+  explicit WorkDir(std::filesystem::path path) : path_(std::move(path)) {}
+  WorkDir(const WorkDir&) = delete;
+  WorkDir& operator=(const WorkDir&) = delete;
+  ~WorkDir();
+  const std::string& path() const { return path_text_; }
+  /// \brief The path, wherever a test passes it as a string.
+  operator const std::string&() const { return path_text_; }
+
+ private:
+  std::filesystem::path path_;
+  std::string path_text_ = path_.string();
+};
+
+/// \brief A fresh, empty directory for one test's files.
+WorkDir make_work_dir(const std::string& name);
 
 /// \brief The LED mask timeline: (time, LEDs on after the write), in time order.
 std::vector<std::pair<std::uint64_t, std::uint8_t>> led_timeline(const nlohmann::json& record);

@@ -22,6 +22,7 @@
 #include "imaging/frame_conversion.hpp"
 #include "imaging/metrics.hpp"
 #include "imaging/motion_refinement.hpp"
+#include "reader/barcode_reader.hpp"
 #include "sim/scene.hpp"
 
 namespace flutterscan::app {
@@ -266,7 +267,7 @@ void run(const DeblurFlags& f) {
   double decode_ms = 0;
   if (f.decode) {
     start = std::chrono::steady_clock::now();
-    decoded = sim::decode_barcodes(result.value().latent);
+    decoded = reader::code_texts(reader::read_barcodes(result.value().latent));
     decode_ms = elapsed_ms(start);
   }
   if (f.json) {

@@ -31,6 +31,7 @@
 #include "imaging/metrics.hpp"
 #include "plot/heat_map.hpp"
 #include "plot/line_chart.hpp"
+#include "reader/barcode_reader.hpp"
 #include "sim/forward_model.hpp"
 #include "sim/pixel_integration.hpp"
 #include "sim/scene.hpp"
@@ -188,7 +189,7 @@ int main(int argc, char** argv) {
         if (psnr_only) continue;
         s.ssim = imaging::ssim(scene.reflectance, result.value().latent, region);
         if (!scene.content.empty()) {
-          const auto decoded = sim::decode_barcodes(result.value().latent);
+          const auto decoded = reader::code_texts(reader::read_barcodes(result.value().latent));
           s.decoded = std::find(decoded.begin(), decoded.end(), scene.content) != decoded.end();
         }
       }

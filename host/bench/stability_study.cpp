@@ -21,6 +21,7 @@
 #include "imaging/per_channel_wiener.hpp"
 #include "imaging/row_phase_deblur.hpp"
 #include "plot/line_chart.hpp"
+#include "reader/barcode_reader.hpp"
 #include "sim/colour_scene.hpp"
 #include "sim/forward_model.hpp"
 #include "sim/pixel_integration.hpp"
@@ -96,7 +97,7 @@ Score judge(const Plane& latent, const Plane& truth, const std::string& content)
   s.psnr = imaging::psnr(
       truth, latent,
       imaging::scored_region(truth.width, truth.height, kBlur, imaging::Direction::kPlusX));
-  const auto found = sim::decode_barcodes(latent);
+  const auto found = reader::code_texts(reader::read_barcodes(latent));
   s.decoded = std::find(found.begin(), found.end(), content) != found.end();
   return s;
 }

@@ -13,18 +13,8 @@ namespace flutterscan::device {
 
 namespace {
 
-/// DFU runtime and DFU mode interfaces: class 0xFE (application specific), subclass 1.
-constexpr std::uint8_t kDfuClass = 0xFE;
-constexpr std::uint8_t kDfuSubclass = 1;
-constexpr std::uint8_t kDfuProtocolRuntime = 1;
-constexpr std::uint8_t kDfuProtocolDfuMode = 2;
-/// DFU_DETACH's wValue: the contract's wDetachTimeOut, ms.
-constexpr std::uint16_t kDetachTimeoutMs = 1000;
 /// Control transfer timeout (an erase can take a while; bwPollTimeout covers the rest).
 constexpr unsigned kControlTimeoutMs = 5000;
-/// bmRequestType of DFU class requests to an interface (USB 2.0 9.3.1).
-constexpr std::uint8_t kClassInterfaceOut = 0x21;
-constexpr std::uint8_t kClassInterfaceIn = 0xA1;
 /// GETSTATUS polls allowed for one block or the manifest before giving up.
 constexpr int kMaxPolls = 2000;
 /// Between looks at the bus while waiting for a device to enumerate.
@@ -41,38 +31,38 @@ std::string block_text(std::size_t block) {
 }  // namespace
 
 std::string dfu_status_text(std::uint8_t status) {
-  switch (status) {
-    case 0x00:
+  switch (static_cast<protocol::DfuStatus>(status)) {
+    case protocol::DfuStatus::kOk:
       return "OK";
-    case 0x01:
+    case protocol::DfuStatus::kErrTarget:
       return "errTARGET: file is not targeted for this device";
-    case 0x02:
+    case protocol::DfuStatus::kErrFile:
       return "errFILE: file fails a vendor-specific check";
-    case 0x03:
+    case protocol::DfuStatus::kErrWrite:
       return "errWRITE: unable to write memory";
-    case 0x04:
+    case protocol::DfuStatus::kErrErase:
       return "errERASE: memory erase failed";
-    case 0x05:
+    case protocol::DfuStatus::kErrCheckErased:
       return "errCHECK_ERASED: memory erase check failed";
-    case 0x06:
+    case protocol::DfuStatus::kErrProg:
       return "errPROG: program memory failed";
-    case 0x07:
+    case protocol::DfuStatus::kErrVerify:
       return "errVERIFY: programmed memory failed verification";
-    case 0x08:
+    case protocol::DfuStatus::kErrAddress:
       return "errADDRESS: address out of range (blocks out of order?)";
-    case 0x09:
+    case protocol::DfuStatus::kErrNotDone:
       return "errNOTDONE: end of download before it was expected";
-    case 0x0A:
+    case protocol::DfuStatus::kErrFirmware:
       return "errFIRMWARE: the image failed the bootloader's check (header, board, size or CRC)";
-    case 0x0B:
+    case protocol::DfuStatus::kErrVendor:
       return "errVENDOR: vendor-specific error";
-    case 0x0C:
+    case protocol::DfuStatus::kErrUsbReset:
       return "errUSBR: unexpected USB reset";
-    case 0x0D:
+    case protocol::DfuStatus::kErrPowerOnReset:
       return "errPOR: unexpected power-on reset";
-    case 0x0E:
+    case protocol::DfuStatus::kErrUnknown:
       return "errUNKNOWN: unknown error";
-    case 0x0F:
+    case protocol::DfuStatus::kErrStalledPacket:
       return "errSTALLEDPKT: unexpected request";
   }
   return "DFU status " + std::to_string(status);
@@ -109,19 +99,18 @@ const char* dfu_state_name(DfuState state) {
 // ---------------------------------------------------------------------------
 // The DFU request sequence
 
-Expected<DfuStatus> dfu_get_status(DfuControl& dfu) {
-  const auto reply = dfu.control_in(DfuRequest::kGetStatus, 0, 6);
-  if (!reply.ok()) return fail<DfuStatus>(reply.error());
+Expected<DfuStatusReply> dfu_get_status(DfuControl& dfu) {
+  const auto reply = dfu.control_in(DfuRequest::kGetStatus, 0,
+                                    static_cast<std::uint16_t>(protocol::kDfuStatusSize));
+  if (!reply.ok()) return fail<DfuStatusReply>(reply.error());
   const auto& bytes = reply.value();
-  if (bytes.size() != 6)
-    return fail<DfuStatus>(
+  if (bytes.size() != protocol::kDfuStatusSize)
+    return fail<DfuStatusReply>(
         ErrorKind::kBadReply,
         "DFU GETSTATUS returned " + std::to_string(bytes.size()) + " bytes, expected 6");
-  DfuStatus status;
-  status.status = bytes[0];
-  status.poll_timeout_ms = static_cast<std::uint32_t>(bytes[1] | bytes[2] << 8 | bytes[3] << 16);
-  status.state = static_cast<DfuState>(bytes[4]);
-  return Expected<DfuStatus>::success(status);
+  return Expected<DfuStatusReply>::success(
+      protocol::parse_dfu_status(std::span<const std::uint8_t, protocol::kDfuStatusSize>(
+          bytes.data(), protocol::kDfuStatusSize)));
 }
 
 Expected<Done> dfu_make_idle(DfuControl& dfu) {
@@ -136,7 +125,8 @@ Expected<Done> dfu_make_idle(DfuControl& dfu) {
   if (status.value().state != DfuState::kDfuIdle)
     return fail(ErrorKind::kRejected,
                 std::string("the bootloader stays in ") + dfu_state_name(status.value().state) +
-                    " (" + dfu_status_text(status.value().status) + ") instead of dfuIDLE");
+                    " (" + dfu_status_text(static_cast<std::uint8_t>(status.value().status)) +
+                    ") instead of dfuIDLE");
   return done();
 }
 
@@ -150,11 +140,12 @@ Expected<DfuState> poll_until(DfuControl& dfu, std::initializer_list<DfuState> d
   for (int poll = 0; poll < kMaxPolls; ++poll) {
     const auto status = dfu_get_status(dfu);
     if (!status.ok()) return fail<DfuState>(status.error());
-    const DfuStatus s = status.value();
-    if (s.state == DfuState::kError || s.status != 0)
-      return fail<DfuState>(ErrorKind::kRejected, "the bootloader refused " + what + ": " +
-                                                      dfu_status_text(s.status) + " (state " +
-                                                      dfu_state_name(s.state) + ")");
+    const DfuStatusReply s = status.value();
+    if (s.state == DfuState::kError || s.status != protocol::DfuStatus::kOk)
+      return fail<DfuState>(ErrorKind::kRejected,
+                            "the bootloader refused " + what + ": " +
+                                dfu_status_text(static_cast<std::uint8_t>(s.status)) + " (state " +
+                                dfu_state_name(s.state) + ")");
     if (std::find(done_states.begin(), done_states.end(), s.state) != done_states.end())
       return Expected<DfuState>::success(s.state);
     if (std::find(busy_states.begin(), busy_states.end(), s.state) == busy_states.end())
@@ -170,12 +161,14 @@ Expected<DfuState> poll_until(DfuControl& dfu, std::initializer_list<DfuState> d
 Expected<Done> dfu_download(DfuControl& dfu, std::span<const std::uint8_t> image,
                             const ProgressCallback& progress, const DfuSleeper& sleep) {
   if (auto idle = dfu_make_idle(dfu); !idle.ok()) return idle;
-  const std::size_t blocks = (image.size() + kDfuBlockSize - 1) / kDfuBlockSize;
+  const std::size_t blocks =
+      (image.size() + protocol::kDfuTransferSize - 1) / protocol::kDfuTransferSize;
   if (blocks > 0xFFFF) return fail(ErrorKind::kBadInput, "image too large for DFU block numbers");
   if (progress) progress(0, image.size());
   for (std::size_t block = 0; block < blocks; ++block) {
-    const std::size_t offset = block * kDfuBlockSize;
-    const auto data = image.subspan(offset, std::min(kDfuBlockSize, image.size() - offset));
+    const std::size_t offset = block * protocol::kDfuTransferSize;
+    const auto data = image.subspan(
+        offset, std::min<std::size_t>(protocol::kDfuTransferSize, image.size() - offset));
     if (auto sent = dfu.control_out(DfuRequest::kDnload, static_cast<std::uint16_t>(block), data);
         !sent.ok())
       return fail(sent.error().kind, "DNLOAD " + block_text(block) + ": " + sent.error().message);
@@ -203,12 +196,12 @@ Expected<std::vector<std::uint8_t>> dfu_upload(DfuControl& dfu, std::size_t leng
   for (std::size_t block = 0; out.size() < length; ++block) {
     if (block > 0xFFFF) break;
     const auto data = dfu.control_in(DfuRequest::kUpload, static_cast<std::uint16_t>(block),
-                                     static_cast<std::uint16_t>(kDfuBlockSize));
+                                     static_cast<std::uint16_t>(protocol::kDfuTransferSize));
     if (!data.ok())
       return fail<Bytes>(data.error().kind,
                          "UPLOAD " + block_text(block) + ": " + data.error().message);
     out.insert(out.end(), data.value().begin(), data.value().end());
-    if (data.value().size() < kDfuBlockSize) break;  // a short block ends the upload
+    if (data.value().size() < protocol::kDfuTransferSize) break;  // a short block ends the upload
   }
   // Stopped before a short block: back to dfuIDLE.
   if (auto idle = dfu_make_idle(dfu); !idle.ok()) return fail<Bytes>(idle.error());
@@ -265,7 +258,7 @@ class LibusbDfuControl final : public DfuControl {
   Expected<Done> control_out(DfuRequest request, std::uint16_t value,
                              std::span<const std::uint8_t> data) override {
     const int rc = libusb_control_transfer(
-        claimed_.handle(), kClassInterfaceOut, static_cast<std::uint8_t>(request), value,
+        claimed_.handle(), protocol::kDfuRequestOut, static_cast<std::uint8_t>(request), value,
         static_cast<std::uint16_t>(claimed_.interface_number()),
         const_cast<unsigned char*>(data.data()), static_cast<std::uint16_t>(data.size()),
         kControlTimeoutMs);
@@ -278,7 +271,7 @@ class LibusbDfuControl final : public DfuControl {
   Expected<std::vector<std::uint8_t>> control_in(DfuRequest request, std::uint16_t value,
                                                  std::uint16_t length) override {
     std::vector<std::uint8_t> buffer(length);
-    const int rc = libusb_control_transfer(claimed_.handle(), kClassInterfaceIn,
+    const int rc = libusb_control_transfer(claimed_.handle(), protocol::kDfuRequestIn,
                                            static_cast<std::uint8_t>(request), value,
                                            static_cast<std::uint16_t>(claimed_.interface_number()),
                                            buffer.data(), length, kControlTimeoutMs);
@@ -320,7 +313,8 @@ int find_dfu_interface(libusb_device* device, std::uint8_t protocol) {
     const libusb_interface& interface = config->interface[i];
     for (int a = 0; a < interface.num_altsetting; ++a) {
       const libusb_interface_descriptor& alt = interface.altsetting[a];
-      if (alt.bInterfaceClass == kDfuClass && alt.bInterfaceSubClass == kDfuSubclass &&
+      if (alt.bInterfaceClass == protocol::kDfuInterfaceClass &&
+          alt.bInterfaceSubClass == protocol::kDfuInterfaceSubclass &&
           alt.bInterfaceProtocol == protocol) {
         found = alt.bInterfaceNumber;
         break;
@@ -465,11 +459,12 @@ Expected<FlashReport> flash_controller(const FirmwareImage& image, const FlashOp
     say(options, "detaching into the DFU bootloader");
     bool detached = false;
     {
-      auto runtime =
-          open_dfu_interface(usb, protocol::kUsbProductIdApplication, serial, kDfuProtocolRuntime);
+      auto runtime = open_dfu_interface(usb, protocol::kUsbProductIdApplication, serial,
+                                        protocol::kDfuProtocolRuntime);
       if (runtime.ok()) {
         LibusbDfuControl control(*runtime.value());
-        const auto sent = control.control_out(DfuRequest::kDetach, kDetachTimeoutMs, {});
+        const auto sent =
+            control.control_out(DfuRequest::kDetach, protocol::kDfuDetachTimeoutMs, {});
         // The device may reset before the status stage: gone is fine.
         detached = sent.ok() || sent.error().kind == ErrorKind::kGone;
         if (!detached) say(options, "DFU_DETACH failed: " + sent.error().message);
@@ -495,8 +490,8 @@ Expected<FlashReport> flash_controller(const FirmwareImage& image, const FlashOp
   }
 
   {
-    auto claimed =
-        open_dfu_interface(usb, protocol::kUsbProductIdBootloader, serial, kDfuProtocolDfuMode);
+    auto claimed = open_dfu_interface(usb, protocol::kUsbProductIdBootloader, serial,
+                                      protocol::kDfuProtocolDfuMode);
     if (!claimed.ok()) return fail<FlashReport>(claimed.error());
     LibusbDfuControl dfu(*claimed.value());
     const auto start = std::chrono::steady_clock::now();
@@ -523,7 +518,7 @@ Expected<FlashReport> flash_controller(const FirmwareImage& image, const FlashOp
                                    " (" + std::to_string(readback.value().size()) + " bytes read)");
     }
     // Start the application: DFU_DETACH, then a bus reset (either starts it).
-    dfu.control_out(DfuRequest::kDetach, kDetachTimeoutMs, {});
+    dfu.control_out(DfuRequest::kDetach, protocol::kDfuDetachTimeoutMs, {});
     libusb_reset_device(claimed.value()->handle());
   }
 

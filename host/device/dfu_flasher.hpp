@@ -5,6 +5,7 @@
 // GETSTATUS / DNLOAD block by block (block n lands at the application base +
 // n * 1024), a zero-length DNLOAD, manifest, read back with UPLOAD and compare,
 // reset, wait for the application and check the version GetInfo reports.
+// The DFU vocabulary is common/dfu.hpp, the firmware's too.
 // The DFU request sequence is written against DfuControl so it is tested
 // without USB; LibusbDfuControl is the real one.
 
@@ -18,45 +19,14 @@
 
 #include "device/device_error.hpp"
 #include "device/firmware_image.hpp"
+#include "flutterscan/common/dfu.hpp"
 #include "flutterscan/common/protocol.hpp"
 
 namespace flutterscan::device {
 
-/// DFU 1.1 class requests (bRequest).
-enum class DfuRequest : std::uint8_t {
-  kDetach = 0,
-  kDnload = 1,
-  kUpload = 2,
-  kGetStatus = 3,
-  kClrStatus = 4,
-  kGetState = 5,
-  kAbort = 6,
-};
-
-/// DFU 1.1 device states (bState).
-enum class DfuState : std::uint8_t {
-  kAppIdle = 0,
-  kAppDetach = 1,
-  kDfuIdle = 2,
-  kDnloadSync = 3,
-  kDnBusy = 4,
-  kDnloadIdle = 5,
-  kManifestSync = 6,
-  kManifest = 7,
-  kManifestWaitReset = 8,
-  kUploadIdle = 9,
-  kError = 10,
-};
-
-/// Bytes per DNLOAD/UPLOAD block (the contract's wTransferSize).
-inline constexpr std::size_t kDfuBlockSize = 1024;
-
-/// \brief A GETSTATUS reply.
-struct DfuStatus {
-  std::uint8_t status = 0;  ///< bStatus (0 OK, 0x0A errFIRMWARE, ...)
-  DfuState state = DfuState::kDfuIdle;
-  std::uint32_t poll_timeout_ms = 0;  ///< bwPollTimeout
-};
+using protocol::DfuRequest;
+using protocol::DfuState;
+using protocol::DfuStatusReply;
 
 /// \brief The DFU status code's name and meaning ("errFIRMWARE: firmware corrupt").
 std::string dfu_status_text(std::uint8_t status);
@@ -81,7 +51,7 @@ using DfuSleeper = std::function<void(std::chrono::milliseconds)>;
 using ProgressCallback = std::function<void(std::size_t done, std::size_t total)>;
 
 /// \brief GETSTATUS.
-Expected<DfuStatus> dfu_get_status(DfuControl& dfu);
+Expected<DfuStatusReply> dfu_get_status(DfuControl& dfu);
 /// \brief Brings the bootloader to dfuIDLE (CLRSTATUS from dfuERROR, ABORT from others).
 Expected<Done> dfu_make_idle(DfuControl& dfu);
 /// \brief Downloads `image` block by block, the zero-length DNLOAD and manifest,

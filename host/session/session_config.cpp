@@ -245,7 +245,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     std::string area;
     r.get("decode_area", area);
     if (!area.empty()) {
-      const auto a = decode_area_from_name(area);
+      const auto a = reader::decode_area_from_name(area);
       if (!a)
         return Out::failure(origin + ": processing.decode_area '" + area +
                             "' is neither labels nor frame");
@@ -341,7 +341,7 @@ std::string check_config(SessionConfig& c) {
   if (!(c.processing.blur_tolerance_pct >= 0 && c.processing.blur_tolerance_pct < 100))
     return problem("processing.blur_tolerance",
                    "must be a percentage >= 0 and < 100 (0: the encoder's blur exactly)");
-  if (auto why = check_symbologies(c.processing.symbologies); !why.empty())
+  if (auto why = reader::check_symbologies(c.processing.symbologies); !why.empty())
     return problem("processing.symbologies", "'" + c.processing.symbologies + "': " + why);
   imaging::Direction direction;
   if (!imaging::parse_direction(c.optics.direction, direction))

@@ -14,7 +14,7 @@
 #include "flutterscan/common/led_code.hpp"
 #include "flutterscan/common/result.hpp"
 #include "imaging/deblur.hpp"
-#include "session/barcode_reader.hpp"
+#include "reader/barcode_reader.hpp"
 
 namespace flutterscan::session {
 
@@ -86,14 +86,14 @@ struct ProcessingConfig {
   /// encoder's (imaging/motion_refinement.hpp); 0 = use the encoder's blur exactly.
   double blur_tolerance_pct = 10;
   /// ZXing format names read on each fused frame, comma-separated (fewer is faster).
-  std::string symbologies = kDefaultSymbologies;
+  std::string symbologies = reader::kDefaultSymbologies;
   /// Also look for 1-D codes turned by 90 degrees; a line whose labels always
   /// pass the same way up can turn it off and decode in about half the time.
   bool try_rotate = true;
   /// Look for codes on the label paper only (bright runs along the motion, the
   /// frame's edges included) or on the whole frame; "frame" for codes printed
   /// straight on a substrate no brighter than the belt.
-  DecodeArea decode_area = DecodeArea::kLabels;
+  reader::DecodeArea decode_area = reader::DecodeArea::kLabels;
 };
 
 struct OutputConfig {

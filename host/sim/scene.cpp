@@ -1,17 +1,9 @@
-// ZXing 1.4's Result::text() returns std::wstring unless ZX_USE_UTF8 is
-// defined before its headers are included; with it, UTF-8 std::string.
-#define ZX_USE_UTF8 1
-
 #include "sim/scene.hpp"
 
 #include <ZXing/BarcodeFormat.h>
 #include <ZXing/BitMatrix.h>
 #include <ZXing/CharacterSet.h>
-#include <ZXing/DecodeHints.h>
-#include <ZXing/ImageView.h>
 #include <ZXing/MultiFormatWriter.h>
-#include <ZXing/ReadBarcode.h>
-#include <ZXing/Result.h>
 
 #include <opencv2/core.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -547,12 +539,6 @@ PlaneResult render_image(const SceneSpec& spec) {
   return PlaneResult::success(std::move(image));
 }
 
-std::uint8_t to_byte(float v) {
-  if (!(v > 0.0f)) return 0;  // also NaN
-  if (v >= 1.0f) return 255;
-  return static_cast<std::uint8_t>(std::lround(v * 255.0f));
-}
-
 }  // namespace
 
 std::string_view scene_kind_name(SceneKind kind) {
@@ -608,20 +594,6 @@ PlaneResult render_scene(const SceneSpec& camera_spec, int supersample) {
   PlaneResult label = spec.kind == SceneKind::kText ? render_text(spec) : render_barcode(spec);
   if (!label.ok()) return label;
   return PlaneResult::success(weather_print(std::move(label.value()), camera_spec, supersample));
-}
-
-std::vector<std::string> decode_barcodes(const imaging::Plane& image) {
-  if (image.width <= 0 || image.height <= 0 || image.empty()) return {};
-  std::vector<std::uint8_t> lum(image.pixels.size());
-  std::transform(image.pixels.begin(), image.pixels.end(), lum.begin(), to_byte);
-  const ZXing::ImageView view(lum.data(), image.width, image.height, ZXing::ImageFormat::Lum);
-  ZXing::DecodeHints hints;
-  hints.setFormats(ZXing::BarcodeFormat::Any).setTryHarder(true).setTryRotate(true);
-  std::vector<std::string> texts;
-  for (const ZXing::Result& result : ZXing::ReadBarcodes(view, hints)) {
-    if (result.isValid()) texts.push_back(result.text());
-  }
-  return texts;
 }
 
 }  // namespace flutterscan::sim

@@ -82,9 +82,4 @@ Result<SceneSpec, std::string> parse_scene(const std::string& text);
 /// file that cannot be read.
 Result<imaging::Plane, std::string> render_scene(const SceneSpec& spec, int supersample = 1);
 
-/// \brief Decodes every barcode ZXing finds in `image` (reflectance or grey,
-/// values clipped to [0, 1]; any format, trying harder and rotated), returning
-/// their texts as UTF-8 in ZXing's order.
-std::vector<std::string> decode_barcodes(const imaging::Plane& image);
-
 }  // namespace flutterscan::sim

@@ -40,14 +40,14 @@ class FakeBootloader final : public DfuControl {
           state = DfuState::kManifestSync;
           return done();
         }
-        if (value != next_block || data.size() > kDfuBlockSize) {
+        if (value != next_block || data.size() > protocol::kDfuTransferSize) {
           state = DfuState::kError;
           status = 0x08;  // errADDRESS
           return done();
         }
-        if (flash.size() < value * kDfuBlockSize + data.size())
-          flash.resize(value * kDfuBlockSize + data.size());
-        std::memcpy(flash.data() + value * kDfuBlockSize, data.data(), data.size());
+        if (flash.size() < value * protocol::kDfuTransferSize + data.size())
+          flash.resize(value * protocol::kDfuTransferSize + data.size());
+        std::memcpy(flash.data() + value * protocol::kDfuTransferSize, data.data(), data.size());
         ++next_block;
         state = DfuState::kDnloadSync;
         busy_polls_left = 1;
@@ -94,7 +94,7 @@ class FakeBootloader final : public DfuControl {
     if (request == DfuRequest::kUpload) {
       if (state != DfuState::kDfuIdle && state != DfuState::kUploadIdle)
         return fail<Bytes>(ErrorKind::kRejected, "stall");
-      const std::size_t offset = std::size_t{value} * kDfuBlockSize;
+      const std::size_t offset = std::size_t{value} * protocol::kDfuTransferSize;
       const std::size_t count =
           offset >= flash.size() ? 0 : std::min<std::size_t>(length, flash.size() - offset);
       state = count == length ? DfuState::kUploadIdle : DfuState::kDfuIdle;

@@ -28,7 +28,7 @@
 #include "imaging/model_choice.hpp"
 #include "imaging/model_guards.hpp"
 #include "imaging/motion_refinement.hpp"
-#include "session/barcode_reader.hpp"
+#include "reader/barcode_reader.hpp"
 #include "session/session.hpp"
 
 namespace {
@@ -181,10 +181,10 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
     const double ratio = imaging::residual_ratio(electrons, latent, model.value(), height / 32);
     const double saturated = converted.value().saturated_share;
     lap("guards");
-    const auto windows = session::decode_windows(session::find_paper_runs(latent), latent.width,
+    const auto windows = reader::decode_windows(reader::find_paper_runs(latent), latent.width,
                                                  latent.height, imaging::Direction::kPlusX);
     const auto readout =
-        session::read_barcodes(latent, session::kDefaultSymbologies, true, windows);
+        reader::read_barcodes(latent, reader::kDefaultSymbologies, true, windows);
     lap("decode");
     if (r == 0)
       std::cout << "stage frame: blur " << model.value().blur_px << " px refined to "

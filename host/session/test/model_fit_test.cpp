@@ -10,6 +10,7 @@
 #include "imaging/frame_conversion.hpp"
 #include "imaging/metrics.hpp"
 #include "imaging/model_guards.hpp"
+#include "reader/barcode_reader.hpp"
 #include "session/model_fit.hpp"
 #include "sim/colour_scene.hpp"
 #include "sim/forward_model.hpp"
@@ -72,7 +73,7 @@ TEST(ModelFit, NominalGreyFrameKeepsTheSimplestModel) {
   EXPECT_EQ(fitted.value().log["model"]["chosen"],
             "grey latent, global code phase, blur from the encoder");
   EXPECT_LT(fitted.value().log["guards"]["residual_ratio"].get<double>(), 1.5);
-  EXPECT_EQ(sim::decode_barcodes(fitted.value().latent), std::vector<std::string>{"FIT-0042"});
+  EXPECT_EQ(reader::code_texts(reader::read_barcodes(fitted.value().latent)), std::vector<std::string>{"FIT-0042"});
 }
 
 TEST(ModelFit, ColourPrintGetsPerChannelLatents) {
@@ -84,7 +85,7 @@ TEST(ModelFit, ColourPrintGetsPerChannelLatents) {
   ASSERT_TRUE(fitted.ok()) << fitted.error();
   EXPECT_EQ(fitted.value().log["model"]["chosen"],
             "per-channel latents, global code phase, blur from the encoder");
-  EXPECT_EQ(sim::decode_barcodes(fitted.value().latent), std::vector<std::string>{"FIT-0042"});
+  EXPECT_EQ(reader::code_texts(reader::read_barcodes(fitted.value().latent)), std::vector<std::string>{"FIT-0042"});
 }
 
 TEST(ModelFit, WithoutAnEncoderTheBlurComesFromTheFrame) {
@@ -100,7 +101,7 @@ TEST(ModelFit, WithoutAnEncoderTheBlurComesFromTheFrame) {
   EXPECT_NEAR(fitted.value().log["model"]["blur_px"].get<double>(), 47.5, 0.3);
   EXPECT_EQ(fitted.value().log["model"]["chosen"],
             "grey latent, global code phase, blur estimated from the frame");
-  EXPECT_EQ(sim::decode_barcodes(fitted.value().latent), std::vector<std::string>{"FIT-0042"});
+  EXPECT_EQ(reader::code_texts(reader::read_barcodes(fitted.value().latent)), std::vector<std::string>{"FIT-0042"});
 }
 
 TEST(ModelFit, TheBlurCheckCatchesAWrongEncoderReading) {
@@ -140,7 +141,8 @@ TEST(ModelFit, RefinementCorrectsAWrongEncoderReading) {
   EXPECT_NEAR(log["model"]["blur_px"].get<double>(), 52.0, 0.05) << log.dump();
   ASSERT_TRUE(wrong.value().refinement.has_value());
   EXPECT_TRUE(wrong.value().refinement_used);
-  EXPECT_EQ(sim::decode_barcodes(wrong.value().latent), std::vector<std::string>{"FIT-0042"});
+  EXPECT_EQ(reader::code_texts(reader::read_barcodes(wrong.value().latent)),
+            std::vector<std::string>{"FIT-0042"});
 
   // Told 30% wrong, the truth lies outside the tolerance: flagged and not used.
   const auto far = deblur_fitting_model(imaging::saturated_share(f.dn, capture(68)), f.electrons,

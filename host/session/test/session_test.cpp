@@ -217,10 +217,10 @@ TEST(SessionConfigFile, ReadsTheAnnotatedExampleAndNamesBadKeys) {
   const auto no_rotate = parse_config("[processing]\ntry_rotate = false\n", "line3.toml");
   ASSERT_TRUE(no_rotate.ok()) << no_rotate.error();
   EXPECT_FALSE(no_rotate.value().processing.try_rotate);
-  EXPECT_EQ(config.processing.decode_area, DecodeArea::kLabels);  // the default
+  EXPECT_EQ(config.processing.decode_area, reader::DecodeArea::kLabels);  // the default
   const auto whole = parse_config("[processing]\ndecode_area = \"frame\"\n", "line3.toml");
   ASSERT_TRUE(whole.ok()) << whole.error();
-  EXPECT_EQ(whole.value().processing.decode_area, DecodeArea::kFrame);
+  EXPECT_EQ(whole.value().processing.decode_area, reader::DecodeArea::kFrame);
   const auto bad_area = parse_config("[processing]\ndecode_area = \"roi\"\n", "line3.toml");
   ASSERT_FALSE(bad_area.ok());
   EXPECT_NE(bad_area.error().find("line3.toml"), std::string::npos) << bad_area.error();

@@ -12,6 +12,7 @@
 #include "imaging/frame_conversion.hpp"
 #include "imaging/metrics.hpp"
 #include "imaging/motion_frame.hpp"
+#include "reader/barcode_reader.hpp"
 #include "sim/forward_model.hpp"
 #include "sim/scene.hpp"
 
@@ -200,7 +201,7 @@ TEST(Bayer, RawPlanesDeblurADecodableCode128) {
   for (BayerMode mode : {BayerMode::kRawPlanes, BayerMode::kDemosaicFirst}) {
     const auto result = imaging::deblur_bayer(mosaic, bayer, {}, mode);
     ASSERT_TRUE(result.ok());
-    const auto decoded = decode_barcodes(result.value().latent);
+    const auto decoded = reader::code_texts(reader::read_barcodes(result.value().latent));
     EXPECT_NE(std::find(decoded.begin(), decoded.end(), "FS-0042"), decoded.end())
         << imaging::bayer_mode_name(mode);
   }

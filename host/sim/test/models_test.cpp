@@ -13,6 +13,7 @@
 #include "imaging/metrics.hpp"
 #include "imaging/per_channel_wiener.hpp"
 #include "imaging/row_phase_deblur.hpp"
+#include "reader/barcode_reader.hpp"
 #include "sim/colour_scene.hpp"
 #include "sim/forward_model.hpp"
 #include "sim/timeline_forward.hpp"
@@ -48,7 +49,7 @@ SceneSpec label_spec() {
 }
 
 bool decodes(const Plane& image) {
-  const auto found = decode_barcodes(image);
+  const auto found = reader::code_texts(reader::read_barcodes(image));
   return std::find(found.begin(), found.end(), "FS-0042") != found.end();
 }
 

@@ -14,6 +14,8 @@
 #include <utility>
 #include <vector>
 
+#include "reader/barcode_reader.hpp"
+
 namespace flutterscan::sim {
 namespace {
 
@@ -78,7 +80,7 @@ TEST_P(BarcodeRoundTrip, RendersAndDecodesToItsContent) {
   const auto& param = GetParam();
   const imaging::Plane image = render_ok(make_spec(param.kind, param.content));
   ASSERT_FALSE(image.empty());
-  EXPECT_EQ(decode_barcodes(image), std::vector<std::string>{param.content});
+  EXPECT_EQ(reader::code_texts(reader::read_barcodes(image)), std::vector<std::string>{param.content});
 }
 
 TEST_P(BarcodeRoundTrip, FractionalModulesStillDecode) {
@@ -87,7 +89,7 @@ TEST_P(BarcodeRoundTrip, FractionalModulesStillDecode) {
   spec.module_px = 2.5;
   const imaging::Plane image = render_ok(spec);
   ASSERT_FALSE(image.empty());
-  EXPECT_EQ(decode_barcodes(image), std::vector<std::string>{param.content});
+  EXPECT_EQ(reader::code_texts(reader::read_barcodes(image)), std::vector<std::string>{param.content});
 }
 
 INSTANTIATE_TEST_SUITE_P(
@@ -284,8 +286,8 @@ TEST(RenderScene, RejectsBadSizesAndReflectances) {
 }
 
 TEST(DecodeBarcodes, FindsNothingInABlankImage) {
-  EXPECT_TRUE(decode_barcodes(imaging::Plane(200, 100, 0.5f)).empty());
-  EXPECT_TRUE(decode_barcodes(imaging::Plane()).empty());
+  EXPECT_TRUE(reader::read_barcodes(imaging::Plane(200, 100, 0.5f)).codes.empty());
+  EXPECT_TRUE(reader::read_barcodes(imaging::Plane()).codes.empty());
 }
 
 TEST(ParseScene, ReadsEachKind) {
@@ -344,7 +346,7 @@ TEST(RenderScene, WeatheredPrintStillDecodesAndIsDeterministic) {
     return v > 0.2f && v < 0.7f && std::abs(v - 0.35f) > 0.05f;
   });
   EXPECT_GT(greys, 1000);
-  const auto decoded = decode_barcodes(weathered);
+  const auto decoded = reader::code_texts(reader::read_barcodes(weathered));
   ASSERT_EQ(decoded.size(), 1U);
   EXPECT_EQ(decoded[0], "FLUTTER-0042");
   spec.texture_seed = 2;

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <span>
 
+#include "flutterscan/common/dfu.hpp"
 #include "flutterscan/common/protocol.hpp"
 #include "flutterscan/firmware/usb/usb_types.hpp"
 
@@ -231,14 +232,6 @@ inline constexpr std::uint8_t kHidInterval = 1;
 inline constexpr std::uint8_t kDfuRuntimeInterface = 1;
 inline constexpr std::uint8_t kDfuModeInterface = 0;
 
-// DFU functional descriptor values shared by both images.
-/// bmAttributes: bitCanDnload | bitCanUpload | bitManifestationTolerant | bitWillDetach.
-inline constexpr std::uint8_t kDfuAttributes = 0x0F;
-inline constexpr std::uint16_t kDfuDetachTimeoutMs = 1000;
-/// wTransferSize: bytes per DNLOAD/UPLOAD block.
-inline constexpr std::uint16_t kDfuTransferSize = 1024;
-inline constexpr std::uint16_t kBcdDfu = 0x0110;
-
 /// Bus powered (bit 7 is reserved, set), no remote wakeup; 100 mA.
 inline constexpr std::uint8_t kConfigurationAttributes = 0x80;
 inline constexpr std::uint16_t kMaxPowerMa = 100;
@@ -267,8 +260,10 @@ inline constexpr auto kApplicationProductString = string_descriptor("flutterscan
 inline constexpr auto kBootloaderProductString = string_descriptor("flutterscan DFU bootloader");
 inline constexpr auto kDfuInterfaceString = string_descriptor("Application flash");
 
+// DFU functional descriptor values shared by both images (common/dfu.hpp).
 inline constexpr auto kDfuFunctional =
-    dfu_functional_descriptor(kDfuAttributes, kDfuDetachTimeoutMs, kDfuTransferSize, kBcdDfu);
+    dfu_functional_descriptor(protocol::kDfuAttributes, protocol::kDfuDetachTimeoutMs,
+                              protocol::kDfuTransferSize, protocol::kBcdDfu);
 inline constexpr auto kHidClassDescriptor =
     hid_descriptor(static_cast<std::uint16_t>(kHidReportDescriptor.size()));
 
@@ -278,14 +273,18 @@ inline constexpr auto kApplicationConfiguration = with_total_length(
            interface_descriptor(kHidInterface, 0, 2, 0x03, 0x00, 0x00, 0), kHidClassDescriptor,
            endpoint_descriptor(kHidInEndpoint, kHidInterval),
            endpoint_descriptor(kHidOutEndpoint, kHidInterval),
-           interface_descriptor(kDfuRuntimeInterface, 0, 0, 0xFE, 0x01, 0x01, kStringDfuInterface),
+           interface_descriptor(kDfuRuntimeInterface, 0, 0, protocol::kDfuInterfaceClass,
+                                protocol::kDfuInterfaceSubclass, protocol::kDfuProtocolRuntime,
+                                kStringDfuInterface),
            kDfuFunctional));
 static_assert(kApplicationConfiguration.size() == 59);
 
 /// The bootloader's configuration 1: one DFU mode interface.
 inline constexpr auto kBootloaderConfiguration = with_total_length(
     concat(configuration_header(1, 1, kConfigurationAttributes, kMaxPowerMa),
-           interface_descriptor(kDfuModeInterface, 0, 0, 0xFE, 0x01, 0x02, kStringDfuInterface),
+           interface_descriptor(kDfuModeInterface, 0, 0, protocol::kDfuInterfaceClass,
+                                protocol::kDfuInterfaceSubclass, protocol::kDfuProtocolDfuMode,
+                                kStringDfuInterface),
            kDfuFunctional));
 static_assert(kBootloaderConfiguration.size() == 27);
 

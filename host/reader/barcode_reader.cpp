@@ -1,9 +1,9 @@
 // ZXing 1.4 returns UTF-8 std::string from Result::text() only with ZX_USE_UTF8.
 #define ZX_USE_UTF8 1
 
-#include "session/barcode_reader.hpp"
+#include "reader/barcode_reader.hpp"
 
-#include "session/assertion_guard.hpp"
+#include "reader/assertion_guard.hpp"
 
 #include <ZXing/BarcodeFormat.h>
 #include <ZXing/DecodeHints.h>
@@ -16,7 +16,7 @@
 #include <cstdint>
 #include <stdexcept>
 
-namespace flutterscan::session {
+namespace flutterscan::reader {
 
 std::string check_symbologies(const std::string& symbologies) {
   try {
@@ -107,6 +107,12 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
   return out;
 }
 
+std::vector<std::string> code_texts(const BarcodeReadout& readout) {
+  std::vector<std::string> texts;
+  for (const DecodedCode& code : readout.codes) texts.push_back(code.text);
+  return texts;
+}
+
 std::vector<LabelRegion> find_paper_runs(const imaging::Plane& latent, double paper_threshold,
                                          double min_fraction, int min_width, int max_gap) {
   std::vector<LabelRegion> regions;
@@ -176,4 +182,4 @@ std::vector<DecodeWindow> decode_windows(std::span<const LabelRegion> runs, int 
   return windows;
 }
 
-}  // namespace flutterscan::session
+}  // namespace flutterscan::reader

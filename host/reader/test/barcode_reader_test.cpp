@@ -1,6 +1,6 @@
 // The barcode reader survives ZXing's own assertions: Debian builds ZXing with
 // assert() on, and its Micro QR sampler fails one on some deblurred frames.
-#include "session/barcode_reader.hpp"
+#include "reader/barcode_reader.hpp"
 
 #include <ZXing/BitMatrix.h>
 #include <ZXing/MultiFormatWriter.h>
@@ -11,13 +11,13 @@
 #include <string>
 #include <thread>
 
-#include "session/assertion_guard.hpp"
+#include "reader/assertion_guard.hpp"
 
 // glibc's assertion handler, which assert() calls (not declared under NDEBUG).
 extern "C" [[noreturn]] void __assert_fail(const char* assertion, const char* file,
                                            unsigned int line, const char* function) noexcept;
 
-namespace flutterscan::session {
+namespace flutterscan::reader {
 namespace {
 
 /// A binary PGM (P5, 8-bit) as reflectance 0..1.
@@ -61,7 +61,7 @@ TEST(BarcodeReader, AnImageThatTripsZXingsMicroQrAssertionIsReportedNotFatal) {
   // A crop of a deblurred 1080p sim frame on which ZXing 1.4's Micro QR
   // sampler (FindConcentricPatternCorners -> intersect) aborted a session.
   const imaging::Plane image =
-      read_pgm(FLUTTERSCAN_SOURCE_DIR "/host/session/test/data/zxing_micro_qr_assertion.pgm");
+      read_pgm(FLUTTERSCAN_SOURCE_DIR "/host/reader/test/data/zxing_micro_qr_assertion.pgm");
   ASSERT_EQ(image.width, 41);
   const BarcodeReadout micro_qr = read_barcodes(image, "MicroQRCode");
   EXPECT_NE(micro_qr.decoder_fault.find("RegressionLine"), std::string::npos)
@@ -176,4 +176,4 @@ TEST(BarcodeReader, SymbologyListsAreCheckedByName) {
 }
 
 }  // namespace
-}  // namespace flutterscan::session
+}  // namespace flutterscan::reader

@@ -1,10 +1,10 @@
-#include "session/assertion_guard.hpp"
+#include "reader/assertion_guard.hpp"
 
 #include <csetjmp>
 #include <cstdio>
 #include <cstdlib>
 
-namespace flutterscan::session {
+namespace flutterscan::reader {
 namespace {
 
 /// Where a failed assertion in this thread returns to, if a guarded call is running.
@@ -27,14 +27,14 @@ std::string run_catching_assertions(const std::function<void()>& call) {
   return t_failure;
 }
 
-}  // namespace flutterscan::session
+}  // namespace flutterscan::reader
 
 /// glibc's assertion handler (the signature of <assert.h>), replaced for the
 /// whole process: within a guarded call it returns to the guard, otherwise it
 /// prints glibc's message and aborts as glibc's does.
 extern "C" [[noreturn]] void __assert_fail(const char* assertion, const char* file,
                                            unsigned int line, const char* function) noexcept {
-  using namespace flutterscan::session;
+  using namespace flutterscan::reader;
   if (sigjmp_buf* back = t_return_point) {
     t_failure = std::string(file) + ":" + std::to_string(line) + ": " + function + ": Assertion `" +
                 assertion + "' failed";

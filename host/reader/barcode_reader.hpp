@@ -1,7 +1,12 @@
 #pragma once
-// Barcodes on a fused latent image (ZXing-C++), with where they are, and the
-// label regions (bright paper on the darker belt) whether a code was read on
-// them or not: a region without a decode is what becomes a NO-READ.
+// The barcode reader (ZXing-C++): every figure and every line reads codes
+// here, with the same options unless the caller says otherwise: the session's
+// workers, `flutterscan deblur --decode`, the accuracy sweep and the
+// stability study. It finds codes on a fused latent image, with where they
+// are, and the label regions (bright paper on the darker belt) whether a code
+// was read on them or not: a region without a decode is what becomes a NO-READ.
+// The options: the symbologies (kDefaultSymbologies), try-rotate (on) and the
+// windows to look in (none: the whole image).
 
 #include <optional>
 #include <span>
@@ -11,7 +16,7 @@
 #include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
 
-namespace flutterscan::session {
+namespace flutterscan::reader {
 
 /// \brief One decoded barcode.
 struct DecodedCode {
@@ -40,6 +45,9 @@ struct BarcodeReadout {
   /// its text. The codes read are then none (the frame is flagged, the session goes on).
   std::string decoder_fault;
 };
+
+/// \brief The texts of `readout`'s codes, in the order they were read.
+std::vector<std::string> code_texts(const BarcodeReadout& readout);
 
 /// \brief A rectangle of the latent image to decode: columns [x, x + width), rows [y, y + height).
 struct DecodeWindow {
@@ -93,4 +101,4 @@ std::optional<DecodeArea> decode_area_from_name(const std::string& name);
 std::vector<DecodeWindow> decode_windows(std::span<const LabelRegion> runs, int width, int height,
                                          imaging::Direction direction, int margin = 24);
 
-}  // namespace flutterscan::session
+}  // namespace flutterscan::reader

@@ -19,11 +19,11 @@
 #include <functional>
 #include <string>
 
-namespace flutterscan::session {
+namespace flutterscan::reader {
 
 /// \brief Runs `call`; returns "" when it completes, or the failed
 /// assertion's text ("file:line: function: Assertion `...' failed") when an
 /// assert() inside it failed.
 std::string run_catching_assertions(const std::function<void()>& call);
 
-}  // namespace flutterscan::session
+}  // namespace flutterscan::reader

@@ -1,0 +1,121 @@
+#include "session/results_stage.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <utility>
+
+#include "capture/frame_pixels.hpp"
+#include "session/frame_preview.hpp"
+#include "session/session_clock.hpp"
+
+namespace flutterscan::session {
+
+ResultsStage::ResultsStage(const SessionConfig& config, int belt_length_px, std::int64_t start_ns,
+                           Pipeline& pipeline, SessionFolder& folder, ResultsServer& server)
+    : config_(config),
+      start_ns_(start_ns),
+      pipeline_(pipeline),
+      folder_(folder),
+      server_(server),
+      tracker_(belt_length_px, config.processing.object_match_px) {}
+
+void ResultsStage::run(const std::function<void(const Progress&)>& progress) {
+  std::int64_t last_progress = 0;
+  FrameOutcome o;
+  while (pipeline_.outcomes.pop(o)) {
+    take(std::move(o));
+    const std::int64_t now = now_ns();
+    if (progress && now - last_progress > 500'000'000) {
+      last_progress = now;
+      progress(this->progress(now));
+    }
+  }
+  finish();
+}
+
+void ResultsStage::take(FrameOutcome outcome) {
+  waiting_.emplace(outcome.index, std::move(outcome));
+  for (auto it = waiting_.find(next_); it != waiting_.end(); it = waiting_.find(next_)) {
+    handle(it->second);
+    waiting_.erase(it);
+    ++next_;
+  }
+}
+
+void ResultsStage::finish() {
+  publish(tracker_.finish_all());
+}
+
+void ResultsStage::handle(FrameOutcome& f) {
+  if (f.log.contains("model"))
+    ++results_.models_chosen[f.log["model"]["chosen"].get<std::string>()];
+  if (f.log.contains("flags"))
+    for (const auto& flag : f.log["flags"]) ++results_.frames_flagged[flag.get<std::string>()];
+  if (f.processed)
+    handle_processed(f);
+  else if (!f.log.contains("flags"))
+    f.log["flags"] = nlohmann::json::array({"error"});
+  folder_.log(f.log);
+}
+
+void ResultsStage::handle_processed(FrameOutcome& f) {
+  const std::int64_t done = now_ns();
+  f.latency_ms = ms_between(f.arrival_ns, done);
+  f.log["latency_ms"] = std::round(f.latency_ms * 100) / 100;
+  results_.latency_ms.push_back(f.latency_ms);
+  results_.processed_at_s.push_back(ms_between(start_ns_, done) * 1e-3);
+  ++pipeline_.frames_processed;
+  tracker_.observe(f.index, f.sequence, f.travel_px, f.sightings);
+  publish(tracker_.take_finished());
+  for (const auto& t : f.truth) results_.truth_seen.insert(t);
+  for (const auto& t : f.truth_in_view) results_.truth_in_view.insert(t);
+  const bool keep = static_cast<int>(results_.frames_saved) < config_.output.keep_first_frames ||
+                    (f.decode_failed && config_.output.keep_failed_frames);
+  // The report shows the first frames with a read label, and failures.
+  const bool read_something = std::any_of(f.sightings.begin(), f.sightings.end(),
+                                          [](const Sighting& x) { return x.decoded; });
+  const bool preview =
+      (read_something && previews_read_ < 3) || (f.decode_failed && previews_failed_ < 3);
+  // The frame's DN planes again (it converted without them), for these frames only.
+  const auto dn = keep || preview ? capture::frame_to_dn(f.frame)
+                                  : Result<imaging::Image, std::string>::success({});
+  if (keep && !dn.ok()) {
+    if (results_.save_error.empty()) results_.save_error = dn.error();
+  } else if (keep) {
+    if (auto p = folder_.save_frame(f.sequence, dn.value(), f.descriptor, &f.latent); !p.empty()) {
+      if (results_.save_error.empty()) results_.save_error = p;
+    } else {
+      ++results_.frames_saved;
+      f.log["files_saved"] = true;
+    }
+  }
+  if (preview && dn.ok()) {
+    Preview p = make_preview(f.sequence, dn.value(), f.latent);
+    p.caption = "frame " + std::to_string(f.sequence) +
+                (f.decode_failed ? ": a label without a read" : ": labels read");
+    results_.previews.push_back(std::move(p));
+    (f.decode_failed ? previews_failed_ : previews_read_) += 1;
+  }
+}
+
+void ResultsStage::publish(std::vector<ObjectResult> finished) {
+  for (auto& o : finished) {
+    server_.publish(result_line(o));
+    results_.objects.push_back(std::move(o));
+  }
+}
+
+Progress ResultsStage::progress(std::int64_t now) const {
+  Progress p;
+  p.frames_captured = pipeline_.frames_captured;
+  p.frames_processed = pipeline_.frames_processed;
+  p.frames_dropped = pipeline_.frames_dropped;
+  p.objects = results_.objects.size();
+  p.objects_read = static_cast<std::uint64_t>(std::count_if(
+      results_.objects.begin(), results_.objects.end(), [](const auto& x) { return x.read(); }));
+  p.elapsed_s = ms_between(start_ns_, now) * 1e-3;
+  p.fps = p.elapsed_s > 0 ? static_cast<double>(p.frames_processed) / p.elapsed_s : 0;
+  return p;
+}
+
+}  // namespace flutterscan::session

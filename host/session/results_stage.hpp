@@ -1,0 +1,80 @@
+#pragma once
+// The results stage (docs/session.md, "Objects and results"): one thread takes
+// the frames' outcomes as the workers finish them and handles them in capture
+// order: the frame's latency, its sightings tracked as objects on the belt
+// (each finished object published as one result line), its session.jsonl
+// line, its files (the first frames, and failures) and its report preview;
+// counts of models chosen and flags for the summary; a progress line about
+// twice a second.
+
+#include <cstdint>
+#include <functional>
+#include <map>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "session/object_tracker.hpp"
+#include "session/pipeline.hpp"
+#include "session/results_server.hpp"
+#include "session/session.hpp"
+#include "session/session_config.hpp"
+#include "session/session_folder.hpp"
+#include "session/session_report.hpp"
+
+namespace flutterscan::session {
+
+/// \brief What the results stage gathered for the summary and the report.
+struct SessionResults {
+  std::vector<ObjectResult> objects;   ///< in the order they were published
+  std::vector<double> latency_ms;      ///< per processed frame: arrival to result
+  std::vector<double> processed_at_s;  ///< per processed frame: seconds since the start
+  std::vector<Preview> previews;
+  std::set<std::string> truth_seen;     ///< sim: labels whole in some frame
+  std::set<std::string> truth_in_view;  ///< sim: labels at least partly in some frame
+  std::uint64_t frames_saved = 0;
+  std::string save_error;  ///< the first frame file that could not be saved
+  std::map<std::string, std::uint64_t> models_chosen;   ///< by model
+  std::map<std::string, std::uint64_t> frames_flagged;  ///< by flag
+};
+
+class ResultsStage {
+ public:
+  /// \brief Results of frames `belt_length_px` long along the motion, for the
+  /// session started at `start_ns`; lines to `server`, logs and files to `folder`.
+  ResultsStage(const SessionConfig& config, int belt_length_px, std::int64_t start_ns,
+               Pipeline& pipeline, SessionFolder& folder, ResultsServer& server);
+
+  /// \brief Takes outcomes from `pipeline.outcomes` until it is closed and
+  /// empty, then finishes every object; `progress` (may be empty) about twice a second.
+  void run(const std::function<void(const Progress&)>& progress);
+
+  /// \brief One outcome, in any order: handled once every earlier index was.
+  void take(FrameOutcome outcome);
+  /// \brief Every object still on the belt finished and published (the end).
+  void finish();
+
+  /// \brief Complete after run() or finish().
+  const SessionResults& results() const { return results_; }
+  SessionResults& results() { return results_; }
+
+ private:
+  void handle(FrameOutcome& f);
+  void handle_processed(FrameOutcome& f);
+  void publish(std::vector<ObjectResult> finished);
+  Progress progress(std::int64_t now) const;
+
+  const SessionConfig& config_;
+  const std::int64_t start_ns_;
+  Pipeline& pipeline_;
+  SessionFolder& folder_;
+  ResultsServer& server_;
+  ObjectTracker tracker_;
+  std::map<std::uint64_t, FrameOutcome> waiting_;  ///< by index, until the earlier ones came
+  std::uint64_t next_ = 0;
+  int previews_read_ = 0;
+  int previews_failed_ = 0;
+  SessionResults results_;
+};
+
+}  // namespace flutterscan::session

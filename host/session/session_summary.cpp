@@ -1,0 +1,125 @@
+#include "session/session_summary.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "imaging/deblur.hpp"
+#include "session/results_server.hpp"
+
+namespace flutterscan::session {
+
+double percentile(std::vector<double> values, double p) {
+  if (values.empty()) return 0;
+  std::sort(values.begin(), values.end());
+  const double rank = p / 100.0 * static_cast<double>(values.size() - 1);
+  const auto lo = static_cast<std::size_t>(std::floor(rank));
+  const auto hi = std::min(lo + 1, values.size() - 1);
+  return values[lo] + (values[hi] - values[lo]) * (rank - static_cast<double>(lo));
+}
+
+nlohmann::json session_summary(const SessionConfig& config, const SessionCounts& counts,
+                               const SessionResults& results) {
+  const auto& objects = results.objects;
+  nlohmann::json s;
+  const auto read = static_cast<std::uint64_t>(
+      std::count_if(objects.begin(), objects.end(), [](const auto& x) { return x.read(); }));
+  double rate_sum = 0;
+  for (const auto& o : objects) rate_sum += o.decode_rate();
+  s["format"] = "flutterscan-session-summary";
+  s["version"] = 1;
+  s["camera"] = counts.camera;
+  s["controller"] = counts.controller;
+  s["code"] = config.controller.code;
+  if (const auto& scheme = config.controller.scheme)
+    s["scheme_choice"] = {{"scheme", scheme->scheme},
+                          {"expected_margin_db", scheme->margin_db},
+                          {"regime_cell",
+                           {{"electrons", scheme->cell_electrons},
+                            {"read_noise_e", scheme->cell_read_noise},
+                            {"cap", scheme->cell_cap}}}};
+  if (counts.scheme_light) s["scheme_choice"]["light"] = scheme_light_json(*counts.scheme_light);
+  s["method"] = imaging::method_name(config.processing.method);
+  s["frame_size"] = std::to_string(counts.format.width) + "x" +
+                    std::to_string(counts.format.height) + " " +
+                    capture::pixel_format_name(counts.format.pixel_format);
+  s["frames_captured"] = counts.frames_captured;
+  s["frames_processed"] = counts.frames_processed;
+  s["frames_dropped"] = counts.frames_dropped;
+  s["frames_failed"] = counts.frames_failed;
+  s["frames_without_event"] = counts.frames_without_event;
+  s["events_without_frame"] = counts.events_without_frame;
+  s["events_received"] = counts.events_received;
+  s["events_missing_by_counter"] = counts.events_missing_by_counter;
+  s["camera_frames_lost"] = counts.camera_frames_lost;
+  s["objects"] = objects.size();
+  s["objects_read"] = read;
+  s["object_read_rate"] = objects.empty() ? 0.0 : static_cast<double>(read) / objects.size();
+  s["mean_decode_rate_per_object"] = objects.empty() ? 0.0 : rate_sum / objects.size();
+  const double duration_s = counts.duration_s;
+  s["duration_s"] = std::round(duration_s * 1000) / 1000;
+  s["fps"] = duration_s > 0 ? std::round(counts.frames_processed / duration_s * 10) / 10 : 0.0;
+  s["latency_ms_p50"] = std::round(percentile(results.latency_ms, 50) * 10) / 10;
+  s["latency_ms_p99"] = std::round(percentile(results.latency_ms, 99) * 10) / 10;
+  s["clock_drift_ppm"] = std::round(counts.clocks.drift_ppm() * 10) / 10;
+  s["clock_fit_points"] = counts.clocks.points;
+  s["stopped_by"] = counts.stopped_by;
+  s["frames_saved"] = results.frames_saved;
+  s["models_chosen"] = results.models_chosen;
+  // By flag: saturated, misfit, blur-disagrees, no-read, ...
+  s["frames_flagged"] = results.frames_flagged;
+  const RotationStats& rotation = counts.rotation;
+  s["rotation"] = {{"disk_budget_mb", config.output.disk_budget_mb},
+                   {"frames_rotated", rotation.frames_rotated},
+                   {"bytes_rotated", rotation.bytes_rotated},
+                   {"frames_kept", rotation.frames_kept},
+                   {"bytes_kept", rotation.bytes_kept}};
+  if (rotation.frames_rotated > 0) {
+    s["rotation"]["first_sequence_rotated"] = rotation.first_sequence_rotated;
+    s["rotation"]["last_sequence_rotated"] = rotation.last_sequence_rotated;
+  }
+  s["results"] = {{"lines_sent", counts.lines_sent},
+                  {"tcp_port", counts.tcp_port},
+                  {"clients_dropped", counts.clients_dropped},
+                  {"serial_lines_lost", counts.serial_lines_lost}};
+  if (!results.truth_seen.empty()) {
+    std::set<std::string> values;
+    for (const auto& o : objects)
+      if (o.read()) values.insert(o.value);
+    nlohmann::json missed = nlohmann::json::array(), wrong = nlohmann::json::array();
+    for (const auto& t : results.truth_seen)
+      if (!values.count(t)) missed.push_back(t);
+    for (const auto& v : values)
+      if (!results.truth_in_view.count(v)) wrong.push_back(v);
+    s["ground_truth"] = {{"labels_fully_in_view", results.truth_seen.size()},
+                         {"labels_read", results.truth_seen.size() - missed.size()},
+                         {"missed", missed},
+                         {"wrong_values", wrong}};
+  }
+  nlohmann::json object_list = nlohmann::json::array();
+  for (const auto& o : objects) object_list.push_back(nlohmann::json::parse(result_line(o)));
+  s["object_results"] = object_list;
+  if (!counts.capture_error.empty()) s["error"] = counts.capture_error;
+  if (!results.save_error.empty()) s["save_error"] = results.save_error;
+  return s;
+}
+
+ReportInputs report_inputs(const nlohmann::json& summary, SessionResults& results,
+                           const LedCode& code) {
+  ReportInputs inputs;
+  inputs.summary = summary;
+  inputs.objects = results.objects;
+  inputs.previews = std::move(results.previews);
+  inputs.latency_ms = results.latency_ms;
+  const auto& processed_at_s = results.processed_at_s;
+  if (!processed_at_s.empty()) {
+    std::vector<double> per_second(static_cast<std::size_t>(processed_at_s.back()) + 1, 0.0);
+    for (double t : processed_at_s) per_second[static_cast<std::size_t>(t)] += 1;
+    if (per_second.size() > 1) per_second.pop_back();  // the last second is partial
+    inputs.frames_per_second = per_second;
+  }
+  inputs.code = code;
+  return inputs;
+}
+
+}  // namespace flutterscan::session

@@ -1,0 +1,105 @@
+// The results stage: outcomes handled in capture order whatever order they
+// come in; sightings tracked into objects, each published once; frames not
+// processed logged with their flags; processed ones counted, timed and saved.
+#include "session/results_stage.hpp"
+
+#include <gtest/gtest.h>
+
+#include "session/test/session_test_support.hpp"
+#include "session/test/stage_test_support.hpp"
+
+namespace flutterscan::session {
+namespace {
+
+FrameOutcome processed(std::uint64_t index, double travel_px, double position_px,
+                       const std::string& value) {
+  FrameOutcome o;
+  o.index = index;
+  o.sequence = index + 100;
+  o.processed = true;
+  o.travel_px = travel_px;
+  o.arrival_ns = 1;
+  o.log = {{"index", index}, {"model", {{"chosen", "global"}}}, {"flags", nlohmann::json::array()}};
+  o.sightings.push_back({position_px, !value.empty(), value, value.empty() ? "" : "Code128"});
+  o.decode_failed = value.empty();
+  if (value.empty()) o.log["flags"].push_back("no-read");
+  o.truth = {"ABC"};
+  o.truth_in_view = {"ABC"};
+  return o;
+}
+
+FrameOutcome dropped(std::uint64_t index) {
+  FrameOutcome o;
+  o.index = index;
+  o.sequence = index + 100;
+  o.log = {{"index", index}, {"flags", {"dropped"}}};
+  return o;
+}
+
+TEST(ResultsStage, OutcomesAreHandledInCaptureOrderAndObjectsPublishedOnce) {
+  testing::ScratchFolder scratch("results");
+  SessionFolder folder;
+  ASSERT_EQ(folder.open(scratch.path().string(), 100), "");
+  ResultsServer server;
+  SessionConfig config;
+  config.output.keep_first_frames = 0;
+  config.output.keep_failed_frames = false;
+  Pipeline pipeline(4);
+  ResultsStage stage(config, 640, 0, pipeline, folder, server);
+  // One label seen in three frames (two read, one not), then the belt moves on;
+  // frame 2 was dropped. They arrive out of order.
+  stage.take(processed(3, 300, 460, "ABC"));
+  stage.take(processed(1, 100, 260, ""));
+  stage.take(dropped(2));
+  EXPECT_TRUE(stage.results().latency_ms.empty());  // waiting for frame 0
+  stage.take(processed(0, 0, 160, "ABC"));
+  stage.finish();
+  folder.close();
+
+  const SessionResults& r = stage.results();
+  EXPECT_EQ(pipeline.frames_processed, 3u);
+  EXPECT_EQ(r.latency_ms.size(), 3u);
+  EXPECT_EQ(r.processed_at_s.size(), 3u);
+  ASSERT_EQ(r.objects.size(), 1u);
+  EXPECT_EQ(r.objects[0].value, "ABC");
+  EXPECT_EQ(r.objects[0].frames_seen, 3);
+  EXPECT_EQ(r.objects[0].frames_decoded, 2);
+  EXPECT_EQ(r.models_chosen.at("global"), 3u);
+  EXPECT_EQ(r.frames_flagged.at("no-read"), 1u);
+  EXPECT_EQ(r.frames_flagged.at("dropped"), 1u);
+  EXPECT_EQ(r.truth_seen, std::set<std::string>{"ABC"});
+  EXPECT_EQ(r.frames_saved, 0u);
+  EXPECT_EQ(server.lines_sent(), 1u);  // one line per object
+
+  int bad_lines = 0;
+  const auto lines = testing::read_jsonl(scratch.path() / "session.jsonl", bad_lines);
+  EXPECT_EQ(bad_lines, 0);
+  ASSERT_EQ(lines.size(), 4u);
+  for (std::size_t i = 0; i < lines.size(); ++i) EXPECT_EQ(lines[i]["index"], i);
+  EXPECT_TRUE(lines[0].contains("latency_ms"));
+  EXPECT_FALSE(lines[2].contains("latency_ms"));
+}
+
+TEST(ResultsStage, AFrameThatFailedWithoutFlagsIsLoggedAsAnError) {
+  testing::ScratchFolder scratch("results");
+  SessionFolder folder;
+  ASSERT_EQ(folder.open(scratch.path().string(), 100), "");
+  ResultsServer server;
+  SessionConfig config;
+  Pipeline pipeline(4);
+  ResultsStage stage(config, 640, 0, pipeline, folder, server);
+  FrameOutcome failed;
+  failed.log = {{"index", 0}};
+  stage.take(std::move(failed));
+  stage.finish();
+  folder.close();
+  int bad_lines = 0;
+  const auto lines = testing::read_jsonl(scratch.path() / "session.jsonl", bad_lines);
+  ASSERT_EQ(lines.size(), 1u);
+  EXPECT_EQ(lines[0]["flags"], nlohmann::json::array({"error"}));
+  EXPECT_EQ(stage.results().frames_flagged.count("error"), 0u);  // counted before the default
+  EXPECT_EQ(pipeline.frames_processed, 0u);
+}
+
+}  // namespace
+}  // namespace flutterscan::session

@@ -1,0 +1,83 @@
+// The summary stage: summary.json's figures are the stages' counts, object
+// rates and ground truth judged as docs/session.md says; percentiles between ranks.
+#include "session/session_summary.hpp"
+
+#include <gtest/gtest.h>
+
+namespace flutterscan::session {
+namespace {
+
+ObjectResult object(const std::string& value, int seen, int decoded) {
+  ObjectResult o;
+  o.value = value;
+  o.frames_seen = seen;
+  o.frames_decoded = decoded;
+  if (!value.empty()) o.values[value] = decoded;
+  return o;
+}
+
+TEST(SessionSummary, PercentilesInterpolateBetweenRanks) {
+  EXPECT_EQ(percentile({}, 50), 0);
+  EXPECT_DOUBLE_EQ(percentile({4, 1, 3, 2}, 50), 2.5);
+  EXPECT_DOUBLE_EQ(percentile({4, 1, 3, 2}, 100), 4);
+  EXPECT_DOUBLE_EQ(percentile({10, 20}, 99), 19.9);
+}
+
+TEST(SessionSummary, ReportsTheStagesCountsAndJudgesTheGroundTruth) {
+  SessionConfig config;
+  ASSERT_EQ(check_config(config), "");
+  SessionCounts counts;
+  counts.camera = "sim";
+  counts.controller = "virtual controller";
+  counts.format.width = 640;
+  counts.format.height = 240;
+  counts.format.pixel_format = capture::PixelFormat::kRgb8;
+  counts.frames_captured = 10;
+  counts.frames_processed = 8;
+  counts.frames_dropped = 1;
+  counts.frames_without_event = 1;
+  counts.events_received = 9;
+  counts.duration_s = 2;
+  counts.stopped_by = "max_frames";
+  counts.capture_error = "camera gone";
+  SessionResults results;
+  results.objects = {object("A", 4, 4), object("", 2, 0), object("Z", 2, 1)};
+  results.latency_ms = {10, 20, 30};
+  results.truth_seen = {"A", "B"};
+  results.truth_in_view = {"A", "B", "C"};
+  results.models_chosen["global"] = 8;
+  const nlohmann::json s = session_summary(config, counts, results);
+  EXPECT_EQ(s["format"], "flutterscan-session-summary");
+  EXPECT_EQ(s["frame_size"], "640x240 rgb8");
+  EXPECT_EQ(s["frames_captured"], 10);
+  EXPECT_EQ(s["frames_dropped"], 1);
+  EXPECT_EQ(s["frames_without_event"], 1);
+  EXPECT_EQ(s["fps"], 4.0);
+  EXPECT_EQ(s["objects"], 3);
+  EXPECT_EQ(s["objects_read"], 2);
+  EXPECT_DOUBLE_EQ(s["object_read_rate"].get<double>(), 2.0 / 3.0);
+  EXPECT_DOUBLE_EQ(s["mean_decode_rate_per_object"].get<double>(), (1.0 + 0.0 + 0.5) / 3.0);
+  EXPECT_EQ(s["latency_ms_p50"], 20.0);
+  EXPECT_EQ(s["stopped_by"], "max_frames");
+  EXPECT_EQ(s["error"], "camera gone");
+  EXPECT_EQ(s["models_chosen"]["global"], 8);
+  EXPECT_EQ(s["ground_truth"]["labels_fully_in_view"], 2);
+  EXPECT_EQ(s["ground_truth"]["labels_read"], 1);
+  EXPECT_EQ(s["ground_truth"]["missed"], nlohmann::json::array({"B"}));
+  EXPECT_EQ(s["ground_truth"]["wrong_values"], nlohmann::json::array({"Z"}));
+  EXPECT_EQ(s["object_results"].size(), 3u);
+  EXPECT_FALSE(s.contains("save_error"));
+}
+
+TEST(SessionSummary, TheReportCountsWholeSecondsOnly) {
+  SessionResults results;
+  results.processed_at_s = {0.1, 0.5, 1.2, 2.9, 3.1};
+  results.objects = {object("A", 1, 1)};
+  const ReportInputs inputs = report_inputs({{"objects", 1}}, results, LedCode{});
+  EXPECT_EQ(inputs.frames_per_second, (std::vector<double>{2, 1, 1}));  // second 3 is partial
+  EXPECT_EQ(inputs.objects.size(), 1u);
+  EXPECT_EQ(inputs.summary["objects"], 1);
+}
+
+}  // namespace
+}  // namespace flutterscan::session

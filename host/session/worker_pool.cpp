@@ -1,0 +1,42 @@
+#include "session/worker_pool.hpp"
+
+#include <utility>
+
+#include "imaging/row_fft.hpp"
+#include "session/frame_processing.hpp"
+
+namespace flutterscan::session {
+namespace {
+
+/// Blurs up to this long deblur with FFT plans measured before the session
+/// streams (longer ones with estimated plans, about 20% slower).
+constexpr int kLongestPlannedBlurPx = 256;
+
+}  // namespace
+
+void plan_row_ffts(const capture::FrameFormat& format, imaging::Direction direction) {
+  const bool along_x =
+      direction == imaging::Direction::kPlusX || direction == imaging::Direction::kMinusX;
+  imaging::measure_row_ffts(along_x ? format.width : format.height, kLongestPlannedBlurPx + 2);
+}
+
+WorkerPool::WorkerPool(Pipeline& pipeline, const SessionConfig& config,
+                       const imaging::FlatField* flat)
+    : last_blur_px_(config.optics.nominal_blur_px) {
+  for (int w = 0; w < config.processing.workers; ++w)
+    threads_.emplace_back([this, &pipeline, &config, flat] {
+      FrameJob job;
+      while (pipeline.jobs.pop(job)) {
+        FrameOutcome o = process_frame(job, config, last_blur_px_, flat);
+        if (!o.processed) ++pipeline.processing_errors;
+        pipeline.outcomes.push(std::move(o));
+      }
+    });
+}
+
+void WorkerPool::join() {
+  for (auto& t : threads_)
+    if (t.joinable()) t.join();
+}
+
+}  // namespace flutterscan::session

@@ -1,0 +1,43 @@
+#pragma once
+// The worker pool (docs/session.md, "The pipeline"): `processing.workers`
+// threads take FrameJobs from the bounded queue, process each
+// (frame_processing.hpp) and send every outcome to the results thread, in
+// whatever order they finish.
+
+#include <atomic>
+#include <thread>
+#include <vector>
+
+#include "capture/camera_source.hpp"
+#include "imaging/flat_field.hpp"
+#include "imaging/capture_model.hpp"
+#include "session/pipeline.hpp"
+#include "session/session_config.hpp"
+
+namespace flutterscan::session {
+
+/// \brief Measures FFT plans for the rows along the motion of frames of
+/// `format` (blurs up to 256 px), before the session streams: a worker that
+/// planned on its first frame would stall the queue.
+void plan_row_ffts(const capture::FrameFormat& format, imaging::Direction direction);
+
+class WorkerPool {
+ public:
+  /// \brief Starts the workers on `pipeline`'s jobs; `config` and `flat` (may
+  /// be null) must outlive join().
+  WorkerPool(Pipeline& pipeline, const SessionConfig& config, const imaging::FlatField* flat);
+  WorkerPool(const WorkerPool&) = delete;
+  WorkerPool& operator=(const WorkerPool&) = delete;
+  ~WorkerPool() { join(); }
+
+  /// \brief Waits for the workers: they end once the job queue is closed and empty.
+  void join();
+
+ private:
+  /// Without an encoder, the last confident blur estimate stands in for
+  /// frames without edges along the motion.
+  std::atomic<double> last_blur_px_;
+  std::vector<std::thread> threads_;
+};
+
+}  // namespace flutterscan::session
