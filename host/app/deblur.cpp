@@ -216,7 +216,12 @@ void run(const DeblurFlags& f) {
       f.blur_tolerance_pct >= 0 ? f.blur_tolerance_pct : (model.code.leds() >= 2 ? 10.0 : 0.0);
   nlohmann::json motion;
   start = std::chrono::steady_clock::now();
-  if (tolerance_pct > 0 && !model.bayer_rggb && model.code.leds() >= 2) {
+  const bool along_x =
+      model.direction == imaging::Direction::kPlusX || model.direction == imaging::Direction::kMinusX;
+  const int along = along_x ? electrons.width() : electrons.height();
+  // (A blur that cannot fit the frame is left to deblur, which refuses it by name.)
+  if (tolerance_pct > 0 && !model.bayer_rggb && model.code.leds() >= 2 &&
+      2 * model.blur_px * (1 + tolerance_pct / 100) + 8 < along) {
     imaging::MotionRefinementOptions refine;
     refine.tolerance = tolerance_pct / 100;
     const auto refined = imaging::refine_motion(electrons, model, refine);

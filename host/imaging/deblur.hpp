@@ -25,9 +25,8 @@ std::optional<Method> method_from_name(const std::string& name);
 
 /// \brief The latent's expected gradient variance along the motion (reflectance^2):
 /// the Wiener prior. Printed labels (black on white, edges every few pixels) give
-/// about 0.05 drawn pixel-exact; seen through the pixels' box aperture each edge
-/// spreads over two pixels and about halves it. lambda = 1 / it.
-inline constexpr double kLabelGradientVariance = 0.025;
+/// about this; lambda = 1 / it (joint Wiener's prior shape: label_prior_power).
+inline constexpr double kLabelGradientVariance = 0.05;
 
 /// \brief Iterations of rl when DeblurOptions::iterations is unset.
 inline constexpr int kRichardsonLucyIterations = 20;

@@ -90,7 +90,8 @@ class JointWiener {
 JointWiener::RowLoader plane_row_loader(std::span<const Plane> channels);
 
 /// \brief P(w), the Wiener prior's weight at angular frequency w (radians per
-/// pixel): the latent's gradient power 2 - 2 cos w, divided by sinc^4(w / 2 pi).
+/// pixel): twice the latent's gradient power 2 - 2 cos w (an edge seen through
+/// the box aperture spreads over two pixels), divided by sinc^4(w / 2 pi).
 /// The latent is the scene averaged over each pixel's box aperture, and sharp
 /// print finer than a pixel reaches the frame folded back near the Nyquist
 /// frequency, where the box-aperture PSFs all vanish: the 1 / sinc^4 keeps that

@@ -119,7 +119,12 @@ TEST(ModelFit, TheBlurCheckCatchesAWrongEncoderReading) {
                                           capture(57), tv(), config, 1);
   ASSERT_TRUE(wrong.ok());
   EXPECT_TRUE(has(wrong.value().flags, "blur-disagrees")) << wrong.value().log.dump();
-  EXPECT_TRUE(has(wrong.value().flags, "misfit")) << wrong.value().log.dump();
+  // The deblurred frame's residual rises well above the right blur's (about 1). Under the
+  // box-aperture pixel model a 10% error leaves 2.6 times the noise (the tap-grid model left
+  // over 3, the misfit guard's level); the blur check is what catches it.
+  EXPECT_GT(wrong.value().log["guards"]["residual_ratio"].get<double>(),
+            2 * right.value().log["guards"]["residual_ratio"].get<double>())
+      << wrong.value().log.dump();
 }
 
 TEST(ModelFit, RefinementCorrectsAWrongEncoderReading) {
@@ -144,11 +149,13 @@ TEST(ModelFit, RefinementCorrectsAWrongEncoderReading) {
   EXPECT_EQ(reader::code_texts(reader::read_barcodes(wrong.value().latent)),
             std::vector<std::string>{"FIT-0042"});
 
-  // Told 30% wrong, the truth lies outside the tolerance: flagged and not used.
+  // Told 30% wrong, the truth lies outside the tolerance: what the search finds either sits
+  // on the tolerance's edge or leaves a residual far above the noise; flagged, not used.
   const auto far = deblur_fitting_model(imaging::saturated_share(f.dn, capture(68)), f.electrons,
                                         capture(68), tv(), config, 1);
   ASSERT_TRUE(far.ok());
-  EXPECT_TRUE(has(far.value().flags, "blur-off-encoder")) << far.value().log.dump();
+  EXPECT_TRUE(has(far.value().flags, "blur-off-encoder") || has(far.value().flags, "motion-unfit"))
+      << far.value().log.dump();
   EXPECT_FALSE(far.value().refinement_used);
   EXPECT_NEAR(far.value().log["model"]["blur_px"].get<double>(), 68.0, 1e-9);
 }
