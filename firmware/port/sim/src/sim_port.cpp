@@ -56,7 +56,7 @@ PortStatus SimPort::start_slot_table(std::span<const std::uint32_t> words,
 }
 
 PortStatus SimPort::start_frame_timer(std::uint32_t period_us, std::uint32_t trigger_pulse_us) {
-  if (period_us == 0) return PortStatus::kError;
+  if (period_us == 0 || frame_timer_fails_) return PortStatus::kError;
   frame_period_us_ = period_us;
   trigger_pulse_us_ = trigger_pulse_us;
   next_frame_us_ = now_us_;

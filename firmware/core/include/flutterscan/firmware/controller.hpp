@@ -11,7 +11,15 @@
 // mode) the slot time of an exposure is the previous strobe pulse width / L,
 // since the current pulse's width is known only at its end.
 // The thermal guard checks every exposure before it starts; an exposure it
-// refuses stays dark and its event carries kEventGuardHit.
+// refuses stays dark and its event carries kEventGuardHit. Its history (when
+// the last lit exposure started, when it ended, each LED's run at its end) is
+// the LEDs' and outlives Arm, Disarm, faults and mode or code changes; a self
+// test is an exposure like any other. Only a power-on reset starts it empty;
+// after a watchdog or software reset the duty period counts from boot.
+// The invariant (docs/hardware.md, "Thermal guard"): for any two lit
+// exposures (self tests included) starting at a < b with none between, each
+// LED's on-time in the one starting at b is at most its duty cap times b - a,
+// and no LED stays on longer than its max_on_time, across exposures too.
 //
 // On the MCU the Port callbacks run in interrupt context and the command
 // methods in the main loop: the stm32f4 port must mask the strobe, frame and
@@ -128,6 +136,13 @@ class Controller final : public PortListener {
   /// kOk if code `code_id` may run with the current timing (frame period, guard).
   protocol::Status check_code_runnable(std::uint8_t code_id) const;
   void begin_exposure(std::uint64_t time_us);
+  /// The guard's verdict on `stats` at `slot_time_us` for an exposure whose
+  /// LEDs light at `start_us`, given the history of lit exposures.
+  GuardVerdict guard_verdict(const LedOnStats& stats, std::uint32_t slot_time_us,
+                             std::uint64_t start_us) const;
+  /// Records a lit exposure (or self test) starting at `start_us` in the guard's history.
+  void record_lit_exposure(const LedOnStats& stats, std::uint64_t start_us,
+                           std::uint32_t slot_time_us);
   std::uint32_t slot_time_for_next_exposure(int code_length, std::uint16_t& flags) const;
   /// Records the exposure just started (lit) for the next one's seam check.
   void note_lit_exposure(const LedOnStats& stats, std::uint64_t start_us,
@@ -164,6 +179,9 @@ class Controller final : public PortListener {
   bool have_lit_exposure_ = false;
   std::uint64_t lit_end_us_ = 0;
   std::array<std::uint64_t, kMaxLeds> lit_trailing_on_us_{};
+  std::uint64_t lit_start_us_ = 0;  ///< start of the last lit exposure
+  /// The self test's table (its own, so a self test never writes a code's table).
+  std::array<std::uint32_t, kMaxLeds + 1> self_test_words_{};
   // Strobe pulse measurement (slave mode).
   bool strobe_active_ = false;
   std::uint64_t strobe_start_us_ = 0;

@@ -78,6 +78,8 @@ class SimPort final : public Port {
   void set_reset_cause(ResetCause cause) { reset_cause_ = cause; }
   /// \brief Makes start_slot_table fail (to exercise the fault path).
   void set_slot_timer_fails(bool fails) { slot_timer_fails_ = fails; }
+  /// \brief Makes start_frame_timer fail (to exercise Arm's failure path).
+  void set_frame_timer_fails(bool fails) { frame_timer_fails_ = fails; }
   /// \brief Makes erase and write of the config page fail.
   void set_flash_fails(bool fails) { flash_fails_ = fails; }
   /// \brief The virtual flash page, writable to corrupt it.
@@ -125,6 +127,7 @@ class SimPort final : public Port {
 
   PlayingTable table_;
   bool slot_timer_fails_ = false;
+  bool frame_timer_fails_ = false;
 
   std::vector<StrobeEdge> strobe_edges_;  ///< pending, sorted by time
   bool strobe_active_low_ = false;
