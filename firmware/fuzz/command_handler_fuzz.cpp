@@ -14,6 +14,13 @@
 //   or free-run mode, and otherwise every LED is off;
 // - no LED stays on longer than the thermal guard's max_on_time_us (a run that
 //   ends and restarts in the same microsecond counts as one run);
+// - the duty cap (docs/hardware.md, "Thermal guard"): for every two slot
+//   tables the port started one after the other (exposures and self tests
+//   alike, across Arm, Disarm, mode and code changes and warm reboots), at a
+//   and then b, each LED's on-time from b until the next table starts is at
+//   most its max_duty_permille (in force at b) of b - a. Measured from the
+//   port's record of table starts and LED writes, not the controller's
+//   bookkeeping. Only a power-on reboot starts afresh (the LEDs were cold);
 // - USB (ops kSetup..kDfuDownload, through the USB device core on a
 //   SimUsbController): every control transfer gets exactly one answer of the
 //   right direction and no more data than wLength; every report on the HID IN
@@ -382,11 +389,14 @@ class Harness {
         port_.set_flash_fails((b & 2) != 0);
         break;
       }
-      case Op::kReboot:
-        port_.set_reset_cause(static_cast<fw::ResetCause>(in.u8() % 3));
+      case Op::kReboot: {
+        const auto cause = static_cast<fw::ResetCause>(in.u8() % 3);
+        port_.set_reset_cause(cause);
         boot();
+        if (cause == fw::ResetCause::kPowerOn) duty_.have_start = false;
         FUZZ_CHECK(port_.led_mask() == 0);
         break;
+      }
       case Op::kFlashPoke: {
         const std::size_t offset = in.u16() % sizeof(fw::ConfigImage);
         port_.flash_page()[offset] = in.u8();
@@ -903,6 +913,68 @@ class Harness {
   void observe(const OnLimits& limits) {
     check_state();
     check_on_times(limits);
+    check_duty();
+  }
+
+  /// The duty oracle's state: the table playing (or last played) and the gap
+  /// it followed; the LED record read so far.
+  struct DutyState {
+    bool have_start = false;  ///< a table started since the (power-on) boot
+    bool have_gap = false;    ///< ... and one before it: its duty is checked
+    std::uint64_t start_us = 0;
+    std::uint64_t gap_us = 0;
+    std::array<std::uint16_t, flutterscan::kMaxLeds> cap{};
+    std::array<std::uint64_t, flutterscan::kMaxLeds> on_us{};
+    std::uint8_t leds_on = 0;
+    std::uint64_t last_us = 0;
+    std::size_t seen_starts = 0;
+    std::size_t seen_writes = 0;
+  };
+
+  /// Adds the LEDs' on-time up to `t` to the current table's and checks it.
+  void duty_accrue(std::uint64_t t) {
+    DutyState& d = duty_;
+    for (int led = 0; led < board_.pins.led_count; ++led) {
+      const auto k = static_cast<std::size_t>(led);
+      if (((d.leds_on >> led) & 1u) == 0) continue;
+      d.on_us[k] += t - d.last_us;
+      if (!d.have_gap || d.on_us[k] * 1000 <= static_cast<std::uint64_t>(d.cap[k]) * d.gap_us)
+        continue;
+      std::fprintf(stderr,
+                   "LED %d on %llu us in the table started at %llu us, %llu us after the one "
+                   "before: over max_duty_permille %u\n",
+                   led, static_cast<unsigned long long>(d.on_us[k]),
+                   static_cast<unsigned long long>(d.start_us),
+                   static_cast<unsigned long long>(d.gap_us), d.cap[k]);
+      fail("an LED's duty exceeded the guard's max_duty_permille", __LINE__);
+    }
+    d.last_us = t;
+  }
+
+  void check_duty() {
+    DutyState& d = duty_;
+    const auto& starts = port_.table_starts();
+    const auto& writes = port_.led_transitions();
+    while (d.seen_starts < starts.size() || d.seen_writes < writes.size()) {
+      const bool start_next =
+          d.seen_starts < starts.size() &&
+          (d.seen_writes == writes.size() || starts[d.seen_starts] <= writes[d.seen_writes].time_us);
+      if (start_next) {
+        const std::uint64_t t = starts[d.seen_starts++];
+        duty_accrue(t);
+        d.have_gap = d.have_start;
+        d.gap_us = t - d.start_us;
+        d.have_start = true;
+        d.start_us = t;
+        d.on_us = {};
+        d.cap = controller_->settings().guard.max_duty_permille;
+      } else {
+        const auto& w = writes[d.seen_writes++];
+        duty_accrue(w.time_us);
+        d.leds_on = w.led_mask;
+      }
+    }
+    duty_accrue(std::max(d.last_us, port_.now_us()));
   }
 
   void check_state() const {
@@ -1011,6 +1083,7 @@ class Harness {
   int strobe_pulses_ = 0;
   std::size_t seen_writes_ = 0;
   std::array<LedRun, flutterscan::kMaxLeds> runs_{};
+  DutyState duty_;
 };
 
 }  // namespace
