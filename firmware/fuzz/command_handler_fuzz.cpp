@@ -398,8 +398,9 @@ class Harness {
         break;
       }
       case Op::kFlashPoke: {
-        const std::size_t offset = in.u16() % sizeof(fw::ConfigImage);
-        port_.flash_page()[offset] = in.u8();
+        const std::uint16_t where = in.u16();
+        const std::size_t offset = (where >> 1) % (sizeof(fw::ConfigImage) + sizeof(fw::ConfigCommit));
+        port_.flash_page(where & 1)[offset] = in.u8();
         break;
       }
       case Op::kSetup:
@@ -804,24 +805,30 @@ class Harness {
   const fw::ControllerSettings& saved_settings() {
     struct Entry {
       int board = -1;
-      std::array<std::uint8_t, sizeof(fw::ConfigImage)> bytes{};
+      std::array<std::uint8_t, fw::kConfigCopies * (sizeof(fw::ConfigImage) +
+                                                    sizeof(fw::ConfigCommit))>
+          bytes{};
       std::optional<fw::ControllerSettings> settings;
     };
     constexpr std::size_t kEntries = 8;
     static std::array<Entry, kEntries> cache;
     static std::size_t next_victim = 0;
-    const auto page = port_.flash_page();
-    FUZZ_CHECK(page.size() >= sizeof(fw::ConfigImage));
+    // Both copies (image and commit each) decide what loads.
+    constexpr std::size_t kCopyBytes = sizeof(fw::ConfigImage) + sizeof(fw::ConfigCommit);
+    std::array<std::uint8_t, fw::kConfigCopies * kCopyBytes> bytes{};
+    for (int c = 0; c < fw::kConfigCopies; ++c) {
+      const auto page = port_.flash_page(c);
+      FUZZ_CHECK(page.size() >= kCopyBytes);
+      std::memcpy(bytes.data() + static_cast<std::size_t>(c) * kCopyBytes, page.data(), kCopyBytes);
+    }
     for (const Entry& e : cache)
-      if (e.board == board_byte_ &&
-          std::memcmp(e.bytes.data(), page.data(), sizeof(fw::ConfigImage)) == 0)
-        return *e.settings;
+      if (e.board == board_byte_ && e.bytes == bytes) return *e.settings;
     const auto loaded = fw::load_config(port_, board_);
     FUZZ_CHECK(loaded.ok());
     Entry& e = cache[next_victim];
     next_victim = (next_victim + 1) % kEntries;
     e.board = board_byte_;
-    std::memcpy(e.bytes.data(), page.data(), sizeof(fw::ConfigImage));
+    e.bytes = bytes;
     e.settings = loaded.value();
     return *e.settings;
   }

@@ -119,19 +119,26 @@ TEST(SimPort, FrameTimerTicksAndDrivesTheTrigger) {
 }
 
 TEST(SimPort, FlashProgrammingOnlyClearsBits) {
-  SimPort port(kPins, 64);
+  SimPort port(kPins, 128);  // two pages of 64 bytes
+  ASSERT_EQ(port.config_page_size(), 64u);
   const std::array<std::uint8_t, 2> first = {0xF0, 0x0F};
   const std::array<std::uint8_t, 2> second = {0x3C, 0xFF};
-  ASSERT_EQ(port.write_config_page(first), PortStatus::kOk);
-  ASSERT_EQ(port.write_config_page(second), PortStatus::kOk);
+  ASSERT_EQ(port.write_config_page(0, 0, first), PortStatus::kOk);
+  ASSERT_EQ(port.write_config_page(0, 0, second), PortStatus::kOk);
   std::array<std::uint8_t, 3> out{};
-  ASSERT_EQ(port.read_config_page(out), PortStatus::kOk);
+  ASSERT_EQ(port.read_config_page(0, 0, out), PortStatus::kOk);
   EXPECT_EQ(out, (std::array<std::uint8_t, 3>{0x30, 0x0F, 0xFF}));
-  ASSERT_EQ(port.erase_config_page(), PortStatus::kOk);
-  ASSERT_EQ(port.read_config_page(out), PortStatus::kOk);
+  ASSERT_EQ(port.read_config_page(1, 0, out), PortStatus::kOk);
+  EXPECT_EQ(out, (std::array<std::uint8_t, 3>{0xFF, 0xFF, 0xFF}));  // the other page
+  ASSERT_EQ(port.write_config_page(1, 62, first), PortStatus::kOk);
+  EXPECT_EQ(port.flash_page()[126], 0xF0);
+  ASSERT_EQ(port.erase_config_page(0), PortStatus::kOk);
+  ASSERT_EQ(port.read_config_page(0, 0, out), PortStatus::kOk);
   EXPECT_EQ(out, (std::array<std::uint8_t, 3>{0xFF, 0xFF, 0xFF}));
+  EXPECT_EQ(port.flash_page(1)[62], 0xF0);  // erasing page 0 left page 1
   std::array<std::uint8_t, 65> too_much{};
-  EXPECT_EQ(port.read_config_page(too_much), PortStatus::kError);
+  EXPECT_EQ(port.read_config_page(0, 0, too_much), PortStatus::kError);
+  EXPECT_EQ(port.write_config_page(1, 63, first), PortStatus::kError);
 }
 
 TEST(SimFlash, ProgrammingOnlyClearsBitsAndResetRestoresTheFreshFlash) {

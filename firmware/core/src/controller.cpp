@@ -313,7 +313,7 @@ Result<protocol::SaveConfigReply, Status> Controller::save_config() {
   using Out = Result<protocol::SaveConfigReply, Status>;
   if (state_ != ControllerState::kIdle) return Out::failure(Status::kBadState);
   if (self_test_running_) return Out::failure(Status::kBusy);
-  const auto saved = firmware::save_config(port_, settings_);
+  const auto saved = firmware::save_config(port_, settings_, board_);
   if (!saved.ok()) return Out::failure(saved.error());
   return Out::success({static_cast<std::uint32_t>(sizeof(ConfigImage)), saved.value()});
 }

@@ -52,6 +52,7 @@ PortStatus SimPort::start_slot_table(std::span<const std::uint32_t> words,
                                      std::uint32_t slot_time_us) {
   if (slot_timer_fails_ || words.empty() || slot_time_us == 0) return PortStatus::kError;
   table_ = {words, slot_time_us, now_us_, 0};
+  table_starts_.push_back(now_us_);
   return PortStatus::kOk;
 }
 
@@ -131,24 +132,45 @@ void SimPort::run_until(std::uint64_t time_us) {
   now_us_ = std::max(now_us_, time_us);
 }
 
-PortStatus SimPort::read_config_page(std::span<std::uint8_t> out) {
-  if (out.size() > flash_.size()) return PortStatus::kError;
-  std::copy_n(flash_.begin(), out.size(), out.begin());
+std::size_t SimPort::flash_operation_budget(std::size_t bytes) {
+  ++flash_operations_;
+  if (power_loss_countdown_ < 0) return bytes;
+  if (power_loss_countdown_-- > 0) return bytes;
+  powered_off_ = true;
+  return std::min(bytes, power_loss_bytes_);
+}
+
+PortStatus SimPort::read_config_page(int copy, std::size_t offset, std::span<std::uint8_t> out) {
+  const std::size_t page = config_page_size();
+  if (copy < 0 || copy >= kConfigCopies || offset > page || out.size() > page - offset)
+    return PortStatus::kError;
+  std::copy_n(
+      flash_.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(copy) * page + offset),
+      out.size(), out.begin());
   return PortStatus::kOk;
 }
 
-PortStatus SimPort::erase_config_page() {
-  if (flash_fails_) return PortStatus::kError;
-  std::fill(flash_.begin(), flash_.end(), std::uint8_t{0xFF});
+PortStatus SimPort::erase_config_page(int copy) {
+  if (flash_fails_ || powered_off_ || copy < 0 || copy >= kConfigCopies) return PortStatus::kError;
+  const std::size_t page = config_page_size();
+  const std::size_t erased = flash_operation_budget(page);
+  auto first = flash_.begin() + static_cast<std::ptrdiff_t>(static_cast<std::size_t>(copy) * page);
+  std::fill(first, first + static_cast<std::ptrdiff_t>(erased), std::uint8_t{0xFF});
   ++flash_erases_;
-  return PortStatus::kOk;
+  return powered_off_ ? PortStatus::kError : PortStatus::kOk;
 }
 
-PortStatus SimPort::write_config_page(std::span<const std::uint8_t> data) {
-  if (flash_fails_ || data.size() > flash_.size()) return PortStatus::kError;
+PortStatus SimPort::write_config_page(int copy, std::size_t offset,
+                                      std::span<const std::uint8_t> data) {
+  const std::size_t page = config_page_size();
+  if (flash_fails_ || powered_off_ || copy < 0 || copy >= kConfigCopies || offset > page ||
+      data.size() > page - offset)
+    return PortStatus::kError;
+  const std::size_t written = flash_operation_budget(data.size());
   // NOR flash programming only clears bits: writing over unerased bytes ANDs.
-  nor_program_bytes(flash_.data(), data.data(), data.size());
-  return PortStatus::kOk;
+  nor_program_bytes(flash_.data() + static_cast<std::size_t>(copy) * page + offset, data.data(),
+                    written);
+  return powered_off_ ? PortStatus::kError : PortStatus::kOk;
 }
 
 }  // namespace flutterscan::firmware::sim

@@ -43,8 +43,9 @@ namespace {
 constexpr BoardConfig kBoard = stm32f4_board_config();
 constexpr auto kDeviceDescriptor = usb::application_device_descriptor(usb::bcd_device(
     FLUTTERSCAN_VERSION_MAJOR, FLUTTERSCAN_VERSION_MINOR, FLUTTERSCAN_VERSION_PATCH));
-/// Longer than a 16 KiB sector erase (up to ~0.5 s) at the slowest LSI.
-constexpr std::uint32_t kWatchdogTimeoutMs = 2'000;
+/// Longer than the config's 128 KiB sector erase (sector 11: up to 2 s, DS8626)
+/// at the slowest LSI.
+constexpr std::uint32_t kWatchdogTimeoutMs = 4'000;
 /// Main loop wake-up period (SysTick): the loop kicks the watchdog on every pass.
 constexpr std::uint32_t kMainLoopTickHz = 1'000;
 

@@ -85,8 +85,7 @@ void Stm32f4Port::init() {
   pwm_arr_ = brightness_pwm_arr(clocks_.tim_apb1_hz);
   at(tim::kTim3 + tim::kPsc) = 0;
   at(tim::kTim3 + tim::kArr) = pwm_arr_;
-  const std::uint32_t pwm_channel =
-      ((tim::kOcModePwm1 << tim::kOcModeShift) | tim::kOcPreload);
+  const std::uint32_t pwm_channel = ((tim::kOcModePwm1 << tim::kOcModeShift) | tim::kOcPreload);
   at(tim::kTim3 + tim::kCcmr1) = pwm_channel | (pwm_channel << 8);
   at(tim::kTim3 + tim::kCcmr2) = pwm_channel | (pwm_channel << 8);
   for (int channel = 1; channel <= 4; ++channel) at(tim::kTim3 + tim::ccr(channel)) = 0;
@@ -101,8 +100,7 @@ void Stm32f4Port::init() {
 
   // TIM5: quadrature encoder, both inputs filtered, 32-bit count.
   at(tim::kTim5 + tim::kArr) = 0xFFFFFFFF;
-  const std::uint32_t encoder_input =
-      tim::kCcsInputOwn | (tim::kIcFilterN8 << tim::kIcFilterShift);
+  const std::uint32_t encoder_input = tim::kCcsInputOwn | (tim::kIcFilterN8 << tim::kIcFilterShift);
   at(tim::kTim5 + tim::kCcmr1) = encoder_input | (encoder_input << 8);
   at(tim::kTim5 + tim::kCcer) = 0;
   at(tim::kTim5 + tim::kSmcr) = tim::kSmsEncoderMode3;
@@ -117,7 +115,7 @@ void Stm32f4Port::init() {
   at(tim::kTim2 + tim::kArr) = 0xFFFFFFFF;
   const std::uint32_t filter = tim::kIcFilterN8 << tim::kIcFilterShift;
   at(tim::kTim2 + tim::kCcmr1) =
-      (tim::kCcsInputOwn | filter) | ((tim::kCcsInputOther | filter) << 8);  // IC1, IC2 on TI1
+      (tim::kCcsInputOwn | filter) | ((tim::kCcsInputOther | filter) << 8);       // IC1, IC2 on TI1
   at(tim::kTim2 + tim::kCcmr2) = tim::kOcModeForceInactive << tim::kOcModeShift;  // OC3
   at(tim::kTim2 + tim::kCr2) = tim::kMmsComparePulse << tim::kCr2MmsShift;
   configure_strobe_input(false);
@@ -215,7 +213,8 @@ void Stm32f4Port::load_slot_hardware(std::span<const std::uint32_t> words,
   // DMA: memory (the table, in SRAM: DMA2 cannot reach the CCM RAM) to BSRR,
   // 32-bit, one word per request, direct mode, transfer-complete and error interrupts.
   at(kSlotStream + dma::kSxPar) = static_cast<std::uint32_t>(kLedBsrr);
-  at(kSlotStream + dma::kSxM0ar) = static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(words.data()));
+  at(kSlotStream + dma::kSxM0ar) =
+      static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(words.data()));
   at(kSlotStream + dma::kSxNdtr) = static_cast<std::uint32_t>(words.size());
   at(kSlotStream + dma::kSxFcr) = 0;
   at(kSlotStream + dma::kSxCr) =
@@ -238,8 +237,7 @@ void Stm32f4Port::load_slot_hardware(std::span<const std::uint32_t> words,
 void Stm32f4Port::prearm() {
   load_slot_hardware(slot_words_, slot_setting_);
   // Trigger mode from ITR1 = TIM2 TRGO: the edge sets CEN (RM0090 17.3.14).
-  at(tim::kTim1 + tim::kSmcr) =
-      (tim::kTim1TsItr1Tim2 << tim::kSmcrTsShift) | tim::kSmsTrigger;
+  at(tim::kTim1 + tim::kSmcr) = (tim::kTim1TsItr1Tim2 << tim::kSmcrTsShift) | tim::kSmsTrigger;
   slot_state_ = SlotState::kPrearmed;
 }
 
@@ -305,8 +303,8 @@ void Stm32f4Port::on_slot_dma_interrupt() {
 template <typename Callback>
 void Stm32f4Port::run_trigger_callback(Callback&& callback) {
   // Did this edge start the pre-armed table (TIM1 enabled by its trigger)?
-  hardware_started_ = slot_state_ == SlotState::kPrearmed &&
-                      (at(tim::kTim1 + tim::kCr1) & tim::kCr1Cen) != 0;
+  hardware_started_ =
+      slot_state_ == SlotState::kPrearmed && (at(tim::kTim1 + tim::kCr1) & tim::kCr1Cen) != 0;
   if (slot_state_ == SlotState::kPrearmed && !hardware_started_) {
     // Not this trigger source's edge (or not yet): no hardware start to confirm.
     stop_slot_hardware();
@@ -337,8 +335,7 @@ void Stm32f4Port::configure_strobe_input(bool active_low) {
   const std::uint32_t cc1 = tim::kCcerE | (active_low ? tim::kCcerP : 0u);
   const std::uint32_t cc2 = tim::kCcerE | (active_low ? 0u : tim::kCcerP);
   const std::uint32_t mask = 0xFFu;  // channels 1 and 2
-  modify(tim::kTim2 + tim::kCcer, mask,
-         (cc1 << tim::ccer_shift(1)) | (cc2 << tim::ccer_shift(2)));
+  modify(tim::kTim2 + tim::kCcer, mask, (cc1 << tim::ccer_shift(1)) | (cc2 << tim::ccer_shift(2)));
 }
 
 void Stm32f4Port::handle_strobe_capture(bool active, std::uint32_t captured) {
@@ -456,22 +453,31 @@ std::size_t Stm32f4Port::config_page_size() {
   return kConfigSize;
 }
 
-PortStatus Stm32f4Port::read_config_page(std::span<std::uint8_t> out) {
-  if (out.size() > kConfigSize) return PortStatus::kError;
-  std::memcpy(out.data(), reinterpret_cast<const void*>(static_cast<std::uintptr_t>(kConfigBase)),
+PortStatus Stm32f4Port::read_config_page(int copy, std::size_t offset,
+                                         std::span<std::uint8_t> out) {
+  if (copy < 0 || copy >= kConfigCopies || offset > kConfigSize ||
+      out.size() > kConfigSize - offset)
+    return PortStatus::kError;
+  const std::uint32_t base = flash_sector_base(kConfigSectors[static_cast<std::size_t>(copy)]);
+  std::memcpy(out.data(), reinterpret_cast<const void*>(static_cast<std::uintptr_t>(base + offset)),
               out.size());
   return PortStatus::kOk;
 }
 
-PortStatus Stm32f4Port::erase_config_page() {
-  kick_watchdog();  // a sector erase stalls the CPU for up to ~0.5 s
-  return flash_erase_sector(kConfigSector);
+PortStatus Stm32f4Port::erase_config_page(int copy) {
+  if (copy < 0 || copy >= kConfigCopies) return PortStatus::kError;
+  kick_watchdog();  // a sector erase stalls the CPU: up to 0.5 s (16 KiB), 2 s (128 KiB)
+  return flash_erase_sector(kConfigSectors[static_cast<std::size_t>(copy)]);
 }
 
-PortStatus Stm32f4Port::write_config_page(std::span<const std::uint8_t> data) {
-  if (data.size() > kConfigSize) return PortStatus::kError;
+PortStatus Stm32f4Port::write_config_page(int copy, std::size_t offset,
+                                          std::span<const std::uint8_t> data) {
+  if (copy < 0 || copy >= kConfigCopies || offset > kConfigSize ||
+      data.size() > kConfigSize - offset)
+    return PortStatus::kError;
   kick_watchdog();
-  return flash_program(kConfigBase, data);
+  const std::uint32_t base = flash_sector_base(kConfigSectors[static_cast<std::size_t>(copy)]);
+  return flash_program(base + static_cast<std::uint32_t>(offset), data);
 }
 
 void Stm32f4Port::enter_bootloader() {

@@ -11,6 +11,9 @@
 
 namespace flutterscan::firmware {
 
+/// \brief Config pages: SaveConfig rewrites the older one (config_store.hpp).
+inline constexpr int kConfigCopies = 2;
+
 /// \brief Result of a port operation.
 enum class PortStatus : std::uint8_t { kOk, kError };
 
@@ -65,14 +68,18 @@ class Port {
   /// \brief The quadrature encoder's count (wraps in two's complement).
   virtual std::int32_t encoder_count() = 0;
 
-  /// \brief Bytes in the flash page that holds the configuration.
+  /// \brief Bytes in each of the two config pages (separately erasable flash
+  /// sectors, kConfigCopies of them, so a power loss while one is rewritten
+  /// leaves the other intact).
   virtual std::size_t config_page_size() = 0;
-  /// \brief Reads the start of the config page into `out`.
-  virtual PortStatus read_config_page(std::span<std::uint8_t> out) = 0;
-  /// \brief Erases the config page (every byte 0xFF).
-  virtual PortStatus erase_config_page() = 0;
-  /// \brief Programs `data` at the start of the (erased) config page.
-  virtual PortStatus write_config_page(std::span<const std::uint8_t> data) = 0;
+  /// \brief Reads `out.size()` bytes of config page `copy` from `offset`.
+  virtual PortStatus read_config_page(int copy, std::size_t offset,
+                                      std::span<std::uint8_t> out) = 0;
+  /// \brief Erases config page `copy` (every byte 0xFF).
+  virtual PortStatus erase_config_page(int copy) = 0;
+  /// \brief Programs `data` into the (erased) config page `copy` at `offset`, in address order.
+  virtual PortStatus write_config_page(int copy, std::size_t offset,
+                                       std::span<const std::uint8_t> data) = 0;
 
   /// \brief Restarts the watchdog's countdown.
   virtual void kick_watchdog() = 0;

@@ -15,6 +15,7 @@
 //   PA11/PA12 USB OTG FS DM/DP, PA9 VBUS sense (for the USB driver to come)
 //   PA13/PA14 SWD
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 
@@ -65,7 +66,9 @@ inline constexpr std::uint32_t kFlashBase = 0x08000000;
 /// Bootloader: sector 0 (16 KiB).
 inline constexpr std::uint32_t kBootloaderBase = kFlashBase;
 inline constexpr std::uint32_t kBootloaderSize = 16 * 1024;
-/// Config page: sector 1 (16 KiB, so SaveConfig erases 16 KiB, not 64 or 128).
+/// Config page: sector 1 (16 KiB, so SaveConfig erases 16 KiB, not 64 or 128);
+/// the second copy is in sector 11 (kConfigSectors), no other 16 KiB sector
+/// being free: SaveConfig erases one of them, the one without the newest copy.
 inline constexpr int kConfigSector = 1;
 inline constexpr std::uint32_t kConfigBase = 0x08004000;
 inline constexpr std::uint32_t kConfigSize = 16 * 1024;
@@ -97,6 +100,10 @@ constexpr int flash_sector_of(std::uint32_t address) {
       return s;
   return -1;
 }
+
+/// The config pages, one copy each (Port::read_config_page's `copy`): sector 1,
+/// and the last sector, which no application image can reach.
+inline constexpr std::array<int, 2> kConfigSectors{kConfigSector, 11};
 
 // ---------------------------------------------------------------------------
 // Bootloader hand-off: a word at the bottom of SRAM that neither image's

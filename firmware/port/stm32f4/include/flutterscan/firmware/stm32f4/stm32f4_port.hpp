@@ -28,8 +28,9 @@
 //   The first exposure after Arm always starts in software.
 // - Encoder: TIM5 (32-bit) in encoder mode 3 on PA0/PA1.
 // - Brightness: TIM3 CH1..CH4 PWM at 20 kHz on PC6..PC9.
-// - Config page: flash sector 1 (16 KiB at 0x08004000), erased and
-//   programmed through the flash interface.
+// - Config pages: flash sector 1 (16 KiB at 0x08004000) and sector 11 (the
+//   first 16 KiB of its 128 KiB used), erased and programmed through the flash
+//   interface; SaveConfig rewrites only the one without the newest copy.
 // - Watchdog: IWDG; reset cause from RCC_CSR; enter_bootloader: hand-off word
 //   in SRAM, then a system reset.
 // ARM only. Only one instance may exist (it owns the interrupt handlers).
@@ -72,9 +73,10 @@ class Stm32f4Port final : public Port {
   void stop_frame_timer() override;
   std::int32_t encoder_count() override;
   std::size_t config_page_size() override;
-  PortStatus read_config_page(std::span<std::uint8_t> out) override;
-  PortStatus erase_config_page() override;
-  PortStatus write_config_page(std::span<const std::uint8_t> data) override;
+  PortStatus read_config_page(int copy, std::size_t offset, std::span<std::uint8_t> out) override;
+  PortStatus erase_config_page(int copy) override;
+  PortStatus write_config_page(int copy, std::size_t offset,
+                               std::span<const std::uint8_t> data) override;
   void kick_watchdog() override;
   ResetCause reset_cause() override { return reset_cause_; }
   [[noreturn]] void enter_bootloader() override;
@@ -114,7 +116,7 @@ class Stm32f4Port final : public Port {
   SlotState slot_state_ = SlotState::kIdle;
   std::span<const std::uint32_t> slot_words_;  ///< the table playing or pre-armed
   TimerPeriod slot_setting_;
-  bool prearm_enabled_ = false;   ///< exposures run: pre-arm after each table
+  bool prearm_enabled_ = false;  ///< exposures run: pre-arm after each table
   bool in_trigger_callback_ = false;
   bool hardware_started_ = false;  ///< a pre-armed table started on this edge
   bool start_confirmed_ = false;
