@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "flutterscan/firmware/boot_decision.hpp"
+
 namespace flutterscan::firmware::usb {
 
 namespace {
@@ -18,7 +20,7 @@ DfuMode::DfuMode(Flash& flash, const FlashLayout& layout, const AppRegion& regio
 
 bool DfuMode::application_valid() {
   const auto image = flash_.read(region_.load_address, region_.max_size);
-  return check_image(image, region_.board_id, region_.max_size) == ImageCheck::kOk;
+  return check_boot_image(image, region_) == BootImageCheck::kOk;
 }
 
 ControlReply DfuMode::fail(DfuStatus status) {
@@ -280,7 +282,9 @@ void DfuMode::write_block() {
 void DfuMode::manifest() {
   const auto image = flash_.read(region_.load_address, download_end_);
   last_check_ = check_image(image, region_.board_id, region_.max_size);
-  if (last_check_ != ImageCheck::kOk) {
+  // Also what the bootloader's jump needs (load address, vector table, SP, PC):
+  // an image the bootloader would not start is refused here, not after a reset.
+  if (last_check_ != ImageCheck::kOk || check_boot_image(image, region_) != BootImageCheck::kOk) {
     fail(DfuStatus::kErrFirmware);
     return;
   }

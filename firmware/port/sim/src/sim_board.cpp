@@ -50,6 +50,12 @@ std::vector<std::uint8_t> make_application_image(std::uint16_t board_id, std::ui
     x = x * 1664525u + 1013904223u;
     image[i] = static_cast<std::uint8_t>(x >> 24);
   }
+  // A vector table the bootloader accepts (check_boot_image): the initial SP
+  // at the top of SRAM, the reset vector a Thumb address just after the table.
+  const std::uint32_t sp = kSramEnd;
+  const std::uint32_t reset = load_address + kVectorOffset + 8 + 1;
+  std::memcpy(image.data() + kVectorOffset, &sp, sizeof sp);
+  std::memcpy(image.data() + kVectorOffset + 4, &reset, sizeof reset);
   stamp_image(image);
   return image;
 }

@@ -112,6 +112,13 @@ inline constexpr std::array<int, 2> kConfigSectors{kConfigSector, 11};
 inline constexpr std::uint32_t kBootRequestAddress = 0x20000000;
 inline constexpr std::uint32_t kBootRequestReserved = 16;  ///< bytes kept free there
 inline constexpr std::uint32_t kBootRequestMagic = 0xB007DF11;
+/// The BootRecord (boot_decision.hpp: unconfirmed application starts) right
+/// after the hand-off word, inside the same reserved 16 bytes.
+inline constexpr std::uint32_t kBootRecordAddress = kBootRequestAddress + 4;
+/// Recovery pin: PB2 (BOOT1, unused by the ROM while BOOT0 is low), 10 kOhm to
+/// ground on the board; a jumper to 3.3 V at reset keeps the bootloader in DFU mode.
+inline constexpr int kRecoveryPort = 1;  // GPIOB
+inline constexpr int kRecoveryPin = 2;
 
 /// \brief The board configuration of the product image: four LEDs on PC0..PC3
 /// (boards with three LEDs leave PC3 unconnected; the code sets led_count 3).
