@@ -1,5 +1,7 @@
 #include "flutterscan/firmware/controller.hpp"
 
+#include <algorithm>
+
 #include "flutterscan/firmware/config_store.hpp"
 
 namespace flutterscan::firmware {
@@ -45,6 +47,7 @@ void Controller::start() {
 
 void Controller::poll(bool may_enter_bootloader) {
   port_.kick_watchdog();
+  update_prearm();  // time passed: a table the guard refused a while ago may be fine now
   if (bootloader_requested_ && !bootloader_entered_ && may_enter_bootloader) {
     bootloader_entered_ = true;
     port_.enter_bootloader();
@@ -152,17 +155,22 @@ Result<protocol::SelectCodeReply, Status> Controller::select_code(
   const Status runnable = check_code_runnable(r.code_id);
   if (runnable != Status::kOk) return Out::failure(runnable);
   settings_.selected_code = r.code_id;
+  // The pre-armed table is the old choice: withdraw it (an edge that already
+  // started it came before this command: that exposure plays the old code).
+  withdraw_prearm();
   const auto& playing = tables_[static_cast<std::size_t>(playing_table_)];
   if (playing.code_id == r.code_id) {
     pending_table_ = -1;  // back to the code that is playing: cancel a pending switch
   } else {
-    // Build into the table that is not playing; publish it only when complete.
-    const int spare = 1 - playing_table_;
-    pending_table_ = -1;
+    // Build into a table neither playing nor pending: the DMA reads neither
+    // the one it plays nor (pre-armed) the pending one while the CPU writes.
+    int spare = 0;
+    while (spare == playing_table_ || spare == pending_table_) ++spare;
     build_table(tables_[static_cast<std::size_t>(spare)], r.code_id);
     pending_table_ = spare;
   }
   const std::uint8_t pending = pending_table_ < 0 ? protocol::kNoCode : r.code_id;
+  update_prearm();
   return Out::success({playing.code_id, pending, {}});
 }
 
@@ -237,6 +245,7 @@ Status Controller::arm() {
   events_.clear();
   port_.configure_strobe_input(settings_.mode.strobe_active_low);
   state_ = ControllerState::kArmed;
+  update_prearm();
   return Status::kOk;
 }
 
@@ -357,6 +366,7 @@ void Controller::on_strobe_edge(bool active, std::uint64_t time_us) {
     exposure_flags_ |= protocol::kEventOverrun;
     ++overruns_;
   }
+  update_prearm();  // the measured width sets the next slot time (follow exposure)
 }
 
 void Controller::on_frame_tick(std::uint64_t time_us) {
@@ -382,12 +392,21 @@ std::uint32_t Controller::slot_time_for_next_exposure(int code_length, std::uint
 
 void Controller::begin_exposure(std::uint64_t time_us) {
   if (state_ == ControllerState::kExposing) {
+    if (adopted_edge_pending_) {
+      adopted_edge_pending_ = false;  // the edge that started the adopted pre-armed table
+      return;
+    }
     // A trigger while the previous sequence still runs: that frame gets no light.
     ++missed_triggers_;
     exposure_flags_ |= protocol::kEventMissedTrigger;
     return;
   }
   if (state_ != ControllerState::kArmed) return;
+  // Did this edge (or one whose callback is still to come) start the pre-armed table?
+  if (withdraw_prearm()) return;
+  // No: decide now; the LEDs light when the table starts, now (in the callback,
+  // after the interrupt latency), not at the edge.
+  const std::uint64_t light_us = std::max(time_us, port_.now_us());
 
   std::uint16_t flags = 0;
   if (pending_table_ >= 0) {
@@ -405,7 +424,7 @@ void Controller::begin_exposure(std::uint64_t time_us) {
   exposure_pulse_width_us_ = 0;
   exposure_flags_ = flags;
 
-  const GuardVerdict verdict = guard_verdict(table.stats, slot_time, time_us);
+  const GuardVerdict verdict = guard_verdict(table.stats, slot_time, light_us);
   if (verdict.status != GuardStatus::kOk) {
     // This exposure stays dark, but it takes no time: a trigger in the same
     // microsecond still touches the last lit exposure, so that one stays the
@@ -430,8 +449,58 @@ void Controller::begin_exposure(std::uint64_t time_us) {
     enter_fault(protocol::FaultCode::kSlotTimer);
     return;
   }
-  record_lit_exposure(table.stats, time_us, slot_time);
+  record_lit_exposure(table.stats, light_us, slot_time);
   state_ = ControllerState::kExposing;
+}
+
+void Controller::update_prearm() {
+  if (state_ != ControllerState::kArmed) return;
+  const int index = pending_table_ >= 0 ? pending_table_ : playing_table_;
+  const SlotTable& table = tables_[static_cast<std::size_t>(index)];
+  std::uint16_t flags = 0;
+  const std::uint32_t slot_time = slot_time_for_next_exposure(table.stats.length, flags);
+  const bool accepted =
+      guard_verdict(table.stats, slot_time, port_.now_us()).status == GuardStatus::kOk;
+  if (accepted && prearm_.active && prearm_.table == index && prearm_.slot_time_us == slot_time)
+    return;
+  if (withdraw_prearm()) return;  // an edge started it: now exposing
+  if (!accepted) return;          // the edge's callback will decide
+  if (port_.prearm_slot_table(std::span<const std::uint32_t>(table.words.data(), table.word_count),
+                              slot_time) == PortStatus::kOk)
+    prearm_ = {true, index, slot_time, flags};
+}
+
+bool Controller::withdraw_prearm() {
+  if (!prearm_.active) return false;
+  const PrearmStart start = port_.cancel_prearm();
+  if (!start.started) {
+    prearm_.active = false;
+    return false;
+  }
+  adopt_prearm(start);
+  return true;
+}
+
+void Controller::adopt_prearm(const PrearmStart& start) {
+  const int index = prearm_.table;
+  prearm_.active = false;
+  std::uint16_t flags = prearm_.flags;
+  if (index != playing_table_) {
+    flags |= protocol::kEventCodeSwitched;
+    playing_table_ = index;
+  }
+  if (pending_table_ == index) pending_table_ = -1;
+  const SlotTable& table = tables_[static_cast<std::size_t>(index)];
+  ++frame_counter_;
+  exposure_start_us_ = start.time_us;
+  exposure_slot_time_us_ = prearm_.slot_time_us;
+  exposure_pulse_width_us_ = 0;
+  exposure_flags_ = flags;
+  encoder_at_start_ = port_.encoder_count();
+  // The guard accepted this table for any start from the pre-arm on.
+  record_lit_exposure(table.stats, start.time_us, prearm_.slot_time_us);
+  state_ = ControllerState::kExposing;
+  adopted_edge_pending_ = start.edge_pending;
 }
 
 GuardVerdict Controller::guard_verdict(const LedOnStats& stats, std::uint32_t slot_time_us,
@@ -502,6 +571,7 @@ void Controller::on_slot_table_done(std::uint64_t) {
   event.slot_count = static_cast<std::uint16_t>(table.stats.length);
   state_ = ControllerState::kArmed;
   queue_event(event);
+  update_prearm();
 }
 
 // ---------------------------------------------------------------------------
@@ -543,6 +613,10 @@ void Controller::queue_event(const protocol::ExposureEvent& event) {
 
 void Controller::stop_sequencing() {
   port_.stop_frame_timer();
+  // A pre-armed table an edge already started lit the LEDs: into the history
+  // before it is cut.
+  withdraw_prearm();
+  adopted_edge_pending_ = false;
   port_.stop_slot_table();
   all_leds_off();
   self_test_running_ = false;

@@ -53,6 +53,8 @@ PortStatus SimPort::start_slot_table(std::span<const std::uint32_t> words,
   if (slot_timer_fails_ || words.empty() || slot_time_us == 0) return PortStatus::kError;
   table_ = {words, slot_time_us, now_us_, 0};
   table_starts_.push_back(now_us_);
+  prearm_ = {};  // the slot hardware is loaded anew
+  prearm_start_ = {};
   return PortStatus::kOk;
 }
 
@@ -100,7 +102,70 @@ std::uint64_t SimPort::next_event_us() const {
       table_.words.empty() ? kNever : table_.start_us + table_.next_word * table_.slot_time_us;
   const std::uint64_t strobe_at = strobe_edges_.empty() ? kNever : strobe_edges_.front().time_us;
   const std::uint64_t frame_at = frame_period_us_ == 0 ? kNever : next_frame_us_;
-  return std::min({slot_at, strobe_at, frame_at});
+  const std::uint64_t callback_at =
+      callbacks_.empty() ? kNever : std::max(callbacks_.front().due_us, lock_until_us_);
+  return std::min({slot_at, strobe_at, frame_at, callback_at});
+}
+
+void SimPort::stop_slot_table() {
+  table_ = {};
+  prearm_ = {};
+  prearm_start_ = {};
+  // The port clears the table's pending done interrupt with the stream.
+  std::erase_if(callbacks_, [](const Callback& c) { return c.kind == CallbackKind::kTableDone; });
+}
+
+PortStatus SimPort::prearm_slot_table(std::span<const std::uint32_t> words,
+                                      std::uint32_t slot_time_us) {
+  if (slot_timer_fails_ || words.empty() || slot_time_us == 0 || !table_.words.empty())
+    return PortStatus::kError;
+  prearm_ = {words, slot_time_us, 0, 0};
+  prearm_start_ = {};
+  return PortStatus::kOk;
+}
+
+PrearmStart SimPort::cancel_prearm() {
+  PrearmStart out = prearm_start_;
+  if (out.started) out.edge_pending = !prearm_edge_delivered_;
+  prearm_ = {};
+  prearm_start_ = {};
+  return out;
+}
+
+bool SimPort::trigger_prearmed() {
+  // A failing slot timer (set_slot_timer_fails) starts nothing in hardware either.
+  if (prearm_.words.empty() || !table_.words.empty() || slot_timer_fails_) return false;
+  table_ = {prearm_.words, prearm_.slot_time_us, now_us_, 0};
+  table_starts_.push_back(now_us_);
+  prearm_ = {};
+  prearm_start_ = {true, now_us_, true};
+  prearm_edge_delivered_ = false;
+  return true;
+}
+
+void SimPort::raise(CallbackKind kind, bool active, bool started_prearm) {
+  const Callback callback{now_us_ + latency_us_, kind, active, now_us_, started_prearm};
+  if (latency_us_ == 0 && lock_until_us_ <= now_us_ && callbacks_.empty()) {
+    deliver(callback);  // at its event, as without the timing model
+    return;
+  }
+  callbacks_.push_back(callback);  // due times only grow: the queue stays in order
+}
+
+void SimPort::deliver(const Callback& callback) {
+  if (callback.started_prearm) prearm_edge_delivered_ = true;
+  if (listener_ == nullptr) return;
+  switch (callback.kind) {
+    case CallbackKind::kStrobe:
+      listener_->on_strobe_edge(callback.active, callback.time_us);
+      break;
+    case CallbackKind::kTableDone:
+      listener_->on_slot_table_done(callback.time_us);
+      break;
+    case CallbackKind::kFrame:
+      listener_->on_frame_tick(callback.time_us);
+      break;
+  }
 }
 
 void SimPort::run_until(std::uint64_t time_us) {
@@ -110,23 +175,34 @@ void SimPort::run_until(std::uint64_t time_us) {
         table_.words.empty() ? kNever : table_.start_us + table_.next_word * table_.slot_time_us;
     const std::uint64_t strobe_at = strobe_edges_.empty() ? kNever : strobe_edges_.front().time_us;
     const std::uint64_t frame_at = frame_period_us_ == 0 ? kNever : next_frame_us_;
-    const std::uint64_t next = std::min({slot_at, strobe_at, frame_at});
+    const std::uint64_t callback_at =
+        callbacks_.empty() ? kNever : std::max(callbacks_.front().due_us, lock_until_us_);
+    const std::uint64_t next = std::min({slot_at, strobe_at, frame_at, callback_at});
     if (next == kNever || next > time_us) break;
     now_us_ = std::max(now_us_, next);
+    // At equal times: slot writes, strobe edges, frame ticks (the hardware),
+    // then queued callbacks.
     if (slot_at == next) {
       apply_bsrr(table_.words[table_.next_word]);
       if (++table_.next_word == table_.words.size()) {
         table_ = {};
-        if (listener_) listener_->on_slot_table_done(now_us_);
+        raise(CallbackKind::kTableDone, false, false);
       }
     } else if (strobe_at == next) {
       const StrobeEdge edge = strobe_edges_.front();
       strobe_edges_.erase(strobe_edges_.begin());
-      if (listener_) listener_->on_strobe_edge(edge.active, now_us_);
-    } else {
+      // The active edge is TIM1's trigger (TRGO) unless the frame timer owns it.
+      const bool started = edge.active && frame_period_us_ == 0 && trigger_prearmed();
+      raise(CallbackKind::kStrobe, edge.active, started);
+    } else if (frame_at == next) {
       next_frame_us_ += frame_period_us_;
       if (trigger_pulse_us_ != 0) trigger_pulses_.push_back({now_us_, trigger_pulse_us_});
-      if (listener_) listener_->on_frame_tick(now_us_);
+      const bool started = trigger_prearmed();
+      raise(CallbackKind::kFrame, false, started);
+    } else {
+      const Callback callback = callbacks_.front();
+      callbacks_.erase(callbacks_.begin());
+      deliver(callback);
     }
   }
   now_us_ = std::max(now_us_, time_us);

@@ -24,6 +24,20 @@
 // On the MCU the Port callbacks run in interrupt context and the command
 // methods in the main loop: the stm32f4 port must mask the strobe, frame and
 // slot interrupts around command handling (not needed on the sim port).
+//
+// Pre-arming (issue 15, finding 3): the port can start a table on the trigger
+// edge in hardware, before any callback. The controller pre-arms only the
+// table of the next exposure, at its slot time, once the guard accepts it for
+// a start at the moment of pre-arming; acceptance only grows with a later
+// start (longer period, no seam), so whatever edge starts it, the guard said
+// yes before any LED lit. A pre-armed table that an edge started is always
+// adopted as a lit exposure, also when SelectCode or Disarm withdraws it too
+// late. Otherwise the edge's callback decides and starts the table in software
+// (late by the interrupt latency, never early). The controller re-decides the
+// pre-arm whenever its inputs change: after each exposure, after a strobe
+// pulse ends (follow-exposure slot time), on SelectCode and in poll().
+// Tables are never rewritten while the DMA may read them: three of them
+// (playing, pending, and the one SelectCode builds into).
 // Freestanding C++20: no heap, no exceptions, no RTTI.
 
 #include <array>
@@ -136,6 +150,13 @@ class Controller final : public PortListener {
   /// kOk if code `code_id` may run with the current timing (frame period, guard).
   protocol::Status check_code_runnable(std::uint8_t code_id) const;
   void begin_exposure(std::uint64_t time_us);
+  /// Pre-arms the next exposure's table if the guard accepts it from now on
+  /// (withdrawing a different one first); nothing unless armed and idle between exposures.
+  void update_prearm();
+  /// Withdraws the pre-armed table; true if an edge had started it (then adopted).
+  bool withdraw_prearm();
+  /// Records the pre-armed table an edge started as the exposure in progress.
+  void adopt_prearm(const PrearmStart& start);
   /// The guard's verdict on `stats` at `slot_time_us` for an exposure whose
   /// LEDs light at `start_us`, given the history of lit exposures.
   GuardVerdict guard_verdict(const LedOnStats& stats, std::uint32_t slot_time_us,
@@ -161,9 +182,20 @@ class Controller final : public PortListener {
   std::uint8_t config_flags_ = 0;
 
   CodeUpload upload_;
-  std::array<SlotTable, 2> tables_{};
+  std::array<SlotTable, 3> tables_{};
   int playing_table_ = 0;   ///< table of the active code
   int pending_table_ = -1;  ///< table taking over at the next exposure, -1 if none
+  /// The table pre-armed in the port (the next exposure's), if any.
+  struct Prearm {
+    bool active = false;
+    int table = 0;
+    std::uint32_t slot_time_us = 0;
+    std::uint16_t flags = 0;
+  };
+  Prearm prearm_;
+  /// An adopted pre-armed start whose edge callback is still to come: that
+  /// callback is the exposure's own edge, not a missed trigger.
+  bool adopted_edge_pending_ = false;
 
   // The exposure in progress (or the last one).
   std::uint64_t exposure_start_us_ = 0;

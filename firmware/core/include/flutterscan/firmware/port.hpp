@@ -20,6 +20,13 @@ enum class PortStatus : std::uint8_t { kOk, kError };
 /// \brief Why the controller last started.
 enum class ResetCause : std::uint8_t { kPowerOn, kWatchdog, kSoftware };
 
+/// \brief A pre-armed slot table that a trigger edge started in hardware.
+struct PrearmStart {
+  bool started = false;       ///< an edge started it (it plays, or played)
+  std::uint64_t time_us = 0;  ///< when it started, or later (never earlier)
+  bool edge_pending = false;  ///< the callback of the edge that started it is still to come
+};
+
 /// \brief What the hardware reports to the core. On the MCU these run in
 /// interrupt context; the core keeps them short and allocation-free.
 class PortListener {
@@ -53,8 +60,21 @@ class Port {
   /// slot_time_us, then calls on_slot_table_done. `words` must stay unchanged until then.
   virtual PortStatus start_slot_table(std::span<const std::uint32_t> words,
                                       std::uint32_t slot_time_us) = 0;
-  /// \brief Stops the slot timer without writing further words or calling back.
+  /// \brief Stops the slot timer without writing further words or calling back;
+  /// also withdraws a pre-armed table.
   virtual void stop_slot_table() = 0;
+  /// \brief Pre-arms `words` at `slot_time_us`: the next trigger edge (the
+  /// strobe's active edge in slave mode, a frame tick while the frame timer
+  /// runs) starts it in hardware, before the edge's callback runs, as
+  /// start_slot_table would at that edge. The controller pre-arms only a table
+  /// the guard has accepted for any start from now on. kError: not supported
+  /// (the controller then starts every exposure from the edge's callback).
+  /// `words` must stay unchanged until the table is done or withdrawn.
+  virtual PortStatus prearm_slot_table(std::span<const std::uint32_t> words,
+                                       std::uint32_t slot_time_us) = 0;
+  /// \brief Withdraws the pre-armed table. If an edge has already started it,
+  /// it keeps playing (and will call on_slot_table_done) and the result says so.
+  virtual PrearmStart cancel_prearm() = 0;
 
   /// \brief Sets the strobe input's polarity (edges are reported as active/inactive).
   virtual void configure_strobe_input(bool active_low) = 0;

@@ -54,6 +54,12 @@ class QemuPort final : public Port {
   PortStatus start_slot_table(std::span<const std::uint32_t> words,
                               std::uint32_t slot_time_us) override;
   void stop_slot_table() override;
+  /// \brief Not supported (no hardware trigger path on QEMU): every exposure
+  /// starts from its edge's callback.
+  PortStatus prearm_slot_table(std::span<const std::uint32_t>, std::uint32_t) override {
+    return PortStatus::kError;
+  }
+  PrearmStart cancel_prearm() override { return {}; }
   void configure_strobe_input(bool active_low) override { strobe_active_low_ = active_low; }
   PortStatus start_frame_timer(std::uint32_t period_us, std::uint32_t trigger_pulse_us) override;
   void stop_frame_timer() override;

@@ -4,6 +4,12 @@
 // tables exactly on time, records every LED bank write with its time and the
 // resulting pin levels, generates strobe pulses and encoder counts on request,
 // drives a virtual camera trigger, and holds a virtual flash page.
+// It models the product port's timing (stm32f4_port.hpp): a pre-armed table
+// starts on its trigger edge in hardware, before any callback; callbacks come
+// set_interrupt_latency_us() after their hardware event, and not before the
+// end of an interrupt lock (hold_interrupts_until: the main loop's
+// InterruptLock around USB and command work). With latency 0 and no lock (the
+// default) every callback runs at its event, as before.
 // Host only (uses the standard library's containers).
 
 #include <array>
@@ -47,7 +53,10 @@ class SimPort final : public Port {
   void set_led_brightness(int led, std::uint16_t permille) override;
   PortStatus start_slot_table(std::span<const std::uint32_t> words,
                               std::uint32_t slot_time_us) override;
-  void stop_slot_table() override { table_ = {}; }
+  void stop_slot_table() override;
+  PortStatus prearm_slot_table(std::span<const std::uint32_t> words,
+                               std::uint32_t slot_time_us) override;
+  PrearmStart cancel_prearm() override;
   void configure_strobe_input(bool active_low) override { strobe_active_low_ = active_low; }
   PortStatus start_frame_timer(std::uint32_t period_us, std::uint32_t trigger_pulse_us) override;
   void stop_frame_timer() override { frame_period_us_ = 0; }
@@ -78,6 +87,15 @@ class SimPort final : public Port {
   void add_encoder_counts(std::int32_t counts);
   /// \brief What reset_cause() reports (set before Controller::start()).
   void set_reset_cause(ResetCause cause) { reset_cause_ = cause; }
+  /// \brief Callbacks come this long after their hardware event (interrupt latency).
+  void set_interrupt_latency_us(std::uint32_t latency_us) { latency_us_ = latency_us; }
+  /// \brief No callback before `time_us` (the main loop holds the interrupt lock
+  /// until then); hardware events (pre-armed starts, slot words) go on.
+  void hold_interrupts_until(std::uint64_t time_us) { lock_until_us_ = time_us; }
+  /// \brief Callbacks whose hardware event happened but which have not run yet.
+  bool callbacks_pending() const { return !callbacks_.empty(); }
+  /// \brief A table is pre-armed and not yet started.
+  bool prearmed() const { return !prearm_.words.empty(); }
   /// \brief Makes start_slot_table fail (to exercise the fault path).
   void set_slot_timer_fails(bool fails) { slot_timer_fails_ = fails; }
   /// \brief Makes start_frame_timer fail (to exercise Arm's failure path).
@@ -138,6 +156,19 @@ class SimPort final : public Port {
     std::uint64_t time_us;
     bool active;
   };
+  enum class CallbackKind : std::uint8_t { kStrobe, kTableDone, kFrame };
+  struct Callback {
+    std::uint64_t due_us;
+    CallbackKind kind;
+    bool active;            ///< strobe edges
+    std::uint64_t time_us;  ///< the hardware event's time (what the callback reports)
+    bool started_prearm;    ///< this edge started the pre-armed table
+  };
+  /// Runs or queues the callback of a hardware event at now.
+  void raise(CallbackKind kind, bool active, bool started_prearm);
+  void deliver(const Callback& callback);
+  /// A trigger edge now: starts the pre-armed table if there is one; true if it did.
+  bool trigger_prearmed();
 
   std::uint8_t led_mask_from_pins(std::uint16_t levels) const;
   void apply_bsrr(std::uint32_t bsrr);
@@ -151,6 +182,12 @@ class SimPort final : public Port {
 
   PlayingTable table_;
   std::vector<std::uint64_t> table_starts_;
+  PlayingTable prearm_;  ///< words empty: nothing pre-armed
+  PrearmStart prearm_start_;
+  bool prearm_edge_delivered_ = false;
+  std::uint32_t latency_us_ = 0;
+  std::uint64_t lock_until_us_ = 0;
+  std::vector<Callback> callbacks_;  ///< queued, in due order
   bool slot_timer_fails_ = false;
   bool frame_timer_fails_ = false;
 
