@@ -176,3 +176,65 @@ TEST(BootRecovery, TheApplicationConfirmsOnlyAfterUsbStaysConfigured) {
 
 }  // namespace
 }  // namespace flutterscan::firmware::test
+
+namespace flutterscan::firmware::test {
+namespace {
+
+// Finding 6 end to end on the simulated board: an application that hangs
+// before USB (watchdog resets, no host ever configures it) is started three
+// times, then the bootloader stays in DFU mode, where a download brings a good
+// image back.
+TEST(BootRecoveryBoard, AHangingApplicationEndsInDfuModeAndCanBeReflashed) {
+  sim::SimBoard board(sim::SimBoardConfig{}, good_image());
+  EXPECT_EQ(board.mode(), sim::BoardMode::kApplication);
+  EXPECT_EQ(board.unconfirmed_starts(), 1u);
+  board.watchdog_reset();  // hung before USB
+  EXPECT_EQ(board.mode(), sim::BoardMode::kApplication);
+  board.watchdog_reset();
+  EXPECT_EQ(board.mode(), sim::BoardMode::kApplication);
+  EXPECT_EQ(board.unconfirmed_starts(), 3u);
+  board.watchdog_reset();
+  EXPECT_EQ(board.mode(), sim::BoardMode::kBootloader);
+  enumerate_or_fail(board);
+  const auto image = sim::make_application_image(kBoardIdStm32f405, 2, 0, 0, 6000, 5);
+  EXPECT_EQ(dfu_download(board, image).final_status.state, DfuState::kDfuIdle);
+  board.bus_reset();  // the deliberate leave clears the count
+  EXPECT_EQ(board.mode(), sim::BoardMode::kApplication);
+  EXPECT_EQ(board.unconfirmed_starts(), 1u);
+}
+
+TEST(BootRecoveryBoard, AnApplicationThatKeepsUsbConfiguredConfirmsItself) {
+  sim::SimBoard board(sim::SimBoardConfig{}, good_image());
+  enumerate_or_fail(board);
+  board.port().run_for(2'000'000);
+  board.poll();
+  EXPECT_EQ(board.unconfirmed_starts(), 1u);  // 2 s: not yet
+  board.port().run_for(1'000'000);
+  board.poll();
+  EXPECT_EQ(board.unconfirmed_starts(), 0u);  // 3 s configured: confirmed
+  for (int i = 0; i < 5; ++i) {  // later watchdog resets of a working image: it keeps running
+    board.watchdog_reset();
+    EXPECT_EQ(board.mode(), sim::BoardMode::kApplication);
+    enumerate_or_fail(board);
+    board.port().run_for(3'000'000);
+    board.poll();
+  }
+  EXPECT_EQ(board.unconfirmed_starts(), 0u);
+}
+
+TEST(BootRecoveryBoard, ThePowerOnResetAndTheRecoveryPin) {
+  sim::SimBoard board(sim::SimBoardConfig{}, good_image());
+  for (int i = 0; i < 3; ++i) board.watchdog_reset();
+  EXPECT_EQ(board.mode(), sim::BoardMode::kBootloader);
+  board.reset();  // power cycle: the SRAM record is gone, three new tries
+  EXPECT_EQ(board.mode(), sim::BoardMode::kApplication);
+  board.set_recovery_pin(true);
+  board.reset();
+  EXPECT_EQ(board.mode(), sim::BoardMode::kBootloader);
+  board.set_recovery_pin(false);
+  board.reset();
+  EXPECT_EQ(board.mode(), sim::BoardMode::kApplication);
+}
+
+}  // namespace
+}  // namespace flutterscan::firmware::test
