@@ -14,10 +14,13 @@
 #include <gtest/gtest.h>
 #include <unicorn/unicorn.h>
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <map>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -37,6 +40,18 @@ constexpr std::uint32_t kAppBase = 0x08008000;
 // RM0090 2.3 memory map, 7.3 RCC, 8.4 GPIO; PM0214 4.3 SCB.
 constexpr std::uint32_t kRccBase = 0x40023800;
 constexpr std::uint32_t kRccAhb1Enr = 0x30;
+constexpr std::uint32_t kFlashIfBase = 0x40023C00;
+constexpr std::uint32_t kPwrBase = 0x40007000;
+constexpr std::uint32_t kGpioABase = 0x40020000;
+constexpr std::uint32_t kGpioCBase = 0x40020800;
+constexpr std::uint32_t kTim1Base = 0x40010000;
+constexpr std::uint32_t kTim2Base = 0x40000000;
+constexpr std::uint32_t kTim3Base = 0x40000400;
+constexpr std::uint32_t kTim5Base = 0x40000C00;
+constexpr std::uint32_t kDma2Base = 0x40026400;
+constexpr std::uint32_t kIwdgBase = 0x40003000;
+constexpr std::uint32_t kDbgmcuBase = 0xE0042000;
+constexpr std::uint32_t kUniqueIdPage = 0x1FFF7000;
 constexpr std::uint32_t kGpioBBase = 0x40020400;
 constexpr std::uint32_t kGpioModer = 0x00;
 constexpr std::uint32_t kGpioPupdr = 0x0C;
@@ -119,7 +134,7 @@ struct Elf {
   }
 };
 
-/// The chip: flash, SRAM, the modelled registers, and why it stopped.
+/// The chip: flash, SRAM, the modelled registers (RM0090 reset values), and why it stopped.
 class Chip {
  public:
   Chip() {
@@ -134,10 +149,13 @@ class Chip {
     std::vector<std::uint8_t> sram(kSramSize);
     for (std::size_t i = 0; i < sram.size(); ++i) sram[i] = static_cast<std::uint8_t>(i * 37 + 11);
     uc_mem_write(uc_, kSramBase, sram.data(), sram.size());
-    map_mmio(kRccBase, &Chip::rcc_read, &Chip::rcc_write);
-    map_mmio(kGpioBBase, &Chip::gpiob_read, &Chip::gpiob_write);
-    EXPECT_EQ(uc_mmio_map(uc_, kScsBase, 0x1000, &Chip::scs_read, this, &Chip::scs_write, this),
-              UC_ERR_OK);
+    model_registers();
+    for (const std::uint32_t block :
+         {kRccBase, kFlashIfBase, kPwrBase, kGpioABase, kGpioBBase, kGpioCBase, kTim1Base,
+          kTim2Base, kTim3Base, kTim5Base, kDma2Base, kIwdgBase, kDbgmcuBase})
+      map_region(block, 0x400);
+    map_region(kScsBase, 0x1000);
+    map_region(kUniqueIdPage, 0x1000);
     uc_hook hook;
     uc_hook_add(uc_, &hook, UC_HOOK_MEM_UNMAPPED, reinterpret_cast<void*>(&Chip::unmapped), this, 1,
                 0);
@@ -164,114 +182,192 @@ class Chip {
                 address & ~1u, address & ~1u);
   }
 
-  /// Resets the core (SP and PC from the vector table at 0) and runs.
+  /// Resets the core (SP and PC from the vector table at 0) and runs to a stop.
   std::string run() {
     const std::uint32_t sp = read_word(kFlashBase);
     const std::uint32_t pc = read_word(kFlashBase + 4);
     uc_reg_write(uc_, UC_ARM_REG_SP, &sp);
-    const uc_err err = uc_emu_start(uc_, pc | 1u, 0, 0, 200'000'000);
-    if (!error_.empty()) return "error: " + error_;
-    if (err != UC_ERR_OK) return std::string("error: unicorn: ") + uc_strerror(err);
-    return stopped_at_;
+    return go(pc);
   }
+  /// Runs on from where the last stop was.
+  std::string resume() { return go(reg(UC_ARM_REG_PC)); }
 
   std::uint32_t reg(int r) {
     std::uint32_t v = 0;
     uc_reg_read(uc_, r, &v);
     return v;
   }
+  /// A modelled peripheral register's value.
+  std::uint32_t io(std::uint32_t address) const { return regs_.at(address); }
+  /// Every value written to `address`, in order.
+  std::vector<std::uint32_t> writes_to(std::uint32_t address) const {
+    std::vector<std::uint32_t> out;
+    for (const auto& [a, v] : writes_)
+      if (a == address) out.push_back(v);
+    return out;
+  }
 
   bool recovery_pin_high = false;
-  std::uint32_t rcc_ahb1enr = 0x00100000;  // reset value (CCMDATARAMEN)
-  std::uint32_t gpiob_moder = 0x00000280;  // reset value of port B
-  std::uint32_t gpiob_pupdr = 0x00000100;  // reset value of port B
-  std::uint32_t vtor = 0;
-  std::uint32_t cpacr = 0;
 
  private:
-  using Read = std::uint64_t (*)(uc_engine*, std::uint64_t, unsigned, void*);
-  using Write = void (*)(uc_engine*, std::uint64_t, unsigned, std::uint64_t, void*);
-
-  void map_mmio(std::uint32_t base, Read on_read, Write on_write) {
-    EXPECT_EQ(uc_mmio_map(uc_, base, 0x400, on_read, this, on_write, this), UC_ERR_OK);
+  std::string go(std::uint32_t pc) {
+    skip_stop_ = pc & ~1u;
+    stopped_at_ = "no stop";
+    const uc_err err = uc_emu_start(uc_, pc | 1u, 0, 0, 400'000'000);
+    if (!error_.empty()) return "error: " + error_;
+    if (err != UC_ERR_OK) return std::string("error: unicorn: ") + uc_strerror(err);
+    return stopped_at_;
   }
+
+  /// One MMIO region: the callbacks get offsets into it.
+  struct Region {
+    Chip* chip;
+    std::uint32_t base;
+  };
+  void map_region(std::uint32_t base, std::uint32_t size) {
+    regions_.push_back(std::make_unique<Region>(Region{this, base}));
+    Region* r = regions_.back().get();
+    EXPECT_EQ(uc_mmio_map(uc_, base, size, &Chip::mmio_read, r, &Chip::mmio_write, r), UC_ERR_OK);
+  }
+
+  void model_registers() {
+    auto block = [this](std::uint32_t base, std::uint32_t last_offset) {
+      for (std::uint32_t o = 0; o <= last_offset; o += 4) regs_[base + o] = 0;
+    };
+    // RCC (RM0090 7.3): CR HSION|HSIRDY, PLLCFGR, AHB1ENR CCMDATARAMEN, CSR POR|PIN|BOR.
+    for (const std::uint32_t o :
+         {0x00u, 0x04u, 0x08u, 0x0Cu, 0x10u, 0x14u, 0x18u, 0x20u, 0x24u, 0x30u, 0x34u, 0x38u,
+          0x40u, 0x44u, 0x50u, 0x54u, 0x58u, 0x60u, 0x64u, 0x70u, 0x74u, 0x80u, 0x84u})
+      regs_[kRccBase + o] = 0;
+    regs_[kRccBase + 0x00] = 0x00000083;
+    regs_[kRccBase + 0x04] = 0x24003010;
+    regs_[kRccBase + 0x30] = 0x00100000;
+    regs_[kRccBase + 0x74] = 0x0E000000;
+    block(kFlashIfBase, 0x14);  // ACR, KEYR, OPTKEYR, SR, CR, OPTCR
+    regs_[kFlashIfBase + 0x10] = 0x80000000;
+    block(kPwrBase, 0x04);
+    for (const std::uint32_t gpio : {kGpioABase, kGpioBBase, kGpioCBase}) block(gpio, 0x24);
+    regs_[kGpioABase + 0x00] = 0xA8000000;
+    regs_[kGpioABase + 0x08] = 0x0C000000;
+    regs_[kGpioABase + 0x0C] = 0x64000000;
+    regs_[kGpioBBase + 0x00] = 0x00000280;
+    regs_[kGpioBBase + 0x08] = 0x000000C0;
+    regs_[kGpioBBase + 0x0C] = 0x00000100;
+    for (const std::uint32_t tim : {kTim1Base, kTim2Base, kTim3Base, kTim5Base}) block(tim, 0x50);
+    block(kDma2Base, 0xCC);  // LISR..HIFCR, streams 0..7
+    block(kIwdgBase, 0x0C);
+    regs_[kIwdgBase + 0x08] = 0x00000FFF;
+    block(kDbgmcuBase, 0x0C);
+    // System control space (PM0214 4): SysTick, NVIC, SCB.
+    for (std::uint32_t o = 0x10; o <= 0x1C; o += 4) regs_[kScsBase + o] = 0;
+    for (std::uint32_t o = 0x100; o <= 0x29C; o += 4) regs_[kScsBase + o] = 0;
+    for (std::uint32_t o = 0x400; o <= 0x4EC; o += 4) regs_[kScsBase + o] = 0;
+    for (std::uint32_t o = 0xD00; o <= 0xD24; o += 4) regs_[kScsBase + o] = 0;
+    regs_[kScsBase + 0xD00] = 0x410FC241;  // CPUID: Cortex-M4 r0p1
+    regs_[kScsBase + kScbCpacr] = 0;
+    // The 96-bit unique ID (RM0090 39.1), read-only.
+    regs_[kUniqueIdPage + 0xA10] = 0x00470031;
+    regs_[kUniqueIdPage + 0xA14] = 0x31385119;
+    regs_[kUniqueIdPage + 0xA18] = 0x32363734;
+  }
+
+  /// What reading `address` shows (the register, plus the hardware's status bits).
+  std::uint32_t observe(std::uint32_t address) {
+    std::uint32_t v = regs_.at(address);
+    if (address == kRccBase + 0x00) {  // CR: each oscillator / the PLL ready once on
+      if (v & (1u << 0)) v |= 1u << 1;
+      if (v & (1u << 16)) v |= 1u << 17;
+      if (v & (1u << 24)) v |= 1u << 25;
+    } else if (address == kRccBase + 0x08) {  // CFGR: SWS follows SW
+      v = (v & ~0xCu) | ((v & 0x3u) << 2);
+    } else if (address == kGpioBBase + kGpioIdr) {  // PB2: the recovery jumper, else pulled down
+      v = recovery_pin_high ? (1u << 2) : 0u;
+    } else if (address == kGpioABase + kGpioIdr || address == kGpioCBase + kGpioIdr) {
+      v = 0;
+    }
+    return v;
+  }
+
+  void store(std::uint32_t address, std::uint32_t value) {
+    writes_.push_back({address, value});
+    const std::uint32_t offset = address & 0x3FFu;
+    const std::uint32_t base = address & ~0x3FFu;
+    if (address == kRccBase + 0x74 && (value & (1u << 24)) != 0) {  // CSR.RMVF
+      regs_[address] = regs_[address] & 0x00FFFFFFu;
+      return;
+    }
+    if ((base == kGpioABase || base == kGpioBBase || base == kGpioCBase) && offset == 0x18) {
+      // BSRR: set bits win over reset bits; ODR changes, BSRR reads 0.
+      std::uint32_t& odr = regs_[base + 0x14];
+      odr = (odr & ~(value >> 16)) | (value & 0xFFFFu);
+      return;
+    }
+    regs_[address] = value;
+  }
+
+  bool clocked(std::uint32_t address) const {
+    const std::uint32_t ahb1 = regs_.at(kRccBase + 0x30);
+    const std::uint32_t apb1 = regs_.at(kRccBase + 0x40);
+    const std::uint32_t apb2 = regs_.at(kRccBase + 0x44);
+    const std::uint32_t base = address & ~0x3FFu;
+    if (base == kGpioABase) return (ahb1 & (1u << 0)) != 0;
+    if (base == kGpioBBase) return (ahb1 & (1u << 1)) != 0;
+    if (base == kGpioCBase) return (ahb1 & (1u << 2)) != 0;
+    if (base == kDma2Base) return (ahb1 & (1u << 22)) != 0;
+    if (base == kTim2Base) return (apb1 & (1u << 0)) != 0;
+    if (base == kTim3Base) return (apb1 & (1u << 1)) != 0;
+    if (base == kTim5Base) return (apb1 & (1u << 3)) != 0;
+    if (base == kPwrBase) return (apb1 & (1u << 28)) != 0;
+    if (base == kTim1Base) return (apb2 & (1u << 0)) != 0;
+    return true;
+  }
+
   void unmodelled(const char* what, std::uint64_t address) {
     char buffer[96];
-    std::snprintf(buffer, sizeof buffer, "%s of 0x%08llx (not modelled)", what,
-                  static_cast<unsigned long long>(address));
+    std::snprintf(buffer, sizeof buffer, "%s of 0x%08llx (not modelled) at pc 0x%08x", what,
+                  static_cast<unsigned long long>(address), reg(UC_ARM_REG_PC));
     if (error_.empty()) error_ = buffer;
     uc_emu_stop(uc_);
   }
 
-  static std::uint64_t rcc_read(uc_engine*, std::uint64_t offset, unsigned size, void* user) {
-    auto* chip = static_cast<Chip*>(user);
-    if (offset == kRccAhb1Enr && size == 4) return chip->rcc_ahb1enr;
-    chip->unmodelled("read", kRccBase + offset);
-    return 0;
-  }
-  static void rcc_write(uc_engine*, std::uint64_t offset, unsigned size, std::uint64_t value,
-                        void* user) {
-    auto* chip = static_cast<Chip*>(user);
-    if (offset == kRccAhb1Enr && size == 4) {
-      chip->rcc_ahb1enr = static_cast<std::uint32_t>(value);
-      return;
+  bool check(std::uint32_t word, const char* what, std::uint32_t address) {
+    if (regs_.count(word) == 0) {
+      unmodelled(what, address);
+      return false;
     }
-    chip->unmodelled("write", kRccBase + offset);
-  }
-  bool gpiob_clocked() const { return (rcc_ahb1enr & (1u << 1)) != 0; }
-  static std::uint64_t gpiob_read(uc_engine*, std::uint64_t offset, unsigned size, void* user) {
-    auto* chip = static_cast<Chip*>(user);
-    if (!chip->gpiob_clocked() || size != 4) {
-      chip->unmodelled("read (port clock off)", kGpioBBase + offset);
-      return 0;
+    if (!clocked(word)) {
+      unmodelled(what, address);  // a peripheral whose clock is off ignores the bus
+      return false;
     }
-    switch (offset) {
-      case kGpioModer:
-        return chip->gpiob_moder;
-      case kGpioPupdr:
-        return chip->gpiob_pupdr;
-      case kGpioIdr: {
-        // PB2: the jumper to 3.3 V, else the board's pull-down (and the pin's own, if set).
-        return chip->recovery_pin_high ? (1u << 2) : 0u;
-      }
-      default:
-        chip->unmodelled("read", kGpioBBase + offset);
-        return 0;
-    }
+    return true;
   }
-  static void gpiob_write(uc_engine*, std::uint64_t offset, unsigned size, std::uint64_t value,
-                          void* user) {
-    auto* chip = static_cast<Chip*>(user);
-    if (!chip->gpiob_clocked() || size != 4) {
-      chip->unmodelled("write (port clock off)", kGpioBBase + offset);
-      return;
-    }
-    if (offset == kGpioPupdr) {
-      chip->gpiob_pupdr = static_cast<std::uint32_t>(value);
-    } else if (offset == kGpioModer) {
-      chip->gpiob_moder = static_cast<std::uint32_t>(value);
-    } else {
-      chip->unmodelled("write", kGpioBBase + offset);
-    }
+
+  static std::uint64_t mmio_read(uc_engine*, std::uint64_t offset, unsigned size, void* user) {
+    const auto* region = static_cast<const Region*>(user);
+    Chip* chip = region->chip;
+    const std::uint32_t address = region->base + static_cast<std::uint32_t>(offset);
+    const std::uint32_t word = address & ~3u;
+    if (!chip->check(word, "read", address)) return 0;
+    const std::uint32_t v = chip->observe(word) >> (8 * (address & 3u));
+    return size == 4 ? v : v & ((1u << (8 * size)) - 1u);
   }
-  static std::uint64_t scs_read(uc_engine*, std::uint64_t offset, unsigned, void* user) {
-    auto* chip = static_cast<Chip*>(user);
-    if (offset == kScbVtor) return chip->vtor;
-    if (offset == kScbCpacr) return chip->cpacr;
-    chip->unmodelled("read", kScsBase + offset);
-    return 0;
-  }
-  static void scs_write(uc_engine*, std::uint64_t offset, unsigned, std::uint64_t value,
-                        void* user) {
-    auto* chip = static_cast<Chip*>(user);
-    if (offset == kScbVtor) {
-      chip->vtor = static_cast<std::uint32_t>(value);
-    } else if (offset == kScbCpacr) {
-      chip->cpacr = static_cast<std::uint32_t>(value);
-    } else {
-      chip->unmodelled("write", kScsBase + offset);
+
+  static void mmio_write(uc_engine*, std::uint64_t offset, unsigned size, std::uint64_t value,
+                         void* user) {
+    const auto* region = static_cast<const Region*>(user);
+    Chip* chip = region->chip;
+    const std::uint32_t address = region->base + static_cast<std::uint32_t>(offset);
+    const std::uint32_t word = address & ~3u;
+    if (!chip->check(word, "write", address)) return;
+    std::uint32_t v = static_cast<std::uint32_t>(value);
+    if (size != 4) {  // a byte or half-word: the other lanes keep their value
+      const std::uint32_t shift = 8 * (address & 3u);
+      const std::uint32_t mask = ((size == 1 ? 0xFFu : 0xFFFFu)) << shift;
+      v = (chip->regs_.at(word) & ~mask) | ((v << shift) & mask);
     }
+    chip->store(word, v);
   }
+
   static bool unmapped(uc_engine*, uc_mem_type type, std::uint64_t address, int, std::int64_t,
                        void* user) {
     static_cast<Chip*>(user)->unmodelled(type == UC_MEM_WRITE_UNMAPPED   ? "write"
@@ -282,13 +378,21 @@ class Chip {
   }
   static void on_code(uc_engine* uc, std::uint64_t address, std::uint32_t, void* user) {
     auto* chip = static_cast<Chip*>(user);
+    if (address == chip->skip_stop_) {  // resuming from this stop
+      chip->skip_stop_ = 0;
+      return;
+    }
     for (const auto& [at, name] : chip->stops_)
       if (at == address) chip->stopped_at_ = name;
     uc_emu_stop(uc);
   }
 
   uc_engine* uc_ = nullptr;
+  std::map<std::uint32_t, std::uint32_t> regs_;
+  std::vector<std::pair<std::uint32_t, std::uint32_t>> writes_;
   std::vector<std::pair<std::uint32_t, std::string>> stops_;
+  std::uint32_t skip_stop_ = 0;
+  std::vector<std::unique_ptr<Region>> regions_;
   std::string stopped_at_ = "no stop";
   std::string error_;
 };
@@ -329,10 +433,10 @@ TEST_F(BootloaderEmu, AGoodImageIsStartedThroughItsVectorTable) {
   ASSERT_EQ(chip.run(), "application");
   EXPECT_EQ(chip.reg(UC_ARM_REG_PC) | 1u, app_reset_);
   EXPECT_EQ(chip.reg(UC_ARM_REG_MSP), app_sp_);
-  EXPECT_EQ(chip.vtor, kAppBase + kAppVectorTableOffset);
+  EXPECT_EQ(chip.io(kScsBase + kScbVtor), kAppBase + kAppVectorTableOffset);
   // The recovery pin was read and everything put back as reset left it.
-  EXPECT_EQ(chip.rcc_ahb1enr, 0x00100000u);
-  EXPECT_EQ(chip.gpiob_pupdr, 0x00000100u);
+  EXPECT_EQ(chip.io(kRccBase + kRccAhb1Enr), 0x00100000u);
+  EXPECT_EQ(chip.io(kGpioBBase + kGpioPupdr), 0x00000100u);
   // This start is on trial: one unconfirmed start in the record.
   BootRecord record{};
   record.magic = chip.read_word(0x20000004);
@@ -388,6 +492,48 @@ TEST_F(BootloaderEmu, TheHandOffWordTheRecoveryPinAndUnconfirmedStartsKeepDfuMod
     chip.write_word(0x2000000C, r.check);
     EXPECT_EQ(chip.run(), starts < kMaxUnconfirmedStarts ? "application" : "dfu") << starts;
   }
+}
+
+// Reset -> bootloader -> image check -> application: the application's own
+// start-up (C runtime, clocks from HSE through the PLL, the port's GPIO,
+// timers, DMA, NVIC, the controller loading its config from both flash copies,
+// the watchdog, SysTick) runs on the modelled chip up to the USB driver's init.
+TEST_F(BootloaderEmu, ResetRunsTheBootloaderThenTheApplicationsStartUpWithClocksUp) {
+  const auto app = Elf::load(FLUTTERSCAN_FW_STM32F405_ELF);
+  if (!app) GTEST_SKIP() << "no application ELF";
+  const std::uint32_t usb_init =
+      app->symbol("_ZN11flutterscan8firmware7stm32f411OtgFsDevice4initEm");
+  ASSERT_NE(usb_init, 0u);
+  Chip chip;
+  flash(chip, image_);
+  chip.stop_at(usb_init, "usb init");
+  ASSERT_EQ(chip.run(), "application");
+  ASSERT_EQ(chip.resume(), "usb init");
+  // Clocks (RM0090 6.3): HSE on, PLL M 8, N 336, P 2, Q 7 from HSE, SYSCLK = PLL,
+  // APB1 /4, APB2 /2, 5 wait states.
+  EXPECT_NE(chip.io(kRccBase + 0x00) & (1u << 16), 0u);
+  EXPECT_NE(chip.io(kRccBase + 0x00) & (1u << 24), 0u);
+  const std::uint32_t pllcfgr = chip.io(kRccBase + 0x04);
+  EXPECT_EQ(pllcfgr & 0x3Fu, 8u);
+  EXPECT_EQ((pllcfgr >> 6) & 0x1FFu, 336u);
+  EXPECT_EQ((pllcfgr >> 16) & 0x3u, 0u);  // P = 2
+  EXPECT_EQ((pllcfgr >> 24) & 0xFu, 7u);
+  EXPECT_NE(pllcfgr & (1u << 22), 0u);             // source HSE
+  EXPECT_EQ(chip.io(kRccBase + 0x08) & 0x3u, 2u);  // SW = PLL
+  EXPECT_EQ(chip.io(kFlashIfBase) & 0xFu, 5u);
+  // LEDs: the board config's three, PC0..PC2, outputs driven low; no slot
+  // table running or pre-armed.
+  EXPECT_EQ(chip.io(kGpioCBase + kGpioModer) & 0x3Fu, 0x15u);
+  EXPECT_EQ(chip.io(kGpioCBase + 0x14) & 0x7u, 0u);
+  const auto bsrr = chip.writes_to(kGpioCBase + 0x18);
+  ASSERT_FALSE(bsrr.empty());
+  EXPECT_EQ(bsrr.front() & 0xFFFFu, 0u);          // the first LED write sets nothing
+  EXPECT_EQ(chip.io(kTim1Base + 0x00) & 1u, 0u);  // TIM1 stopped
+  EXPECT_EQ(chip.io(kTim1Base + 0x08), 0u);       // no trigger: nothing pre-armed at boot
+  // The watchdog started (IWDG_KR 0xCCCC), TIM2 (the clock) running.
+  const auto kr = chip.writes_to(kIwdgBase + 0x00);
+  EXPECT_NE(std::find(kr.begin(), kr.end(), 0xCCCCu), kr.end());
+  EXPECT_EQ(chip.io(kTim2Base + 0x00) & 1u, 1u);
 }
 
 }  // namespace
