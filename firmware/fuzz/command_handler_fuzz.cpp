@@ -11,9 +11,20 @@
 // - every exposure event report is well-formed;
 // - the port agrees with the controller's state: a slot table plays only while
 //   exposing or self-testing, the frame timer runs only while armed in master
-//   or free-run mode, and otherwise every LED is off;
+//   or free-run mode, and otherwise every LED is off (checked whenever no port
+//   callback is on its way: with the product port's timing, board byte bit 6,
+//   a pre-armed table starts on its edge in hardware and the controller hears
+//   of it an interrupt latency later, or after the main loop's interrupt lock,
+//   which every request holds);
 // - no LED stays on longer than the thermal guard's max_on_time_us (a run that
 //   ends and restarts in the same microsecond counts as one run);
+// - the duty cap (docs/hardware.md, "Thermal guard"): for every two slot
+//   tables the port started one after the other (exposures and self tests
+//   alike, across Arm, Disarm, mode and code changes and warm reboots), at a
+//   and then b, each LED's on-time from b until the next table starts is at
+//   most its max_duty_permille (in force at b) of b - a. Measured from the
+//   port's record of table starts and LED writes, not the controller's
+//   bookkeeping. Only a power-on reboot starts afresh (the LEDs were cold);
 // - USB (ops kSetup..kDfuDownload, through the USB device core on a
 //   SimUsbController): every control transfer gets exactly one answer of the
 //   right direction and no more data than wLength; every report on the HID IN
@@ -47,10 +58,10 @@
 #include <vector>
 
 #include "flutterscan/common/protocol.hpp"
+#include "flutterscan/firmware/boot_decision.hpp"
 #include "flutterscan/firmware/command_handler.hpp"
 #include "flutterscan/firmware/config_store.hpp"
 #include "flutterscan/firmware/controller.hpp"
-#include "flutterscan/firmware/boot_decision.hpp"
 #include "flutterscan/firmware/sim/sim_board.hpp"
 #include "flutterscan/firmware/sim/sim_flash.hpp"
 #include "flutterscan/firmware/sim/sim_port.hpp"
@@ -68,7 +79,7 @@ using fw::fuzz::Op;
 
 // Bounds on the work of one input.
 constexpr int kMaxOps = 300;
-constexpr std::size_t kMaxWork = 20'000;            // LED writes + port callbacks
+constexpr std::size_t kMaxWork = 20'000;             // LED writes + port callbacks
 constexpr std::uint64_t kMaxVirtualUs = 60'000'000;  // clock advanced by the ops
 constexpr int kMaxStrobePulses = 64;
 constexpr int kMaxUploadChunks = 6;
@@ -95,9 +106,9 @@ constexpr std::size_t kMaxDfuImage = 20 * 1024;
 // reading what a seed or a crash does; slow).
 const bool g_trace = std::getenv("FUZZ_TRACE") != nullptr;
 
-#define FUZZ_CHECK(cond)                   \
-  do {                                     \
-    if (!(cond)) fail(#cond, __LINE__);    \
+#define FUZZ_CHECK(cond)                \
+  do {                                  \
+    if (!(cond)) fail(#cond, __LINE__); \
   } while (false)
 
 /// Reads the input; missing bytes read as 0.
@@ -232,8 +243,7 @@ bool same_settings(const fw::ControllerSettings& a, const fw::ControllerSettings
     if (!std::equal(x.code.masks().begin(), x.code.masks().end(), y.code.masks().begin()))
       return false;
   }
-  return a.selected_code == b.selected_code &&
-         a.timing.slot_time_us == b.timing.slot_time_us &&
+  return a.selected_code == b.selected_code && a.timing.slot_time_us == b.timing.slot_time_us &&
          a.timing.frame_period_us == b.timing.frame_period_us &&
          a.timing.source == b.timing.source && a.mode.sync == b.mode.sync &&
          a.mode.strobe_active_low == b.mode.strobe_active_low &&
@@ -279,6 +289,11 @@ class Harness {
   explicit Harness(std::uint8_t board_byte)
       : board_byte_(board_byte), board_(board_from(board_byte)), port_(board_.pins) {
     interposer_.port = &port_;
+    if ((board_byte & fw::fuzz::kBoardTiming) != 0) {
+      const bool slow = (board_byte & fw::fuzz::kBoardSlowInterrupts) != 0;
+      port_.set_interrupt_latency_us(slow ? 25 : 3);
+      lock_us_ = slow ? 150 : 10;
+    }
     boot();
   }
   Harness(const Harness&) = delete;
@@ -382,14 +397,19 @@ class Harness {
         port_.set_flash_fails((b & 2) != 0);
         break;
       }
-      case Op::kReboot:
-        port_.set_reset_cause(static_cast<fw::ResetCause>(in.u8() % 3));
+      case Op::kReboot: {
+        const auto cause = static_cast<fw::ResetCause>(in.u8() % 3);
+        port_.set_reset_cause(cause);
         boot();
+        if (cause == fw::ResetCause::kPowerOn) duty_.have_start = false;
         FUZZ_CHECK(port_.led_mask() == 0);
         break;
+      }
       case Op::kFlashPoke: {
-        const std::size_t offset = in.u16() % sizeof(fw::ConfigImage);
-        port_.flash_page()[offset] = in.u8();
+        const std::uint16_t where = in.u16();
+        const std::size_t offset =
+            (where >> 1) % (sizeof(fw::ConfigImage) + sizeof(fw::ConfigCommit));
+        port_.flash_page(where & 1)[offset] = in.u8();
         break;
       }
       case Op::kSetup:
@@ -460,7 +480,9 @@ class Harness {
     if (r == fw::sim::OutResult::kAck)
       pending_replies_.push_back({report.size() > 0 ? report[0] : std::uint8_t{0},
                                   report.size() > 1 ? report[1] : std::uint8_t{0}});
+    take_lock();
     usb_main_loop();
+    release_lock();
   }
 
   void hid_in(int count) {
@@ -482,8 +504,7 @@ class Harness {
       const proto::MessageHeader h = proto::peek_header(*packet);
       // An event has status 0; a reply to a request whose command byte is
       // 0x80 (not a request) always carries an error status.
-      if (h.command == static_cast<std::uint8_t>(proto::Command::kExposureEvent) &&
-          h.status == 0) {
+      if (h.command == static_cast<std::uint8_t>(proto::Command::kExposureEvent) && h.status == 0) {
         check_event_report(*packet, true);
         continue;
       }
@@ -522,7 +543,7 @@ class Harness {
   struct DfuDevice {
     fw::sim::SimFlash& flash = dfu_flash();
     fw::sim::SimUsbController usb;
-    fw::usb::BootloaderUsb boot{usb, flash, kDfuFlash, flutterscan::kStm32f405AppRegion,
+    fw::usb::BootloaderUsb boot{usb,         flash,    kDfuFlash, flutterscan::kStm32f405AppRegion,
                                 kBootDevice, kUniqueId};
     DfuDevice() {
       usb.attach(&boot);
@@ -573,8 +594,8 @@ class Harness {
     next_victim = (next_victim + 1) % kEntries;
     e.key = key;
     e.image = fw::sim::make_application_image(
-        wrong_board ? flutterscan::kBoardIdQemuNetduinoplus2 : flutterscan::kBoardIdStm32f405, 1,
-        2, 3, size, seed);
+        wrong_board ? flutterscan::kBoardIdQemuNetduinoplus2 : flutterscan::kBoardIdStm32f405, 1, 2,
+        3, size, seed);
     return e.image;
   }
 
@@ -661,8 +682,24 @@ class Harness {
   }
 
   // Reports ------------------------------------------------------------------
+  /// The main loop takes the interrupt lock: the hardware runs on for
+  /// lock_us_ without callbacks, then the request is handled, then the lock ends.
+  void take_lock() {
+    if (lock_us_ == 0) return;
+    port_.hold_interrupts_until(port_.now_us() + lock_us_);
+    advance(lock_us_);
+  }
+  void release_lock() { port_.hold_interrupts_until(0); }
+
   proto::Status feed_report(std::span<const std::uint8_t> request) {
     advance(kReportGapUs);
+    take_lock();
+    const proto::Status status = feed_report_locked(request);
+    release_lock();
+    return status;
+  }
+
+  proto::Status feed_report_locked(std::span<const std::uint8_t> request) {
     const fw::ControllerSettings settings_before = controller_->settings();
     const proto::StatusReply status_before = controller_->status();
     const proto::ControllerState state_before = controller_->state();
@@ -673,7 +710,8 @@ class Harness {
 
     const proto::MessageHeader h = proto::peek_header(reply);
     if (g_trace)
-      std::fprintf(stderr, "%10llu us: request %zu bytes, command 0x%02x -> status %u (%s), state %u\n",
+      std::fprintf(stderr,
+                   "%10llu us: request %zu bytes, command 0x%02x -> status %u (%s), state %u\n",
                    static_cast<unsigned long long>(port_.now_us()), request.size(), h.command,
                    h.status, proto::status_text(static_cast<proto::Status>(h.status)),
                    static_cast<unsigned>(controller_->state()));
@@ -729,8 +767,7 @@ class Harness {
         FUZZ_CHECK(st.last_fault <= static_cast<std::uint8_t>(proto::FaultCode::kPort));
         FUZZ_CHECK((st.flags & ~0x0Fu) == 0);
         FUZZ_CHECK(st.active_code_id == proto::kNoCode || st.active_code_id < proto::kMaxCodes);
-        FUZZ_CHECK(st.pending_code_id == proto::kNoCode ||
-                   st.pending_code_id < proto::kMaxCodes);
+        FUZZ_CHECK(st.pending_code_id == proto::kNoCode || st.pending_code_id < proto::kMaxCodes);
         break;
       }
       case proto::Command::kSetCode: {
@@ -794,24 +831,30 @@ class Harness {
   const fw::ControllerSettings& saved_settings() {
     struct Entry {
       int board = -1;
-      std::array<std::uint8_t, sizeof(fw::ConfigImage)> bytes{};
+      std::array<std::uint8_t,
+                 fw::kConfigCopies*(sizeof(fw::ConfigImage) + sizeof(fw::ConfigCommit))>
+          bytes{};
       std::optional<fw::ControllerSettings> settings;
     };
     constexpr std::size_t kEntries = 8;
     static std::array<Entry, kEntries> cache;
     static std::size_t next_victim = 0;
-    const auto page = port_.flash_page();
-    FUZZ_CHECK(page.size() >= sizeof(fw::ConfigImage));
+    // Both copies (image and commit each) decide what loads.
+    constexpr std::size_t kCopyBytes = sizeof(fw::ConfigImage) + sizeof(fw::ConfigCommit);
+    std::array<std::uint8_t, fw::kConfigCopies * kCopyBytes> bytes{};
+    for (int c = 0; c < fw::kConfigCopies; ++c) {
+      const auto page = port_.flash_page(c);
+      FUZZ_CHECK(page.size() >= kCopyBytes);
+      std::memcpy(bytes.data() + static_cast<std::size_t>(c) * kCopyBytes, page.data(), kCopyBytes);
+    }
     for (const Entry& e : cache)
-      if (e.board == board_byte_ &&
-          std::memcmp(e.bytes.data(), page.data(), sizeof(fw::ConfigImage)) == 0)
-        return *e.settings;
+      if (e.board == board_byte_ && e.bytes == bytes) return *e.settings;
     const auto loaded = fw::load_config(port_, board_);
     FUZZ_CHECK(loaded.ok());
     Entry& e = cache[next_victim];
     next_victim = (next_victim + 1) % kEntries;
     e.board = board_byte_;
-    std::memcpy(e.bytes.data(), page.data(), sizeof(fw::ConfigImage));
+    e.bytes = bytes;
     e.settings = loaded.value();
     return *e.settings;
   }
@@ -846,10 +889,10 @@ class Harness {
     FUZZ_CHECK(h.payload_length == sizeof(proto::ExposureEvent));
     for (std::size_t k = proto::kHeaderSize + h.payload_length; k < proto::kReportSize; ++k)
       FUZZ_CHECK(report[k] == 0);
-    const auto e = proto::decode_payload<proto::ExposureEvent>(
-                       std::span<const std::uint8_t>(report).subspan(proto::kHeaderSize,
-                                                                     h.payload_length))
-                       .value();
+    const auto e =
+        proto::decode_payload<proto::ExposureEvent>(
+            std::span<const std::uint8_t>(report).subspan(proto::kHeaderSize, h.payload_length))
+            .value();
     if (g_trace)
       std::fprintf(stderr, "%10llu us: event frame %u start %llu slot %u us flags 0x%x code %u\n",
                    static_cast<unsigned long long>(port_.now_us()), e.frame_counter,
@@ -903,12 +946,75 @@ class Harness {
   void observe(const OnLimits& limits) {
     check_state();
     check_on_times(limits);
+    check_duty();
+  }
+
+  /// The duty oracle's state: the table playing (or last played) and the gap
+  /// it followed; the LED record read so far.
+  struct DutyState {
+    bool have_start = false;  ///< a table started since the (power-on) boot
+    bool have_gap = false;    ///< ... and one before it: its duty is checked
+    std::uint64_t start_us = 0;
+    std::uint64_t gap_us = 0;
+    std::array<std::uint16_t, flutterscan::kMaxLeds> cap{};
+    std::array<std::uint64_t, flutterscan::kMaxLeds> on_us{};
+    std::uint8_t leds_on = 0;
+    std::uint64_t last_us = 0;
+    std::size_t seen_starts = 0;
+    std::size_t seen_writes = 0;
+  };
+
+  /// Adds the LEDs' on-time up to `t` to the current table's and checks it.
+  void duty_accrue(std::uint64_t t) {
+    DutyState& d = duty_;
+    for (int led = 0; led < board_.pins.led_count; ++led) {
+      const auto k = static_cast<std::size_t>(led);
+      if (((d.leds_on >> led) & 1u) == 0) continue;
+      d.on_us[k] += t - d.last_us;
+      if (!d.have_gap || d.on_us[k] * 1000 <= static_cast<std::uint64_t>(d.cap[k]) * d.gap_us)
+        continue;
+      std::fprintf(stderr,
+                   "LED %d on %llu us in the table started at %llu us, %llu us after the one "
+                   "before: over max_duty_permille %u\n",
+                   led, static_cast<unsigned long long>(d.on_us[k]),
+                   static_cast<unsigned long long>(d.start_us),
+                   static_cast<unsigned long long>(d.gap_us), d.cap[k]);
+      fail("an LED's duty exceeded the guard's max_duty_permille", __LINE__);
+    }
+    d.last_us = t;
+  }
+
+  void check_duty() {
+    DutyState& d = duty_;
+    const auto& starts = port_.table_starts();
+    const auto& writes = port_.led_transitions();
+    while (d.seen_starts < starts.size() || d.seen_writes < writes.size()) {
+      const bool start_next =
+          d.seen_starts < starts.size() && (d.seen_writes == writes.size() ||
+                                            starts[d.seen_starts] <= writes[d.seen_writes].time_us);
+      if (start_next) {
+        const std::uint64_t t = starts[d.seen_starts++];
+        duty_accrue(t);
+        d.have_gap = d.have_start;
+        d.gap_us = t - d.start_us;
+        d.have_start = true;
+        d.start_us = t;
+        d.on_us = {};
+        d.cap = controller_->settings().guard.max_duty_permille;
+      } else {
+        const auto& w = writes[d.seen_writes++];
+        duty_accrue(w.time_us);
+        d.leds_on = w.led_mask;
+      }
+    }
+    duty_accrue(std::max(d.last_us, port_.now_us()));
   }
 
   void check_state() const {
+    // A callback on its way: the controller has not heard of the hardware yet.
+    if (port_.callbacks_pending()) return;
     const proto::ControllerState state = controller_->state();
-    const bool self_test =
-        (controller_->status().flags & proto::kStatusSelfTestRunning) != 0;
+    const bool self_test = (controller_->status().flags & proto::kStatusSelfTestRunning) != 0;
     const bool exposing = state == proto::ControllerState::kExposing;
     const bool armed = state == proto::ControllerState::kArmed || exposing;
     if (self_test) FUZZ_CHECK(state == proto::ControllerState::kIdle);
@@ -923,17 +1029,17 @@ class Harness {
     std::uint64_t since_us = 0;
     std::uint32_t limit_us = 0;
     bool ever_off = false;
-    std::uint64_t off_at_us = 0;       // the last off transition
-    std::uint64_t prev_since_us = 0;   // start of the run that ended then
+    std::uint64_t off_at_us = 0;      // the last off transition
+    std::uint64_t prev_since_us = 0;  // start of the run that ended then
     std::uint32_t prev_limit_us = 0;
   };
 
   void check_run(int led, std::uint64_t start_us, std::uint64_t end_us,
                  std::uint32_t limit_us) const {
     if (end_us - start_us <= limit_us) return;
-    std::fprintf(stderr,
-                 "LED %d on from %llu us to %llu us (%llu us), guard max_on_time_us %u\n", led,
-                 static_cast<unsigned long long>(start_us), static_cast<unsigned long long>(end_us),
+    std::fprintf(stderr, "LED %d on from %llu us to %llu us (%llu us), guard max_on_time_us %u\n",
+                 led, static_cast<unsigned long long>(start_us),
+                 static_cast<unsigned long long>(end_us),
                  static_cast<unsigned long long>(end_us - start_us), limit_us);
     fail("an LED stayed on longer than the guard's max_on_time_us", __LINE__);
   }
@@ -1011,6 +1117,8 @@ class Harness {
   int strobe_pulses_ = 0;
   std::size_t seen_writes_ = 0;
   std::array<LedRun, flutterscan::kMaxLeds> runs_{};
+  DutyState duty_;
+  std::uint64_t lock_us_ = 0;  ///< interrupt lock per request (product port timing)
 };
 
 }  // namespace

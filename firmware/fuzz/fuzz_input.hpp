@@ -21,24 +21,28 @@
 
 namespace flutterscan::firmware::fuzz {
 
-/// \brief Board byte: bits 0-1 LED count - 1, bits 2-3 pin layout, bits 4-5 default guard.
+/// \brief Board byte: bits 0-1 LED count - 1, bits 2-3 pin layout, bits 4-5 default guard,
+/// bit 6 the product port's timing (interrupt latency, every request handled under the
+/// interrupt lock), bit 7 its size (latency 3 or 25 us, lock 10 or 150 us per request).
+inline constexpr std::uint8_t kBoardTiming = 0x40;
+inline constexpr std::uint8_t kBoardSlowInterrupts = 0x80;
 inline constexpr int kPinLayouts = 4;
 
 /// \brief Operations (op byte % kOpCount).
 enum class Op : std::uint8_t {
-  kRawReport = 0,   ///< length byte (% 66: 0..65), then that many bytes as they are
-  kReport = 1,      ///< command (1 + byte % 13), sequence, then exactly the command's
-                    ///< request payload, framed by encode_raw into a 64-byte report
-  kUploadCode = 2,  ///< code id, led count, total slots (u16, 1 + v % 256), flags byte
-                    ///< (bit 0 one-of-N, bit 7: masks unmasked and flags raw), masks:
-                    ///< one byte per slot; sent as SetCode chunks of 52 slots
-  kStrobes = 3,     ///< count (1 + byte % 8), first at now + Time, period Time, width Time
-  kAdvance = 4,     ///< Time: run the virtual clock
-  kEncoder = 5,     ///< byte (bit 0: 0 add counts, 1 set velocity), i32 little-endian
-  kPoll = 6,        ///< Controller::poll (watchdog, bootloader entry)
-  kReadEvents = 7,  ///< up to 1 + byte % 20 exposure event reports
-  kUsbReset = 8,    ///< Controller::on_usb_reset
-  kPortFault = 9,   ///< Controller::on_port_fault
+  kRawReport = 0,      ///< length byte (% 66: 0..65), then that many bytes as they are
+  kReport = 1,         ///< command (1 + byte % 13), sequence, then exactly the command's
+                       ///< request payload, framed by encode_raw into a 64-byte report
+  kUploadCode = 2,     ///< code id, led count, total slots (u16, 1 + v % 256), flags byte
+                       ///< (bit 0 one-of-N, bit 7: masks unmasked and flags raw), masks:
+                       ///< one byte per slot; sent as SetCode chunks of 52 slots
+  kStrobes = 3,        ///< count (1 + byte % 8), first at now + Time, period Time, width Time
+  kAdvance = 4,        ///< Time: run the virtual clock
+  kEncoder = 5,        ///< byte (bit 0: 0 add counts, 1 set velocity), i32 little-endian
+  kPoll = 6,           ///< Controller::poll (watchdog, bootloader entry)
+  kReadEvents = 7,     ///< up to 1 + byte % 20 exposure event reports
+  kUsbReset = 8,       ///< Controller::on_usb_reset
+  kPortFault = 9,      ///< Controller::on_port_fault
   kPortFailures = 10,  ///< byte: bit 0 slot timer fails, bit 1 flash fails
   kReboot = 11,        ///< reset cause (byte % 3), then a new Controller on the same port
   kFlashPoke = 12,     ///< u16 offset into the config image, byte: one flash byte overwritten

@@ -41,8 +41,8 @@ Report request(proto::Command command) {
 }
 
 /// SetCode chunks of a code given as per-slot masks, as raw reports.
-void upload(InputWriter& w, std::uint8_t id, std::uint8_t leds, const std::vector<std::uint8_t>& masks,
-            std::uint8_t flags = 0) {
+void upload(InputWriter& w, std::uint8_t id, std::uint8_t leds,
+            const std::vector<std::uint8_t>& masks, std::uint8_t flags = 0) {
   for (std::size_t first = 0; first < masks.size(); first += proto::kSlotsPerCodeChunk) {
     proto::SetCodeRequest r{};
     r.code_id = id;
@@ -79,15 +79,16 @@ std::vector<std::uint8_t> rgb(std::size_t length) {
 
 void timing(InputWriter& w, std::uint32_t slot_us, std::uint32_t period_us,
             proto::SlotTimeSource source = proto::SlotTimeSource::kFixed) {
-  w.raw_report(request(proto::Command::kSetTiming,
-                       proto::SetTimingRequest{slot_us, period_us,
-                                               static_cast<std::uint8_t>(source), {}}));
+  w.raw_report(
+      request(proto::Command::kSetTiming,
+              proto::SetTimingRequest{slot_us, period_us, static_cast<std::uint8_t>(source), {}}));
 }
 
 void mode(InputWriter& w, proto::SyncMode sync, bool active_low = false) {
-  w.raw_report(request(proto::Command::kSetMode,
-                       proto::SetModeRequest{static_cast<std::uint8_t>(sync),
-                                             static_cast<std::uint8_t>(active_low), {}}));
+  w.raw_report(
+      request(proto::Command::kSetMode,
+              proto::SetModeRequest{
+                  static_cast<std::uint8_t>(sync), static_cast<std::uint8_t>(active_low), {}}));
 }
 
 void select(InputWriter& w, std::uint8_t id) {
@@ -101,16 +102,27 @@ void guard(InputWriter& w, std::uint32_t on_us, std::uint16_t duty) {
   w.raw_report(request(proto::Command::kSetGuard, g));
 }
 
-bool write(const std::string& dir, const char* name, const InputWriter& w) {
-  const std::string path = dir + "/" + name;
+bool write_bytes(const std::string& path, const std::vector<std::uint8_t>& d) {
   std::FILE* f = std::fopen(path.c_str(), "wb");
   if (!f) {
     std::perror(path.c_str());
     return false;
   }
-  const auto& d = w.data();
   const bool ok = std::fwrite(d.data(), 1, d.size(), f) == d.size();
   return std::fclose(f) == 0 && ok;
+}
+
+/// The seed as it is, and again with the product port's timing (board byte
+/// bit 6; bit 7: slow interrupts): pre-armed tables, latency, the lock.
+bool write(const std::string& dir, const char* name, const InputWriter& w) {
+  std::vector<std::uint8_t> d(w.data().begin(), w.data().end());
+  bool ok = write_bytes(dir + "/" + name, d);
+  if (d.empty()) return ok;
+  d[0] = static_cast<std::uint8_t>(d[0] | flutterscan::firmware::fuzz::kBoardTiming);
+  ok &= write_bytes(dir + "/" + name + "_timed", d);
+  d[0] = static_cast<std::uint8_t>(d[0] | flutterscan::firmware::fuzz::kBoardSlowInterrupts);
+  ok &= write_bytes(dir + "/" + name + "_timed_slow", d);
+  return ok;
 }
 
 }  // namespace
@@ -149,8 +161,8 @@ int main(int argc, char** argv) {
     select(w, 1);
     timing(w, 50, 2'000);
     mode(w, proto::SyncMode::kMaster);
-    w.raw_report(request(proto::Command::kSetBrightness,
-                         proto::SetBrightnessRequest{{1000, 500, 250, 0}}));
+    w.raw_report(
+        request(proto::Command::kSetBrightness, proto::SetBrightnessRequest{{1000, 500, 250, 0}}));
     w.raw_report(request(proto::Command::kArm));
     w.advance(10'000);
     w.read_events(5);
@@ -273,11 +285,10 @@ int main(int argc, char** argv) {
     w.enumerate();
     upload(w, 0, 3, code52());
     select(w, 0);
-    w.raw_report(request(proto::Command::kSetTiming,
-                         proto::SetTimingRequest{100, 10'000, 0, {}}));
-    w.raw_report(request(proto::Command::kSetMode,
-                         proto::SetModeRequest{static_cast<std::uint8_t>(proto::SyncMode::kFreeRun),
-                                               0, {}}));
+    w.raw_report(request(proto::Command::kSetTiming, proto::SetTimingRequest{100, 10'000, 0, {}}));
+    w.raw_report(request(
+        proto::Command::kSetMode,
+        proto::SetModeRequest{static_cast<std::uint8_t>(proto::SyncMode::kFreeRun), 0, {}}));
     w.hid_out(request(proto::Command::kArm));
     w.advance(35'000);
     w.hid_out(request(proto::Command::kGetStatus));

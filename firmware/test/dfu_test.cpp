@@ -262,6 +262,34 @@ TEST_F(DfuTest, UploadReadsTheImageBackWithAShortLastBlock) {
   EXPECT_EQ(dfu_get_status(board_).state, DfuState::kDfuIdle);
 }
 
+// Issue 15 finding 8: block n went to n x 1024 whatever the host's transfer
+// size, so dfu-util -t 512 left gaps (and failed at the manifest).
+TEST_F(DfuTest, SmallerTransferSizesGiveAContiguousImage) {
+  for (const std::size_t transfer : {std::size_t{512}, std::size_t{256}, std::size_t{1000}}) {
+    SCOPED_TRACE(transfer);
+    const auto image = sim::make_application_image(kBoardIdStm32f405, 3, 0, 0, 9 * 1024 + 77,
+                                                   static_cast<std::uint8_t>(transfer));
+    const DownloadLog log = dfu_download(board_, image, transfer);
+    ASSERT_FALSE(log.dnload_stalled);
+    EXPECT_EQ(log.final_status.state, DfuState::kDfuIdle);
+    EXPECT_EQ(log.final_status.status, DfuStatus::kOk);
+    EXPECT_EQ(board_.bootloader()->dfu().downloaded_bytes(), image.size());
+    EXPECT_EQ(region(image.size()), image);
+    EXPECT_EQ(board_.bootloader()->dfu().last_manifest_check(), ImageCheck::kOk);
+    // Uploaded back in blocks of the same size.
+    std::vector<std::uint8_t> read;
+    for (std::uint16_t block = 0; block < 200; ++block) {
+      const ControlResult r =
+          board_.control_transfer(0xA1, static_cast<std::uint8_t>(DfuRequest::kUpload), block, 0,
+                                  static_cast<std::uint16_t>(transfer));
+      ASSERT_FALSE(r.stalled);
+      read.insert(read.end(), r.data.begin(), r.data.end());
+      if (r.data.size() < transfer) break;
+    }
+    EXPECT_EQ(read, image);
+  }
+}
+
 TEST_F(DfuTest, UploadWithoutAnImageReadsTheWholeRegion) {
   board_.flash().bytes()[kAppBase - board_.flash().base()] ^= 0xFF;  // break the magic
   std::size_t total = 0;

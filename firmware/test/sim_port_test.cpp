@@ -119,19 +119,26 @@ TEST(SimPort, FrameTimerTicksAndDrivesTheTrigger) {
 }
 
 TEST(SimPort, FlashProgrammingOnlyClearsBits) {
-  SimPort port(kPins, 64);
+  SimPort port(kPins, 128);  // two pages of 64 bytes
+  ASSERT_EQ(port.config_page_size(), 64u);
   const std::array<std::uint8_t, 2> first = {0xF0, 0x0F};
   const std::array<std::uint8_t, 2> second = {0x3C, 0xFF};
-  ASSERT_EQ(port.write_config_page(first), PortStatus::kOk);
-  ASSERT_EQ(port.write_config_page(second), PortStatus::kOk);
+  ASSERT_EQ(port.write_config_page(0, 0, first), PortStatus::kOk);
+  ASSERT_EQ(port.write_config_page(0, 0, second), PortStatus::kOk);
   std::array<std::uint8_t, 3> out{};
-  ASSERT_EQ(port.read_config_page(out), PortStatus::kOk);
+  ASSERT_EQ(port.read_config_page(0, 0, out), PortStatus::kOk);
   EXPECT_EQ(out, (std::array<std::uint8_t, 3>{0x30, 0x0F, 0xFF}));
-  ASSERT_EQ(port.erase_config_page(), PortStatus::kOk);
-  ASSERT_EQ(port.read_config_page(out), PortStatus::kOk);
+  ASSERT_EQ(port.read_config_page(1, 0, out), PortStatus::kOk);
+  EXPECT_EQ(out, (std::array<std::uint8_t, 3>{0xFF, 0xFF, 0xFF}));  // the other page
+  ASSERT_EQ(port.write_config_page(1, 62, first), PortStatus::kOk);
+  EXPECT_EQ(port.flash_page()[126], 0xF0);
+  ASSERT_EQ(port.erase_config_page(0), PortStatus::kOk);
+  ASSERT_EQ(port.read_config_page(0, 0, out), PortStatus::kOk);
   EXPECT_EQ(out, (std::array<std::uint8_t, 3>{0xFF, 0xFF, 0xFF}));
+  EXPECT_EQ(port.flash_page(1)[62], 0xF0);  // erasing page 0 left page 1
   std::array<std::uint8_t, 65> too_much{};
-  EXPECT_EQ(port.read_config_page(too_much), PortStatus::kError);
+  EXPECT_EQ(port.read_config_page(0, 0, too_much), PortStatus::kError);
+  EXPECT_EQ(port.write_config_page(1, 63, first), PortStatus::kError);
 }
 
 TEST(SimFlash, ProgrammingOnlyClearsBitsAndResetRestoresTheFreshFlash) {
@@ -157,6 +164,82 @@ TEST(SimFlash, ProgrammingOnlyClearsBitsAndResetRestoresTheFreshFlash) {
   }
   EXPECT_EQ(flash.program(base, first), FlashResult::kOk);  // failures cleared
   EXPECT_EQ(flash.erase_sector(0), FlashResult::kOk);
+}
+
+}  // namespace
+}  // namespace flutterscan::firmware::sim
+
+namespace flutterscan::firmware::sim {
+namespace {
+
+// The product port's timing (issue 15): a pre-armed table starts on its edge
+// in hardware; callbacks come after the interrupt latency, and not before the
+// end of the interrupt lock.
+TEST(SimPortTiming, APrearmedTableStartsOnTheEdgeBeforeItsLateCallback) {
+  SimPort port(kPins);
+  RecordingListener listener;
+  port.set_listener(&listener);
+  port.set_interrupt_latency_us(25);
+  const std::array<std::uint32_t, 3> words = {0x00060001, 0x00050002, 0x00070000};
+  ASSERT_EQ(port.prearm_slot_table(words, 40), PortStatus::kOk);
+  EXPECT_TRUE(port.prearmed());
+  port.inject_strobe(1000, 10);
+  port.run_until(1020);
+  ASSERT_EQ(port.led_transitions().size(), 1u);
+  EXPECT_EQ(port.led_transitions()[0].time_us, 1000u);  // the edge itself
+  EXPECT_TRUE(listener.strobes.empty());                // not yet told
+  EXPECT_TRUE(port.callbacks_pending());
+  port.run_until(1025);
+  ASSERT_EQ(listener.strobes.size(), 1u);
+  EXPECT_EQ(listener.strobes[0].first, 1000u);  // reports the edge's time
+  const PrearmStart start = port.cancel_prearm();
+  EXPECT_TRUE(start.started);
+  EXPECT_EQ(start.time_us, 1000u);
+  EXPECT_FALSE(start.edge_pending);  // its callback ran
+  port.run_until(2000);
+  EXPECT_EQ(listener.table_done, std::vector<std::uint64_t>{1080});  // reports the end
+  EXPECT_EQ(port.table_starts(), std::vector<std::uint64_t>{1000});
+}
+
+TEST(SimPortTiming, TheLockHoldsCallbacksNotTheHardware) {
+  SimPort port(kPins);
+  RecordingListener listener;
+  port.set_listener(&listener);
+  const std::array<std::uint32_t, 2> words = {0x00060001, 0x00070000};
+  ASSERT_EQ(port.prearm_slot_table(words, 40), PortStatus::kOk);
+  port.inject_strobe(1000, 10);
+  port.hold_interrupts_until(1500);
+  port.run_until(1200);
+  EXPECT_EQ(port.led_transitions().size(), 2u);  // played and ended
+  EXPECT_TRUE(listener.strobes.empty());
+  // Withdrawn from the main loop under the lock: it had started; its edge's callback is to come.
+  const PrearmStart start = port.cancel_prearm();
+  EXPECT_TRUE(start.started);
+  EXPECT_TRUE(start.edge_pending);
+  port.hold_interrupts_until(0);
+  port.run_until(1200);
+  EXPECT_EQ(listener.strobes.size(), 2u);
+  EXPECT_EQ(listener.table_done, std::vector<std::uint64_t>{1040});
+}
+
+TEST(SimPortTiming, NothingPrearmedStartsNothingAndStopDropsADoneCallback) {
+  SimPort port(kPins);
+  RecordingListener listener;
+  port.set_listener(&listener);
+  port.set_interrupt_latency_us(5);
+  const std::array<std::uint32_t, 2> words = {0x00060001, 0x00070000};
+  port.inject_strobe(100, 10);
+  port.run_until(200);
+  EXPECT_TRUE(port.led_transitions().empty());
+  ASSERT_EQ(port.prearm_slot_table(words, 40), PortStatus::kOk);
+  EXPECT_FALSE(port.cancel_prearm().started);
+  EXPECT_FALSE(port.prearmed());
+  ASSERT_EQ(port.start_slot_table(words, 40), PortStatus::kOk);
+  EXPECT_EQ(port.prearm_slot_table(words, 40), PortStatus::kError);  // the DMA is busy
+  port.run_until(242);  // ended at 240, its callback due at 245
+  port.stop_slot_table();
+  port.run_until(300);
+  EXPECT_TRUE(listener.table_done.empty());
 }
 
 }  // namespace

@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "flutterscan/common/image_header.hpp"
+#include "flutterscan/firmware/boot_decision.hpp"
 #include "flutterscan/firmware/stm32f4/hardware_math.hpp"
 #include "flutterscan/firmware/stm32f4/registers.hpp"
 #include "flutterscan/firmware/stm32f4/stm32f4_board.hpp"
@@ -203,8 +204,9 @@ TEST(Stm32f4ImageHeader, BuiltImageIsStampedCorrectly) {
   // The post-build step (stamp_image.cmake) computes the CRCs in CMake: check
   // them with the C++ code the bootloader will use.
   std::ifstream file(FLUTTERSCAN_FW_STM32F405_BIN, std::ios::binary);
-  if (!file) GTEST_SKIP() << "no fw-stm32f405 image at " << FLUTTERSCAN_FW_STM32F405_BIN
-                          << " (make fw-stm32f405 builds it)";
+  if (!file)
+    GTEST_SKIP() << "no fw-stm32f405 image at " << FLUTTERSCAN_FW_STM32F405_BIN
+                 << " (make fw-stm32f405 builds it)";
   const std::vector<std::uint8_t> image((std::istreambuf_iterator<char>(file)),
                                         std::istreambuf_iterator<char>());
   ASSERT_EQ(check_image(image, kBoardId, kAppMaxSize), ImageCheck::kOk);
@@ -221,8 +223,15 @@ TEST(Stm32f4ImageHeader, BuiltImageIsStampedCorrectly) {
   EXPECT_EQ(reset & 1u, 1u);
   EXPECT_GT(reset, kAppBase + kAppVectorOffset);
   EXPECT_LT(reset, kAppBase + h.image_size);
+  // ... which is what the bootloader checks before it jumps.
+  std::vector<std::uint8_t> region(kAppMaxSize, 0xFF);
+  std::copy(image.begin(), image.end(), region.begin());
+  EXPECT_EQ(check_boot_image(region, kStm32f405AppRegion), BootImageCheck::kOk);
 }
 #endif
+
+static_assert(kAppVectorOffset == kAppVectorTableOffset,
+              "the bootloader jumps through the offset the boot check requires");
 
 }  // namespace
 }  // namespace flutterscan::firmware::stm32f4

@@ -32,8 +32,9 @@ int count_requests(const nlohmann::json& record, const std::string& request) {
   return n;
 }
 
-/// The board runs the application again, now version 0.2.0 (bcdDevice 0x0020).
-void expect_flashed(const HarnessRun& run) {
+/// The board runs the application again, now version 0.2.0 (bcdDevice 0x0020),
+/// after a download in blocks of `transfer` bytes.
+void expect_flashed(const HarnessRun& run, std::size_t transfer = 1024) {
   const auto& final = run.record.at("final");
   EXPECT_EQ(final.at("mode"), "application") << run.output;
   EXPECT_EQ(final.at("bcd_device"), 0x0020) << run.output;
@@ -44,7 +45,7 @@ void expect_flashed(const HarnessRun& run) {
   EXPECT_EQ(e[1].at("mode"), "bootloader");
   EXPECT_EQ(e[1].at("serial"), e[0].at("serial"));
   EXPECT_EQ(e.back().at("mode"), "application");
-  EXPECT_EQ(count_requests(run.record, "DNLOAD"), static_cast<int>(kImageSize / 1024) + 1);
+  EXPECT_EQ(count_requests(run.record, "DNLOAD"), static_cast<int>(kImageSize / transfer) + 1);
 }
 
 TEST(HilFlash, DfuUtilDownloadsThroughDetachAndManifest) {
@@ -59,6 +60,21 @@ TEST(HilFlash, DfuUtilDownloadsThroughDetachAndManifest) {
   EXPECT_TRUE(run.exit_code == 0 || run.exit_code == 251) << run.output;
   EXPECT_NE(run.output.find("Done!"), std::string::npos) << run.output;
   expect_flashed(run);
+}
+
+// Issue 15 finding 8: the bootloader placed block n at n x 1024, so a host
+// using a smaller transfer size (dfu-util -t 512) left gaps and was refused at
+// the manifest. Blocks now go where the bytes received so far end.
+TEST(HilFlash, DfuUtilWith512ByteTransfersDownloadsAContiguousImage) {
+  const auto dir = make_work_dir("dfu_util_t512");
+  const auto image = make_image(dir, "app020.bin");
+  const auto run =
+      run_harness({"--timeout-s", "90"},
+                  {DFU_UTIL, "-d", "1209:0001,1209:0002", "-t", "512", "-D", image, "-R"}, dir);
+  if (run.exit_code == 77) GTEST_SKIP() << run.output;
+  EXPECT_TRUE(run.exit_code == 0 || run.exit_code == 251) << run.output;
+  EXPECT_NE(run.output.find("Done!"), std::string::npos) << run.output;
+  expect_flashed(run, 512);
 }
 
 TEST(HilFlash, FlutterscanFlashUpdatesTheApplication) {

@@ -7,9 +7,11 @@
 // sector 0).
 
 #include <cstddef>
+#include <cstring>
 #include <new>
 
 #include "flutterscan/common/image_header.hpp"
+#include "flutterscan/firmware/boot_decision.hpp"
 #include "flutterscan/firmware/flash.hpp"
 #include "flutterscan/firmware/stm32f4/otg_fs_device.hpp"
 #include "flutterscan/firmware/stm32f4/registers.hpp"
@@ -70,6 +72,10 @@ extern "C" void OTG_FS_IRQHandler() {
     // fed (harmless when the watchdog is off).
     reg::at(reg::iwdg::kKr) = reg::iwdg::kKeyReload;
     if (usb->leave_requested()) {
+      // The host flashed or detached on purpose: the application gets its
+      // kMaxUnconfirmedStarts tries again.
+      const fw::BootRecord record = fw::make_boot_record(0);
+      std::memcpy(reinterpret_cast<void*>(stm::kBootRecordAddress), &record, sizeof record);
       g_otg_fs.disconnect();
       for (std::uint32_t i = 0; i < clocks.tree.hclk_hz / 100; ++i) asm volatile("" ::: "memory");
       reset_chip();  // the start-up code starts the checked application

@@ -1,12 +1,17 @@
 // Start-up of the DFU bootloader (flash sector 0, where the STM32F405 boots),
 // written from PM0214 (2.3 exception model, vector table; 2.1.3 MSP) and
-// RM0090 (12.2, table 61). At reset, before touching any clock or peripheral,
-// it decides (boot_decision.hpp): the application runs if it did not ask for
-// DFU mode (the hand-off word at kBootRequestAddress) and its image header and
-// CRC check out; otherwise the C runtime starts and bootloader_main() serves
-// DFU. The jump leaves the chip as reset left it, except VTOR and MSP.
+// RM0090 (12.2, table 61; 8.4 GPIO). At reset, before touching any clock, it
+// decides (boot_decision.hpp): the application runs if it did not ask for DFU
+// mode (the hand-off word at kBootRequestAddress), the recovery pin (PB2) is
+// not held high, fewer than kMaxUnconfirmedStarts starts in a row went
+// unconfirmed (the BootRecord after the hand-off word) and the image passes
+// check_boot_image (header, CRC, load address, vector table at 0x200, SP, PC);
+// otherwise the C runtime starts and bootloader_main() serves DFU. The jump
+// leaves the chip as reset left it, except VTOR and MSP (GPIOB's clock and
+// PB2's pull-down, used to read the pin, are put back to their reset values).
 
 #include <cstdint>
+#include <cstring>
 #include <span>
 
 #include "flutterscan/common/image_header.hpp"
@@ -56,6 +61,26 @@ constexpr VectorTable make_vector_table() {
   return table;
 }
 
+/// Reads the recovery pin (PB2, pulled down) with GPIOB's clock on just for
+/// that; GPIOB's PUPDR and the clock go back to their reset values.
+bool recovery_pin_held() {
+  namespace reg = stm::reg;
+  const std::uintptr_t gpio = reg::gpio::port(stm::kRecoveryPort);
+  const auto pin = static_cast<std::uint32_t>(stm::kRecoveryPin);
+  reg::set_bits(reg::rcc::kAhb1Enr, reg::rcc::kAhb1EnrGpioB);
+  (void)reg::read(reg::rcc::kAhb1Enr);  // the clock is on before the port is touched
+  const std::uint32_t pupdr = reg::read(gpio + reg::gpio::kPupdr);
+  reg::modify(gpio + reg::gpio::kPupdr, 0b11u << (2 * pin), reg::gpio::kPullDown << (2 * pin));
+  for (int i = 0; i < 1000; ++i)
+    asm volatile("" ::: "memory");  // the pull settles (~60 us at 16 MHz)
+  bool held = true;
+  for (int i = 0; i < 8; ++i)  // high in every sample: a bounce or glitch is not a request
+    held = held && (reg::read(gpio + reg::gpio::kIdr) & (1u << pin)) != 0;
+  reg::at(gpio + reg::gpio::kPupdr) = pupdr;
+  reg::clear_bits(reg::rcc::kAhb1Enr, reg::rcc::kAhb1EnrGpioB);
+  return held;
+}
+
 /// Sets VTOR and MSP from the application's vector table and jumps to its reset handler.
 [[noreturn]] void start_application() {
   const std::uintptr_t vectors = stm::kAppBase + stm::kAppVectorOffset;
@@ -87,13 +112,20 @@ void Fault_Handler() {
 
 void Reset_Handler() {
   volatile std::uint32_t& request = stm::reg::at(stm::kBootRequestAddress);
-  const bool dfu_requested = request == stm::kBootRequestMagic;
+  fw::BootInputs in;
+  in.dfu_requested = request == stm::kBootRequestMagic;
   request = 0;  // once: the next reset runs the application again
+  in.boot_pin_held = recovery_pin_held();
+  fw::BootRecord record;
+  std::memcpy(&record, reinterpret_cast<const void*>(stm::kBootRecordAddress), sizeof record);
+  in.unconfirmed_starts = fw::unconfirmed_starts(record);
   const auto region = std::span<const std::uint8_t>(
       reinterpret_cast<const std::uint8_t*>(stm::kAppBase), stm::kAppMaxSize);
-  if (fw::choose_boot_target(dfu_requested, region, flutterscan::kStm32f405AppRegion) ==
-      fw::BootTarget::kApplication)
-    start_application();
+  in.image = fw::check_boot_image(region, flutterscan::kStm32f405AppRegion);
+  const fw::BootDecision decision = fw::decide_boot(in);
+  record = fw::make_boot_record(decision.unconfirmed_starts);
+  std::memcpy(reinterpret_cast<void*>(stm::kBootRecordAddress), &record, sizeof record);
+  if (decision.target == fw::BootTarget::kApplication) start_application();
 
   stm::reg::set_bits(stm::reg::scb::kCpacr, stm::reg::scb::kCpacrFpuFullAccess);
   asm volatile("dsb\n\tisb" ::: "memory");

@@ -104,32 +104,128 @@ Loaded decode_config(std::span<const std::uint8_t> bytes, const BoardConfig& boa
   return Loaded::success(settings);
 }
 
-Result<std::uint32_t, protocol::Status> save_config(Port& port,
-                                                    const ControllerSettings& settings) {
+namespace {
+
+/// What one config page holds.
+struct CopyState {
+  ConfigError error = ConfigError::kEmpty;  ///< kNone: valid
+  std::uint32_t sequence = 0;
+};
+
+std::uint32_t commit_crc(const ConfigCommit& commit) {
+  return crc32(std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(&commit),
+                                             offsetof(ConfigCommit, crc32)));
+}
+
+/// Reads page `copy`; decodes it into `settings` (if not null) when valid.
+CopyState read_copy(Port& port, int copy, const BoardConfig& board, ControllerSettings* settings) {
+  CopyState state;
+  ConfigImage image;
+  ConfigCommit commit;
+  auto image_bytes =
+      std::span<std::uint8_t>(reinterpret_cast<std::uint8_t*>(&image), sizeof(image));
+  auto commit_bytes =
+      std::span<std::uint8_t>(reinterpret_cast<std::uint8_t*>(&commit), sizeof(commit));
+  if (port.config_page_size() < sizeof(ConfigImage) + sizeof(ConfigCommit) ||
+      port.read_config_page(copy, 0, image_bytes) != PortStatus::kOk ||
+      port.read_config_page(copy, sizeof(ConfigImage), commit_bytes) != PortStatus::kOk) {
+    state.error = ConfigError::kReadFailed;
+    return state;
+  }
+  const auto decoded = decode_config(image_bytes, board);
+  if (!decoded.ok()) {
+    state.error = decoded.error();
+    return state;
+  }
+  if (settings != nullptr) *settings = decoded.value();
+  if (is_erased(commit_bytes)) {
+    state.error = ConfigError::kNone;  // complete image, no commit: the oldest kind
+    state.sequence = 0;
+    return state;
+  }
+  if (commit.magic != kConfigCommitMagic || commit.crc32 != commit_crc(commit) ||
+      commit.image_crc != image.crc32) {
+    state.error = ConfigError::kCrcMismatch;  // a commit cut off mid-write
+    return state;
+  }
+  state.error = ConfigError::kNone;
+  state.sequence = commit.sequence;
+  return state;
+}
+
+/// True if sequence `a` is newer than `b` (serial number arithmetic).
+bool newer(std::uint32_t a, std::uint32_t b) {
+  return static_cast<std::int32_t>(a - b) > 0;
+}
+
+/// The copy holding the newest valid configuration, or -1.
+int newest_copy(const std::array<CopyState, kConfigCopies>& copies) {
+  int best = -1;
+  for (int c = 0; c < kConfigCopies; ++c) {
+    const CopyState& s = copies[static_cast<std::size_t>(c)];
+    if (s.error != ConfigError::kNone) continue;
+    if (best < 0 || newer(s.sequence, copies[static_cast<std::size_t>(best)].sequence)) best = c;
+  }
+  return best;
+}
+
+}  // namespace
+
+Result<std::uint32_t, protocol::Status> save_config(Port& port, const ControllerSettings& settings,
+                                                    const BoardConfig& board) {
   using Saved = Result<std::uint32_t, protocol::Status>;
+  if (port.config_page_size() < sizeof(ConfigImage) + sizeof(ConfigCommit))
+    return Saved::failure(protocol::Status::kFlashError);
+  std::array<CopyState, kConfigCopies> copies{};
+  for (int c = 0; c < kConfigCopies; ++c)
+    copies[static_cast<std::size_t>(c)] = read_copy(port, c, board, nullptr);
+  const int newest = newest_copy(copies);
+  // Rewrite the other page: the newest copy stays intact whatever happens.
+  const int target = newest < 0 ? 0 : (newest + 1) % kConfigCopies;
+  const std::uint32_t sequence =
+      newest < 0 ? 1 : copies[static_cast<std::size_t>(newest)].sequence + 1;
+
   const ConfigImage image = encode_config(settings);
-  if (port.config_page_size() < sizeof(ConfigImage))
+  ConfigCommit commit{kConfigCommitMagic, sequence, image.crc32, 0};
+  commit.crc32 = commit_crc(commit);
+  const auto commit_bytes =
+      std::span<const std::uint8_t>(reinterpret_cast<const std::uint8_t*>(&commit), sizeof(commit));
+
+  if (port.erase_config_page(target) != PortStatus::kOk)
     return Saved::failure(protocol::Status::kFlashError);
-  if (port.erase_config_page() != PortStatus::kOk)
-    return Saved::failure(protocol::Status::kFlashError);
-  if (port.write_config_page(bytes_of(image)) != PortStatus::kOk)
+  if (port.write_config_page(target, 0, bytes_of(image)) != PortStatus::kOk)
     return Saved::failure(protocol::Status::kFlashError);
   ConfigImage readback;
   auto readback_bytes =
       std::span<std::uint8_t>(reinterpret_cast<std::uint8_t*>(&readback), sizeof(readback));
-  if (port.read_config_page(readback_bytes) != PortStatus::kOk ||
+  if (port.read_config_page(target, 0, readback_bytes) != PortStatus::kOk ||
       std::memcmp(&readback, &image, sizeof(image)) != 0)
+    return Saved::failure(protocol::Status::kFlashError);
+  // Only a complete, verified image gets its commit.
+  if (port.write_config_page(target, sizeof(ConfigImage), commit_bytes) != PortStatus::kOk)
+    return Saved::failure(protocol::Status::kFlashError);
+  ConfigCommit commit_readback;
+  if (port.read_config_page(
+          target, sizeof(ConfigImage),
+          std::span<std::uint8_t>(reinterpret_cast<std::uint8_t*>(&commit_readback),
+                                  sizeof(commit_readback))) != PortStatus::kOk ||
+      std::memcmp(&commit_readback, &commit, sizeof(commit)) != 0)
     return Saved::failure(protocol::Status::kFlashError);
   return Saved::success(image.crc32);
 }
 
 Loaded load_config(Port& port, const BoardConfig& board) {
-  ConfigImage image;
-  auto bytes = std::span<std::uint8_t>(reinterpret_cast<std::uint8_t*>(&image), sizeof(image));
-  if (port.config_page_size() < sizeof(ConfigImage) ||
-      port.read_config_page(bytes) != PortStatus::kOk)
-    return Loaded::failure(ConfigError::kReadFailed);
-  return decode_config(bytes, board);
+  std::array<CopyState, kConfigCopies> copies{};
+  std::array<ControllerSettings, kConfigCopies> settings{};
+  for (int c = 0; c < kConfigCopies; ++c) {
+    const auto k = static_cast<std::size_t>(c);
+    copies[k] = read_copy(port, c, board, &settings[k]);
+  }
+  const int newest = newest_copy(copies);
+  if (newest >= 0) return Loaded::success(settings[static_cast<std::size_t>(newest)]);
+  for (const CopyState& s : copies)
+    if (s.error != ConfigError::kEmpty) return Loaded::failure(s.error);
+  return Loaded::failure(ConfigError::kEmpty);
 }
 
 }  // namespace flutterscan::firmware

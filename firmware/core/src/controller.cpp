@@ -1,5 +1,7 @@
 #include "flutterscan/firmware/controller.hpp"
 
+#include <algorithm>
+
 #include "flutterscan/firmware/config_store.hpp"
 
 namespace flutterscan::firmware {
@@ -24,8 +26,14 @@ Controller::Controller(Port& port, const BoardConfig& board)
 void Controller::start() {
   stop_sequencing();
   state_ = ControllerState::kIdle;
-  if (port_.reset_cause() == ResetCause::kWatchdog)
-    last_fault_ = protocol::FaultCode::kWatchdogReset;
+  const ResetCause cause = port_.reset_cause();
+  if (cause == ResetCause::kWatchdog) last_fault_ = protocol::FaultCode::kWatchdogReset;
+  if (cause != ResetCause::kPowerOn) {
+    // A warm reset: an exposure may have lit the LEDs just before it, so the
+    // guard's duty period counts from now (a reset loop gains no duty).
+    have_previous_start_ = true;
+    previous_start_us_ = port_.now_us();
+  }
   const auto loaded = load_config(port_, board_);
   if (loaded.ok()) {
     settings_ = loaded.value();
@@ -39,6 +47,7 @@ void Controller::start() {
 
 void Controller::poll(bool may_enter_bootloader) {
   port_.kick_watchdog();
+  update_prearm();  // time passed: a table the guard refused a while ago may be fine now
   if (bootloader_requested_ && !bootloader_entered_ && may_enter_bootloader) {
     bootloader_entered_ = true;
     port_.enter_bootloader();
@@ -146,17 +155,22 @@ Result<protocol::SelectCodeReply, Status> Controller::select_code(
   const Status runnable = check_code_runnable(r.code_id);
   if (runnable != Status::kOk) return Out::failure(runnable);
   settings_.selected_code = r.code_id;
+  // The pre-armed table is the old choice: withdraw it (an edge that already
+  // started it came before this command: that exposure plays the old code).
+  withdraw_prearm();
   const auto& playing = tables_[static_cast<std::size_t>(playing_table_)];
   if (playing.code_id == r.code_id) {
     pending_table_ = -1;  // back to the code that is playing: cancel a pending switch
   } else {
-    // Build into the table that is not playing; publish it only when complete.
-    const int spare = 1 - playing_table_;
-    pending_table_ = -1;
+    // Build into a table neither playing nor pending: the DMA reads neither
+    // the one it plays nor (pre-armed) the pending one while the CPU writes.
+    int spare = 0;
+    while (spare == playing_table_ || spare == pending_table_) ++spare;
     build_table(tables_[static_cast<std::size_t>(spare)], r.code_id);
     pending_table_ = spare;
   }
   const std::uint8_t pending = pending_table_ < 0 ? protocol::kNoCode : r.code_id;
+  update_prearm();
   return Out::success({playing.code_id, pending, {}});
 }
 
@@ -208,17 +222,9 @@ Status Controller::arm() {
   if (id >= protocol::kMaxCodes || !settings_.codes[id].present) return Status::kNoSuchCode;
   const Status runnable = check_code_runnable(id);
   if (runnable != Status::kOk) return runnable;
-
-  build_table(tables_[0], id);
-  playing_table_ = 0;
-  pending_table_ = -1;
-  frame_counter_ = 0;
-  have_previous_start_ = false;
-  have_lit_exposure_ = false;
-  strobe_active_ = false;
-  last_pulse_width_us_ = 0;
-  events_.clear();
-  port_.configure_strobe_input(settings_.mode.strobe_active_low);
+  // The frame timer is the one step that can still fail: start it before
+  // anything changes (its ticks are ignored until the state is armed; on the
+  // MCU the main loop holds the interrupt lock around commands anyway).
   if (uses_frame_timer()) {
     const std::uint32_t trigger_us =
         settings_.mode.sync == SyncMode::kMaster
@@ -227,7 +233,19 @@ Status Controller::arm() {
     if (port_.start_frame_timer(settings_.timing.frame_period_us, trigger_us) != PortStatus::kOk)
       return Status::kHardwareError;
   }
+
+  // The guard's history (last lit exposure, its end and trailing runs) stays:
+  // it is the LEDs', not the arming's.
+  build_table(tables_[0], id);
+  playing_table_ = 0;
+  pending_table_ = -1;
+  frame_counter_ = 0;
+  strobe_active_ = false;
+  last_pulse_width_us_ = 0;
+  events_.clear();
+  port_.configure_strobe_input(settings_.mode.strobe_active_low);
   state_ = ControllerState::kArmed;
+  update_prearm();
   return Status::kOk;
 }
 
@@ -279,14 +297,20 @@ Result<protocol::SelfTestReply, Status> Controller::self_test(const protocol::Se
   const int leds = board_.pins.led_count;
   const auto code = LedCode::from_masks(
       std::span<const std::uint8_t>(steps.data(), static_cast<std::size_t>(leds)), leds);
-  SlotTable& table = tables_[0];
-  const auto schedule = build_slot_table(code.value(), r.step_time_us, board_.pins, table.words);
+  if (!code.ok()) return Out::failure(Status::kHardwareError);
+  // A self test lights the LEDs like an exposure: the same guard, the same history.
+  const LedOnStats stats = led_on_stats(code.value());
+  const std::uint64_t start = port_.now_us();
+  if (guard_verdict(stats, r.step_time_us, start).status != GuardStatus::kOk)
+    return Out::failure(Status::kGuardLimit);
+  const auto schedule =
+      build_slot_table(code.value(), r.step_time_us, board_.pins, self_test_words_);
   if (!schedule.ok()) return Out::failure(Status::kHardwareError);
-  table.word_count = schedule.value().word_count;
-  table.code_id = protocol::kNoCode;
-  if (port_.start_slot_table(std::span<const std::uint32_t>(table.words.data(), table.word_count),
-                             r.step_time_us) != PortStatus::kOk)
+  if (port_.start_slot_table(
+          std::span<const std::uint32_t>(self_test_words_.data(), schedule.value().word_count),
+          r.step_time_us) != PortStatus::kOk)
     return Out::failure(Status::kHardwareError);
+  record_lit_exposure(stats, start, r.step_time_us);
   self_test_running_ = true;
   protocol::SelfTestReply reply{};
   reply.leds_stepped = static_cast<std::uint8_t>(leds);
@@ -298,7 +322,7 @@ Result<protocol::SaveConfigReply, Status> Controller::save_config() {
   using Out = Result<protocol::SaveConfigReply, Status>;
   if (state_ != ControllerState::kIdle) return Out::failure(Status::kBadState);
   if (self_test_running_) return Out::failure(Status::kBusy);
-  const auto saved = firmware::save_config(port_, settings_);
+  const auto saved = firmware::save_config(port_, settings_, board_);
   if (!saved.ok()) return Out::failure(saved.error());
   return Out::success({static_cast<std::uint32_t>(sizeof(ConfigImage)), saved.value()});
 }
@@ -342,6 +366,7 @@ void Controller::on_strobe_edge(bool active, std::uint64_t time_us) {
     exposure_flags_ |= protocol::kEventOverrun;
     ++overruns_;
   }
+  update_prearm();  // the measured width sets the next slot time (follow exposure)
 }
 
 void Controller::on_frame_tick(std::uint64_t time_us) {
@@ -367,12 +392,21 @@ std::uint32_t Controller::slot_time_for_next_exposure(int code_length, std::uint
 
 void Controller::begin_exposure(std::uint64_t time_us) {
   if (state_ == ControllerState::kExposing) {
+    if (adopted_edge_pending_) {
+      adopted_edge_pending_ = false;  // the edge that started the adopted pre-armed table
+      return;
+    }
     // A trigger while the previous sequence still runs: that frame gets no light.
     ++missed_triggers_;
     exposure_flags_ |= protocol::kEventMissedTrigger;
     return;
   }
   if (state_ != ControllerState::kArmed) return;
+  // Did this edge (or one whose callback is still to come) start the pre-armed table?
+  if (withdraw_prearm()) return;
+  // No: decide now; the LEDs light when the table starts, now (in the callback,
+  // after the interrupt latency), not at the edge.
+  const std::uint64_t light_us = std::max(time_us, port_.now_us());
 
   std::uint16_t flags = 0;
   if (pending_table_ >= 0) {
@@ -383,11 +417,6 @@ void Controller::begin_exposure(std::uint64_t time_us) {
   const SlotTable& table = tables_[static_cast<std::size_t>(playing_table_)];
   const int length = table.stats.length;
   const std::uint32_t slot_time = slot_time_for_next_exposure(length, flags);
-  // The period since the last lit exposure began: one the guard refused lit
-  // nothing, so it neither starts a period nor ends the last lit exposure.
-  const std::uint64_t period = have_previous_start_
-                                   ? time_us - previous_start_us_
-                                   : (uses_frame_timer() ? settings_.timing.frame_period_us : 0);
   ++frame_counter_;
 
   exposure_start_us_ = time_us;
@@ -395,14 +424,7 @@ void Controller::begin_exposure(std::uint64_t time_us) {
   exposure_pulse_width_us_ = 0;
   exposure_flags_ = flags;
 
-  // Back to back with the last lit exposure if this one starts the moment that
-  // one's all-off word lands: then each LED's run at the seam is the previous
-  // exposure's trailing run (its code, its slot time) plus this code's leading
-  // run at this slot time. The previous code or slot time may differ from these.
-  const bool joins_previous = have_lit_exposure_ && time_us <= lit_end_us_;
-  GuardVerdict verdict = check_led_guard(table.stats, slot_time, period, settings_.guard);
-  if (verdict.status == GuardStatus::kOk && joins_previous)
-    verdict = check_led_guard_seam(lit_trailing_on_us_, table.stats, slot_time, settings_.guard);
+  const GuardVerdict verdict = guard_verdict(table.stats, slot_time, light_us);
   if (verdict.status != GuardStatus::kOk) {
     // This exposure stays dark, but it takes no time: a trigger in the same
     // microsecond still touches the last lit exposure, so that one stays the
@@ -427,10 +449,106 @@ void Controller::begin_exposure(std::uint64_t time_us) {
     enter_fault(protocol::FaultCode::kSlotTimer);
     return;
   }
-  note_lit_exposure(table.stats, time_us, slot_time, joins_previous);
-  have_previous_start_ = true;
-  previous_start_us_ = time_us;
+  record_lit_exposure(table.stats, light_us, slot_time);
   state_ = ControllerState::kExposing;
+}
+
+void Controller::update_prearm() {
+  if (state_ != ControllerState::kArmed) return;
+  const int index = pending_table_ >= 0 ? pending_table_ : playing_table_;
+  const SlotTable& table = tables_[static_cast<std::size_t>(index)];
+  std::uint16_t flags = 0;
+  const std::uint32_t slot_time = slot_time_for_next_exposure(table.stats.length, flags);
+  const bool accepted =
+      guard_verdict(table.stats, slot_time, port_.now_us()).status == GuardStatus::kOk;
+  if (accepted && prearm_.active && prearm_.table == index && prearm_.slot_time_us == slot_time)
+    return;
+  if (withdraw_prearm()) return;  // an edge started it: now exposing
+  if (!accepted) return;          // the edge's callback will decide
+  if (port_.prearm_slot_table(std::span<const std::uint32_t>(table.words.data(), table.word_count),
+                              slot_time) == PortStatus::kOk)
+    prearm_ = {true, index, slot_time, flags};
+}
+
+bool Controller::withdraw_prearm() {
+  if (!prearm_.active) return false;
+  const PrearmStart start = port_.cancel_prearm();
+  if (!start.started) {
+    prearm_.active = false;
+    return false;
+  }
+  adopt_prearm(start);
+  return true;
+}
+
+void Controller::adopt_prearm(const PrearmStart& start) {
+  const int index = prearm_.table;
+  prearm_.active = false;
+  std::uint16_t flags = prearm_.flags;
+  if (index != playing_table_) {
+    flags |= protocol::kEventCodeSwitched;
+    playing_table_ = index;
+  }
+  if (pending_table_ == index) pending_table_ = -1;
+  const SlotTable& table = tables_[static_cast<std::size_t>(index)];
+  ++frame_counter_;
+  exposure_start_us_ = start.time_us;
+  exposure_slot_time_us_ = prearm_.slot_time_us;
+  exposure_pulse_width_us_ = 0;
+  exposure_flags_ = flags;
+  encoder_at_start_ = port_.encoder_count();
+  // The guard accepted this table for any start from the pre-arm on.
+  record_lit_exposure(table.stats, start.time_us, prearm_.slot_time_us);
+  state_ = ControllerState::kExposing;
+  adopted_edge_pending_ = start.edge_pending;
+}
+
+GuardVerdict Controller::guard_verdict(const LedOnStats& stats, std::uint32_t slot_time_us,
+                                       std::uint64_t start_us) const {
+  // The period since the last lit exposure began: one the guard refused lit
+  // nothing, so it neither starts a period nor ends the last lit exposure.
+  // Without one (only after a power-on reset) the first exposure's duty is
+  // judged over the frame period in master and free-run, and not at all in
+  // slave mode or for a self test (the LEDs were cold).
+  const bool frame_timer = is_armed() && uses_frame_timer();
+  const std::uint64_t period = have_previous_start_ ? start_us - previous_start_us_
+                               : frame_timer        ? settings_.timing.frame_period_us
+                                                    : 0;
+  GuardVerdict verdict = check_led_guard(stats, slot_time_us, period, settings_.guard);
+  if (verdict.status != GuardStatus::kOk) return verdict;
+  // Back to back with the last lit exposure if this one starts the moment that
+  // one's all-off word lands: then each LED's run at the seam is the previous
+  // exposure's trailing run (its code, its slot time) plus this code's leading
+  // run at this slot time. The previous code or slot time may differ from these.
+  if (have_lit_exposure_ && start_us <= lit_end_us_) {
+    verdict = check_led_guard_seam(lit_trailing_on_us_, stats, slot_time_us, settings_.guard);
+    if (verdict.status != GuardStatus::kOk) return verdict;
+  }
+  if (!have_previous_start_) return verdict;
+  // check_led_guard judges back-to-back exposures over their own duration;
+  // when this one is longer than the time since the last start (a longer code
+  // or slot time after a shorter one) that is more than the time it follows:
+  // the duty cap holds over the time actually elapsed.
+  for (int led = 0; led < stats.leds; ++led) {
+    const auto k = static_cast<std::size_t>(led);
+    const std::uint64_t on_us = static_cast<std::uint64_t>(stats.on_slots[k]) * slot_time_us;
+    if (on_us * protocol::kDutyFullScale > period * settings_.guard.max_duty_permille[k]) {
+      const std::uint64_t duty = period == 0
+                                     ? protocol::kDutyFullScale + 1
+                                     : (on_us * protocol::kDutyFullScale + period - 1) / period;
+      return {GuardStatus::kDutyTooHigh, led, duty, settings_.guard.max_duty_permille[k]};
+    }
+  }
+  return verdict;
+}
+
+void Controller::record_lit_exposure(const LedOnStats& stats, std::uint64_t start_us,
+                                     std::uint32_t slot_time_us) {
+  const bool joins_previous = have_lit_exposure_ && start_us <= lit_end_us_;
+  note_lit_exposure(stats, start_us, slot_time_us, joins_previous);
+  lit_start_us_ = start_us;
+  have_previous_start_ = true;
+  previous_start_us_ = start_us;
 }
 
 void Controller::on_slot_table_done(std::uint64_t) {
@@ -453,6 +571,7 @@ void Controller::on_slot_table_done(std::uint64_t) {
   event.slot_count = static_cast<std::uint16_t>(table.stats.length);
   state_ = ControllerState::kArmed;
   queue_event(event);
+  update_prearm();
 }
 
 // ---------------------------------------------------------------------------
@@ -494,12 +613,24 @@ void Controller::queue_event(const protocol::ExposureEvent& event) {
 
 void Controller::stop_sequencing() {
   port_.stop_frame_timer();
+  // A pre-armed table an edge already started lit the LEDs: into the history
+  // before it is cut.
+  withdraw_prearm();
+  adopted_edge_pending_ = false;
   port_.stop_slot_table();
   all_leds_off();
   self_test_running_ = false;
   pending_table_ = -1;
   strobe_active_ = false;
-  have_lit_exposure_ = false;  // every LED is off now
+  // Every LED is off now. The guard's history stays; an exposure cut short
+  // ends now, and its LEDs' runs at the cut are at most the time since it
+  // started plus the run it joined (bounded by the on-time limit).
+  const std::uint64_t now = port_.now_us();
+  if (have_lit_exposure_ && now < lit_end_us_) {
+    for (std::size_t k = 0; k < lit_trailing_on_us_.size(); ++k)
+      lit_trailing_on_us_[k] = (now - lit_start_us_) + settings_.guard.max_on_time_us[k];
+    lit_end_us_ = now;
+  }
 }
 
 void Controller::all_leds_off() {

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "flutterscan/firmware/boot_decision.hpp"
+
 namespace flutterscan::firmware::usb {
 
 namespace {
@@ -18,7 +20,7 @@ DfuMode::DfuMode(Flash& flash, const FlashLayout& layout, const AppRegion& regio
 
 bool DfuMode::application_valid() {
   const auto image = flash_.read(region_.load_address, region_.max_size);
-  return check_image(image, region_.board_id, region_.max_size) == ImageCheck::kOk;
+  return check_boot_image(image, region_) == BootImageCheck::kOk;
 }
 
 ControlReply DfuMode::fail(DfuStatus status) {
@@ -102,6 +104,7 @@ ControlReply DfuMode::dnload(const SetupPacket& setup) {
 void DfuMode::start_download() {
   next_block_ = 0;
   download_end_ = 0;
+  pending_offset_ = 0;
   erased_sectors_ = 0;
   block_pending_ = false;
   manifest_done_ = false;
@@ -114,8 +117,9 @@ ControlReply DfuMode::control_out_data(const SetupPacket& setup,
       data.size() > block_.size())
     return ControlReply::stall();
   // The data are acknowledged either way; a bad block shows in the next GETSTATUS.
-  const std::uint64_t end =
-      static_cast<std::uint64_t>(setup.value) * kDfuTransferSize + data.size();
+  // A block goes right after the bytes received so far, whatever transfer size
+  // the host chose (dfu-util -t 512: 512-byte blocks; block x 1024 left gaps).
+  const std::uint64_t end = static_cast<std::uint64_t>(download_end_) + data.size();
   if (setup.value != next_block_ || end > region_.max_size) {
     state_ = DfuState::kError;
     status_ = DfuStatus::kErrAddress;
@@ -124,6 +128,7 @@ ControlReply DfuMode::control_out_data(const SetupPacket& setup,
   }
   std::copy(data.begin(), data.end(), block_.begin());
   pending_block_number_ = setup.value;
+  pending_offset_ = download_end_;
   pending_length_ = data.size();
   block_pending_ = true;
   state_ = DfuState::kDnloadSync;
@@ -162,8 +167,10 @@ ControlReply DfuMode::upload(const SetupPacket& setup, std::span<std::uint8_t> b
   if ((state_ != DfuState::kDfuIdle && state_ != DfuState::kUploadIdle) || setup.length == 0 ||
       setup.length > kDfuTransferSize || buffer.size() < setup.length)
     return fail(DfuStatus::kErrStalledPacket);
+  if (state_ == DfuState::kDfuIdle) upload_offset_ = 0;  // a new upload
   const std::uint32_t size = upload_size();
-  const std::uint64_t offset = static_cast<std::uint64_t>(setup.value) * kDfuTransferSize;
+  // Like a download: from the bytes sent so far, whatever the transfer size.
+  const std::uint64_t offset = upload_offset_;
   const std::size_t n =
       offset < size ? std::min<std::size_t>(setup.length, size - static_cast<std::uint32_t>(offset))
                     : 0;
@@ -172,6 +179,7 @@ ControlReply DfuMode::upload(const SetupPacket& setup, std::span<std::uint8_t> b
     if (bytes.size() != n) return fail(DfuStatus::kErrAddress);
     std::copy(bytes.begin(), bytes.end(), buffer.begin());
   }
+  upload_offset_ += static_cast<std::uint32_t>(n);
   state_ = n < setup.length ? DfuState::kDfuIdle : DfuState::kUploadIdle;
   return ControlReply::send(n);
 }
@@ -217,8 +225,7 @@ void DfuMode::bus_reset() {
 // Flash work
 
 std::uint32_t DfuMode::block_poll_ms() const {
-  const std::uint32_t address =
-      region_.load_address + static_cast<std::uint32_t>(pending_block_number_) * kDfuTransferSize;
+  const std::uint32_t address = region_.load_address + pending_offset_;
   std::uint32_t ms =
       layout_.program_ms_per_kib * static_cast<std::uint32_t>((pending_length_ + 1023) / 1024);
   for (std::uint32_t a = address; a < address + pending_length_;) {
@@ -232,7 +239,7 @@ std::uint32_t DfuMode::block_poll_ms() const {
 }
 
 void DfuMode::write_block() {
-  const std::uint32_t offset = static_cast<std::uint32_t>(pending_block_number_) * kDfuTransferSize;
+  const std::uint32_t offset = pending_offset_;
   const std::uint32_t address = region_.load_address + offset;
   const auto data = std::span<const std::uint8_t>(block_).first(pending_length_);
   block_pending_ = false;
@@ -275,7 +282,9 @@ void DfuMode::write_block() {
 void DfuMode::manifest() {
   const auto image = flash_.read(region_.load_address, download_end_);
   last_check_ = check_image(image, region_.board_id, region_.max_size);
-  if (last_check_ != ImageCheck::kOk) {
+  // Also what the bootloader's jump needs (load address, vector table, SP, PC):
+  // an image the bootloader would not start is refused here, not after a reset.
+  if (last_check_ != ImageCheck::kOk || check_boot_image(image, region_) != BootImageCheck::kOk) {
     fail(DfuStatus::kErrFirmware);
     return;
   }

@@ -27,7 +27,7 @@ InterruptLock::~InterruptLock() {
 }
 
 QemuPort::QemuPort(const LedPinMap& pins) : pins_(pins) {
-  config_page_.fill(0xFF);  // erased flash
+  for (auto& page : config_page_) page.fill(0xFF);  // erased flash
   g_systick_port = this;
 }
 
@@ -162,21 +162,28 @@ void QemuPort::add_encoder_counts(std::int32_t counts) {
 // ---------------------------------------------------------------------------
 // Config page (RAM)
 
-PortStatus QemuPort::read_config_page(std::span<std::uint8_t> out) {
-  if (out.size() > config_page_.size()) return PortStatus::kError;
-  std::memcpy(out.data(), config_page_.data(), out.size());
+PortStatus QemuPort::read_config_page(int copy, std::size_t offset, std::span<std::uint8_t> out) {
+  if (copy < 0 || copy >= kConfigCopies || offset > kConfigPageSize ||
+      out.size() > kConfigPageSize - offset)
+    return PortStatus::kError;
+  std::memcpy(out.data(), config_page_[static_cast<std::size_t>(copy)].data() + offset, out.size());
   return PortStatus::kOk;
 }
 
-PortStatus QemuPort::erase_config_page() {
-  config_page_.fill(0xFF);
+PortStatus QemuPort::erase_config_page(int copy) {
+  if (copy < 0 || copy >= kConfigCopies) return PortStatus::kError;
+  config_page_[static_cast<std::size_t>(copy)].fill(0xFF);
   return PortStatus::kOk;
 }
 
-PortStatus QemuPort::write_config_page(std::span<const std::uint8_t> data) {
-  if (data.size() > config_page_.size()) return PortStatus::kError;
+PortStatus QemuPort::write_config_page(int copy, std::size_t offset,
+                                       std::span<const std::uint8_t> data) {
+  if (copy < 0 || copy >= kConfigCopies || offset > kConfigPageSize ||
+      data.size() > kConfigPageSize - offset)
+    return PortStatus::kError;
   // Flash programming only clears bits.
-  for (std::size_t i = 0; i < data.size(); ++i) config_page_[i] &= data[i];
+  auto& page = config_page_[static_cast<std::size_t>(copy)];
+  for (std::size_t i = 0; i < data.size(); ++i) page[offset + i] &= data[i];
   return PortStatus::kOk;
 }
 

@@ -50,6 +50,12 @@ std::vector<std::uint8_t> make_application_image(std::uint16_t board_id, std::ui
     x = x * 1664525u + 1013904223u;
     image[i] = static_cast<std::uint8_t>(x >> 24);
   }
+  // A vector table the bootloader accepts (check_boot_image): the initial SP
+  // at the top of SRAM, the reset vector a Thumb address just after the table.
+  const std::uint32_t sp = kSramEnd;
+  const std::uint32_t reset = load_address + kVectorOffset + 8 + 1;
+  std::memcpy(image.data() + kVectorOffset, &sp, sizeof sp);
+  std::memcpy(image.data() + kVectorOffset + 4, &reset, sizeof reset);
   stamp_image(image);
   return image;
 }
@@ -76,14 +82,24 @@ void SimBoard::teardown() {
   usb_.reset();
 }
 
-void SimBoard::boot(bool dfu_requested) {
+void SimBoard::boot(bool dfu_requested, ResetCause cause) {
   teardown();
   ++epoch_;
   // At reset the LED pins are inputs pulled low: every LED off.
   port_.write_led_bank(bsrr_all_off(config_.board.pins));
   usb_ = std::make_unique<SimUsbController>();
+  confirmation_ = {};
+  if (cause == ResetCause::kPowerOn) boot_record_ = {};  // SRAM lost
   const auto region_bytes = flash_.read(config_.region.load_address, config_.region.max_size);
-  if (choose_boot_target(dfu_requested, region_bytes, config_.region) == BootTarget::kApplication) {
+  // The bootloader's decision (firmware/bootloader/src/startup.cpp).
+  BootInputs in;
+  in.dfu_requested = dfu_requested;
+  in.boot_pin_held = recovery_pin_;
+  in.unconfirmed_starts = firmware::unconfirmed_starts(boot_record_);
+  in.image = check_boot_image(region_bytes, config_.region);
+  const BootDecision decision = decide_boot(in);
+  boot_record_ = make_boot_record(decision.unconfirmed_starts);
+  if (decision.target == BootTarget::kApplication) {
     const ImageHeader h = read_image_header(region_bytes);
     BoardConfig board = config_.board;
     board.firmware_major = h.version_major;
@@ -92,7 +108,7 @@ void SimBoard::boot(bool dfu_requested) {
     board.build_id = h.image_crc32;
     device_descriptor_ = usb::application_device_descriptor(
         usb::bcd_device(h.version_major, h.version_minor, h.version_patch));
-    port_.set_reset_cause(dfu_requested ? ResetCause::kSoftware : ResetCause::kPowerOn);
+    port_.set_reset_cause(dfu_requested ? ResetCause::kSoftware : cause);
     controller_ = std::make_unique<Controller>(port_, board);
     handler_ = std::make_unique<CommandHandler>(*controller_);
     controller_->start();
@@ -116,8 +132,17 @@ void SimBoard::reset(bool dfu_requested) {
   if (reenumerate_callback_) reenumerate_callback_(mode_, epoch_);
 }
 
+void SimBoard::watchdog_reset() {
+  boot(false, ResetCause::kWatchdog);
+  if (reenumerate_callback_) reenumerate_callback_(mode_, epoch_);
+}
+
 void SimBoard::poll() {
-  if (application_) application_->poll();
+  if (!application_) return;
+  application_->poll();
+  // The application's main loop (stm32f4 main.cpp): USB configured long enough.
+  if (confirmation_.poll(application_->device().configured(), port_.now_us()))
+    boot_record_ = make_boot_record(0);
 }
 
 void SimBoard::after_host_call() {
@@ -128,6 +153,8 @@ void SimBoard::after_host_call() {
     dfu_requested = true;  // Port::enter_bootloader: hand-off word + reset
   } else if (!bootloader_ || !bootloader_->leave_requested()) {
     return;
+  } else {
+    boot_record_ = make_boot_record(0);  // a deliberate leave: new tries (bootloader main.cpp)
   }
   ++self_resets_;
   reset(dfu_requested);

@@ -26,14 +26,21 @@ SimFlash::SimFlash(const FlashLayout& layout)
       erases_(layout.sectors.size(), 0),
       programs_(layout.sectors.size(), 0) {}
 
+std::size_t SimFlash::operation_budget(std::size_t bytes) {
+  ++operations_;
+  if (power_loss_countdown_ < 0 || power_loss_countdown_-- > 0) return bytes;
+  powered_off_ = true;
+  return std::min(bytes, power_loss_bytes_);
+}
+
 FlashResult SimFlash::erase_sector(int sector) {
   if (sector < 0 || static_cast<std::size_t>(sector) >= layout_.sectors.size())
     return FlashResult::kBadAddress;
   ++erases_[static_cast<std::size_t>(sector)];
-  if (erase_fails_) return FlashResult::kEraseFailed;
+  if (erase_fails_ || powered_off_) return FlashResult::kEraseFailed;
   const FlashSector& s = layout_.sectors[static_cast<std::size_t>(sector)];
-  std::fill_n(bytes_.begin() + (s.base - base_), s.size, std::uint8_t{0xFF});
-  return FlashResult::kOk;
+  std::fill_n(bytes_.begin() + (s.base - base_), operation_budget(s.size), std::uint8_t{0xFF});
+  return powered_off_ ? FlashResult::kEraseFailed : FlashResult::kOk;
 }
 
 FlashResult SimFlash::program(std::uint32_t address, std::span<const std::uint8_t> data) {
@@ -45,9 +52,9 @@ FlashResult SimFlash::program(std::uint32_t address, std::span<const std::uint8_
     a = layout_.sectors[static_cast<std::size_t>(s)].base +
         layout_.sectors[static_cast<std::size_t>(s)].size;
   }
-  if (program_fails_) return FlashResult::kProgramFailed;
-  nor_program_bytes(bytes_.data() + (address - base_), data.data(), data.size());
-  return FlashResult::kOk;
+  if (program_fails_ || powered_off_) return FlashResult::kProgramFailed;
+  nor_program_bytes(bytes_.data() + (address - base_), data.data(), operation_budget(data.size()));
+  return powered_off_ ? FlashResult::kProgramFailed : FlashResult::kOk;
 }
 
 void SimFlash::reset() {
@@ -56,6 +63,9 @@ void SimFlash::reset() {
   std::fill(programs_.begin(), programs_.end(), 0);
   erase_fails_ = false;
   program_fails_ = false;
+  operations_ = 0;
+  power_loss_countdown_ = -1;
+  powered_off_ = false;
 }
 
 std::span<const std::uint8_t> SimFlash::read(std::uint32_t address, std::size_t size) {

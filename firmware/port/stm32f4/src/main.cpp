@@ -5,9 +5,11 @@
 // EnterBootloader reset into the bootloader through the hand-off word.
 
 #include <cstddef>
+#include <cstring>
 #include <new>
 
 #include "flutterscan/common/image_header.hpp"
+#include "flutterscan/firmware/boot_decision.hpp"
 #include "flutterscan/firmware/command_handler.hpp"
 #include "flutterscan/firmware/controller.hpp"
 #include "flutterscan/firmware/stm32f4/otg_fs_device.hpp"
@@ -43,8 +45,9 @@ namespace {
 constexpr BoardConfig kBoard = stm32f4_board_config();
 constexpr auto kDeviceDescriptor = usb::application_device_descriptor(usb::bcd_device(
     FLUTTERSCAN_VERSION_MAJOR, FLUTTERSCAN_VERSION_MINOR, FLUTTERSCAN_VERSION_PATCH));
-/// Longer than a 16 KiB sector erase (up to ~0.5 s) at the slowest LSI.
-constexpr std::uint32_t kWatchdogTimeoutMs = 2'000;
+/// Longer than the config's 128 KiB sector erase (sector 11: up to 2 s, DS8626)
+/// at the slowest LSI.
+constexpr std::uint32_t kWatchdogTimeoutMs = 4'000;
 /// Main loop wake-up period (SysTick): the loop kicks the watchdog on every pass.
 constexpr std::uint32_t kMainLoopTickHz = 1'000;
 
@@ -98,12 +101,19 @@ extern "C" void OTG_FS_IRQHandler() {
   port->start_watchdog(kWatchdogTimeoutMs);
   start_main_loop_tick(clocks.tree.hclk_hz);
   g_otg_fs.init(clocks.tree.hclk_hz);
+  BootConfirmation confirmation;
   for (;;) {
     {
       InterruptLock lock;  // controller.hpp: no port callbacks during controller calls
       if (port->take_fault()) controller->on_port_fault();
       g_otg_fs.poll();  // USB events -> device core, HID interface, DFU runtime
       usb->poll();      // commands, replies, events; Controller::poll: watchdog, bootloader
+      // USB configured long enough: this image works; the bootloader's count
+      // of unconfirmed starts (boot_decision.hpp) goes back to 0.
+      if (confirmation.poll(usb->device().configured(), port->now_us())) {
+        const BootRecord record = make_boot_record(0);
+        std::memcpy(reinterpret_cast<void*>(kBootRecordAddress), &record, sizeof record);
+      }
     }
     if (!g_otg_fs.work_pending()) asm volatile("wfi" ::: "memory");
   }

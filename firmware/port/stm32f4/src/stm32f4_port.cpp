@@ -18,8 +18,6 @@ constexpr std::uintptr_t kSlotStream = dma::stream(dma::kDma2, kTim1UpRoute.stre
 constexpr int kSlotFlagShift = dma::flag_shift(kTim1UpRoute.stream);
 constexpr std::uintptr_t kSlotFlagStatus = dma::kDma2 + dma::status_register(kTim1UpRoute.stream);
 constexpr std::uintptr_t kSlotFlagClear = dma::kDma2 + dma::clear_register(kTim1UpRoute.stream);
-/// Timer ticks of headroom when a slot time is corrected in flight.
-constexpr std::uint32_t kArrMarginTicks = 32;
 /// Internal frame pulse in free-run mode (no trigger output): long enough for
 /// TRGO, short enough for any frame period.
 constexpr std::uint32_t kFreeRunPulseUs = 10;
@@ -85,8 +83,7 @@ void Stm32f4Port::init() {
   pwm_arr_ = brightness_pwm_arr(clocks_.tim_apb1_hz);
   at(tim::kTim3 + tim::kPsc) = 0;
   at(tim::kTim3 + tim::kArr) = pwm_arr_;
-  const std::uint32_t pwm_channel =
-      ((tim::kOcModePwm1 << tim::kOcModeShift) | tim::kOcPreload);
+  const std::uint32_t pwm_channel = ((tim::kOcModePwm1 << tim::kOcModeShift) | tim::kOcPreload);
   at(tim::kTim3 + tim::kCcmr1) = pwm_channel | (pwm_channel << 8);
   at(tim::kTim3 + tim::kCcmr2) = pwm_channel | (pwm_channel << 8);
   for (int channel = 1; channel <= 4; ++channel) at(tim::kTim3 + tim::ccr(channel)) = 0;
@@ -101,8 +98,7 @@ void Stm32f4Port::init() {
 
   // TIM5: quadrature encoder, both inputs filtered, 32-bit count.
   at(tim::kTim5 + tim::kArr) = 0xFFFFFFFF;
-  const std::uint32_t encoder_input =
-      tim::kCcsInputOwn | (tim::kIcFilterN8 << tim::kIcFilterShift);
+  const std::uint32_t encoder_input = tim::kCcsInputOwn | (tim::kIcFilterN8 << tim::kIcFilterShift);
   at(tim::kTim5 + tim::kCcmr1) = encoder_input | (encoder_input << 8);
   at(tim::kTim5 + tim::kCcer) = 0;
   at(tim::kTim5 + tim::kSmcr) = tim::kSmsEncoderMode3;
@@ -117,7 +113,7 @@ void Stm32f4Port::init() {
   at(tim::kTim2 + tim::kArr) = 0xFFFFFFFF;
   const std::uint32_t filter = tim::kIcFilterN8 << tim::kIcFilterShift;
   at(tim::kTim2 + tim::kCcmr1) =
-      (tim::kCcsInputOwn | filter) | ((tim::kCcsInputOther | filter) << 8);  // IC1, IC2 on TI1
+      (tim::kCcsInputOwn | filter) | ((tim::kCcsInputOther | filter) << 8);       // IC1, IC2 on TI1
   at(tim::kTim2 + tim::kCcmr2) = tim::kOcModeForceInactive << tim::kOcModeShift;  // OC3
   at(tim::kTim2 + tim::kCr2) = tim::kMmsComparePulse << tim::kCr2MmsShift;
   configure_strobe_input(false);
@@ -215,7 +211,8 @@ void Stm32f4Port::load_slot_hardware(std::span<const std::uint32_t> words,
   // DMA: memory (the table, in SRAM: DMA2 cannot reach the CCM RAM) to BSRR,
   // 32-bit, one word per request, direct mode, transfer-complete and error interrupts.
   at(kSlotStream + dma::kSxPar) = static_cast<std::uint32_t>(kLedBsrr);
-  at(kSlotStream + dma::kSxM0ar) = static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(words.data()));
+  at(kSlotStream + dma::kSxM0ar) =
+      static_cast<std::uint32_t>(reinterpret_cast<std::uintptr_t>(words.data()));
   at(kSlotStream + dma::kSxNdtr) = static_cast<std::uint32_t>(words.size());
   at(kSlotStream + dma::kSxFcr) = 0;
   at(kSlotStream + dma::kSxCr) =
@@ -235,12 +232,42 @@ void Stm32f4Port::load_slot_hardware(std::span<const std::uint32_t> words,
   at(tim1 + tim::kDier) = tim::kDierUde;
 }
 
-void Stm32f4Port::prearm() {
-  load_slot_hardware(slot_words_, slot_setting_);
+PortStatus Stm32f4Port::prearm_slot_table(std::span<const std::uint32_t> words,
+                                          std::uint32_t slot_time_us) {
+  const SlotTimerSetting setting = slot_timer_setting(slot_time_us, clocks_.tim_apb2_hz);
+  if (words.empty() || words.size() > 0xFFFF || !setting.ok) return PortStatus::kError;
+  InterruptLock lock;
+  if (slot_state_ == SlotState::kRunning) return PortStatus::kError;  // the DMA is busy
+  load_slot_hardware(words, setting.period);
   // Trigger mode from ITR1 = TIM2 TRGO: the edge sets CEN (RM0090 17.3.14).
-  at(tim::kTim1 + tim::kSmcr) =
-      (tim::kTim1TsItr1Tim2 << tim::kSmcrTsShift) | tim::kSmsTrigger;
+  at(tim::kTim1 + tim::kSmcr) = (tim::kTim1TsItr1Tim2 << tim::kSmcrTsShift) | tim::kSmsTrigger;
   slot_state_ = SlotState::kPrearmed;
+  prearm_start_ = {};
+  return PortStatus::kOk;
+}
+
+PrearmStart Stm32f4Port::cancel_prearm() {
+  InterruptLock lock;
+  if (prearm_start_.started) {
+    // Started by an edge whose interrupt already ran (we are in its callback,
+    // or it reported the edge and the controller withdraws later).
+    PrearmStart out = prearm_start_;
+    out.edge_pending = !prearm_edge_reported_;
+    prearm_start_ = {};
+    return out;
+  }
+  if (slot_state_ != SlotState::kPrearmed) return {};
+  at(tim::kTim1 + tim::kSmcr) = 0;  // no further trigger
+  if ((at(tim::kTim1 + tim::kCr1) & tim::kCr1Cen) != 0) {
+    // An edge started it and its interrupt waits behind this lock: it plays on.
+    // Now is no earlier than the start (the guard decided for any start since
+    // the pre-arm, and a later recorded start only makes the history stricter).
+    slot_state_ = SlotState::kRunning;
+    return {true, now_locked(), true};
+  }
+  stop_slot_hardware();
+  slot_state_ = SlotState::kIdle;
+  return {};
 }
 
 PortStatus Stm32f4Port::start_slot_table(std::span<const std::uint32_t> words,
@@ -248,28 +275,12 @@ PortStatus Stm32f4Port::start_slot_table(std::span<const std::uint32_t> words,
   const SlotTimerSetting setting = slot_timer_setting(slot_time_us, clocks_.tim_apb2_hz);
   if (words.empty() || words.size() > 0xFFFF || !setting.ok) return PortStatus::kError;
   InterruptLock lock;
-  const bool same_table = words.data() == slot_words_.data() && words.size() == slot_words_.size();
-  if (in_trigger_callback_ && hardware_started_ && !start_confirmed_) {
-    // The pre-armed table already plays since the edge.
-    if (same_table && setting.period.psc == slot_setting_.psc) {
-      if (setting.period.arr == slot_setting_.arr) {
-        start_confirmed_ = true;
-        return PortStatus::kOk;
-      }
-      if (at(tim::kTim1 + tim::kCnt) + kArrMarginTicks < setting.period.arr) {
-        at(tim::kTim1 + tim::kArr) = setting.period.arr;  // ARPE 0: this slot already
-        slot_setting_ = setting.period;
-        start_confirmed_ = true;
-        return PortStatus::kOk;
-      }
-    }
-    start_confirmed_ = true;  // replaced below
-  }
-  // Software start: the first word one tick from now.
+  // Software start (the controller withdrew any pre-armed table first): the
+  // first word one tick from now.
   load_slot_hardware(words, setting.period);
   set_bits(tim::kTim1 + tim::kCr1, tim::kCr1Cen);
   slot_state_ = SlotState::kRunning;
-  if (in_trigger_callback_) prearm_enabled_ = true;
+  prearm_start_ = {};
   return PortStatus::kOk;
 }
 
@@ -277,7 +288,7 @@ void Stm32f4Port::stop_slot_table() {
   InterruptLock lock;
   stop_slot_hardware();
   slot_state_ = SlotState::kIdle;
-  prearm_enabled_ = false;
+  prearm_start_ = {};
 }
 
 void Stm32f4Port::on_slot_dma_interrupt() {
@@ -288,7 +299,7 @@ void Stm32f4Port::on_slot_dma_interrupt() {
     stop_slot_hardware();
     write_led_bank(all_off_word_);
     slot_state_ = SlotState::kIdle;
-    prearm_enabled_ = false;
+    prearm_start_ = {};
     fault_.store(true, std::memory_order_relaxed);
     return;
   }
@@ -298,33 +309,22 @@ void Stm32f4Port::on_slot_dma_interrupt() {
   at(tim::kTim1 + tim::kCr1) = tim::kCr1Urs;
   slot_state_ = SlotState::kIdle;
   const std::uint64_t now = now_locked();
+  // The controller pre-arms the next table itself, once its guard accepts it.
   if (listener_ != nullptr) listener_->on_slot_table_done(now);
-  if (prearm_enabled_ && slot_state_ == SlotState::kIdle) prearm();
 }
 
 template <typename Callback>
-void Stm32f4Port::run_trigger_callback(Callback&& callback) {
+void Stm32f4Port::run_trigger_callback(std::uint64_t edge_us, Callback&& callback) {
   // Did this edge start the pre-armed table (TIM1 enabled by its trigger)?
-  hardware_started_ = slot_state_ == SlotState::kPrearmed &&
-                      (at(tim::kTim1 + tim::kCr1) & tim::kCr1Cen) != 0;
-  if (slot_state_ == SlotState::kPrearmed && !hardware_started_) {
-    // Not this trigger source's edge (or not yet): no hardware start to confirm.
-    stop_slot_hardware();
-    slot_state_ = SlotState::kIdle;
+  if (slot_state_ == SlotState::kPrearmed && (at(tim::kTim1 + tim::kCr1) & tim::kCr1Cen) != 0) {
+    at(tim::kTim1 + tim::kSmcr) = 0;
+    slot_state_ = SlotState::kRunning;
+    prearm_start_ = {true, edge_us, false};
   }
-  if (hardware_started_) slot_state_ = SlotState::kRunning;
-  start_confirmed_ = false;
-  in_trigger_callback_ = true;
+  // The controller adopts it (cancel_prearm) from this callback; a table the
+  // guard accepted is never stopped here.
+  prearm_edge_reported_ = true;
   callback();
-  in_trigger_callback_ = false;
-  if (hardware_started_ && !start_confirmed_) {
-    // The controller started no exposure (guard, missed trigger, disarmed): dark.
-    stop_slot_hardware();
-    write_led_bank(all_off_word_);
-    slot_state_ = SlotState::kIdle;
-    if (prearm_enabled_) prearm();
-  }
-  hardware_started_ = false;
 }
 
 // ---------------------------------------------------------------------------
@@ -337,8 +337,7 @@ void Stm32f4Port::configure_strobe_input(bool active_low) {
   const std::uint32_t cc1 = tim::kCcerE | (active_low ? tim::kCcerP : 0u);
   const std::uint32_t cc2 = tim::kCcerE | (active_low ? 0u : tim::kCcerP);
   const std::uint32_t mask = 0xFFu;  // channels 1 and 2
-  modify(tim::kTim2 + tim::kCcer, mask,
-         (cc1 << tim::ccer_shift(1)) | (cc2 << tim::ccer_shift(2)));
+  modify(tim::kTim2 + tim::kCcer, mask, (cc1 << tim::ccer_shift(1)) | (cc2 << tim::ccer_shift(2)));
 }
 
 void Stm32f4Port::handle_strobe_capture(bool active, std::uint32_t captured) {
@@ -352,7 +351,7 @@ void Stm32f4Port::handle_strobe_capture(bool active, std::uint32_t captured) {
     if (listener_ != nullptr) listener_->on_strobe_edge(true, time);
     return;
   }
-  run_trigger_callback([&] {
+  run_trigger_callback(time, [&] {
     if (listener_ != nullptr) listener_->on_strobe_edge(true, time);
   });
 }
@@ -369,7 +368,7 @@ void Stm32f4Port::handle_frame_compare() {
     const bool missed_end =
         since(at(tim2 + tim::kCnt), end) >= 0 && (at(tim2 + tim::kSr) & tim::kSrCc3If) == 0;
     const std::uint64_t time = extend_capture(frame_start_lo_);
-    run_trigger_callback([&] {
+    run_trigger_callback(time, [&] {
       if (listener_ != nullptr) listener_->on_frame_tick(time);
     });
     if (!missed_end || !frame_running_) return;
@@ -456,22 +455,31 @@ std::size_t Stm32f4Port::config_page_size() {
   return kConfigSize;
 }
 
-PortStatus Stm32f4Port::read_config_page(std::span<std::uint8_t> out) {
-  if (out.size() > kConfigSize) return PortStatus::kError;
-  std::memcpy(out.data(), reinterpret_cast<const void*>(static_cast<std::uintptr_t>(kConfigBase)),
+PortStatus Stm32f4Port::read_config_page(int copy, std::size_t offset,
+                                         std::span<std::uint8_t> out) {
+  if (copy < 0 || copy >= kConfigCopies || offset > kConfigSize ||
+      out.size() > kConfigSize - offset)
+    return PortStatus::kError;
+  const std::uint32_t base = flash_sector_base(kConfigSectors[static_cast<std::size_t>(copy)]);
+  std::memcpy(out.data(), reinterpret_cast<const void*>(static_cast<std::uintptr_t>(base + offset)),
               out.size());
   return PortStatus::kOk;
 }
 
-PortStatus Stm32f4Port::erase_config_page() {
-  kick_watchdog();  // a sector erase stalls the CPU for up to ~0.5 s
-  return flash_erase_sector(kConfigSector);
+PortStatus Stm32f4Port::erase_config_page(int copy) {
+  if (copy < 0 || copy >= kConfigCopies) return PortStatus::kError;
+  kick_watchdog();  // a sector erase stalls the CPU: up to 0.5 s (16 KiB), 2 s (128 KiB)
+  return flash_erase_sector(kConfigSectors[static_cast<std::size_t>(copy)]);
 }
 
-PortStatus Stm32f4Port::write_config_page(std::span<const std::uint8_t> data) {
-  if (data.size() > kConfigSize) return PortStatus::kError;
+PortStatus Stm32f4Port::write_config_page(int copy, std::size_t offset,
+                                          std::span<const std::uint8_t> data) {
+  if (copy < 0 || copy >= kConfigCopies || offset > kConfigSize ||
+      data.size() > kConfigSize - offset)
+    return PortStatus::kError;
   kick_watchdog();
-  return flash_program(kConfigBase, data);
+  const std::uint32_t base = flash_sector_base(kConfigSectors[static_cast<std::size_t>(copy)]);
+  return flash_program(base + static_cast<std::uint32_t>(offset), data);
 }
 
 void Stm32f4Port::enter_bootloader() {

@@ -11,11 +11,33 @@
 // mode) the slot time of an exposure is the previous strobe pulse width / L,
 // since the current pulse's width is known only at its end.
 // The thermal guard checks every exposure before it starts; an exposure it
-// refuses stays dark and its event carries kEventGuardHit.
+// refuses stays dark and its event carries kEventGuardHit. Its history (when
+// the last lit exposure started, when it ended, each LED's run at its end) is
+// the LEDs' and outlives Arm, Disarm, faults and mode or code changes; a self
+// test is an exposure like any other. Only a power-on reset starts it empty;
+// after a watchdog or software reset the duty period counts from boot.
+// The invariant (docs/hardware.md, "Thermal guard"): for any two lit
+// exposures (self tests included) starting at a < b with none between, each
+// LED's on-time in the one starting at b is at most its duty cap times b - a,
+// and no LED stays on longer than its max_on_time, across exposures too.
 //
 // On the MCU the Port callbacks run in interrupt context and the command
 // methods in the main loop: the stm32f4 port must mask the strobe, frame and
 // slot interrupts around command handling (not needed on the sim port).
+//
+// Pre-arming (issue 15, finding 3): the port can start a table on the trigger
+// edge in hardware, before any callback. The controller pre-arms only the
+// table of the next exposure, at its slot time, once the guard accepts it for
+// a start at the moment of pre-arming; acceptance only grows with a later
+// start (longer period, no seam), so whatever edge starts it, the guard said
+// yes before any LED lit. A pre-armed table that an edge started is always
+// adopted as a lit exposure, also when SelectCode or Disarm withdraws it too
+// late. Otherwise the edge's callback decides and starts the table in software
+// (late by the interrupt latency, never early). The controller re-decides the
+// pre-arm whenever its inputs change: after each exposure, after a strobe
+// pulse ends (follow-exposure slot time), on SelectCode and in poll().
+// Tables are never rewritten while the DMA may read them: three of them
+// (playing, pending, and the one SelectCode builds into).
 // Freestanding C++20: no heap, no exceptions, no RTTI.
 
 #include <array>
@@ -128,6 +150,20 @@ class Controller final : public PortListener {
   /// kOk if code `code_id` may run with the current timing (frame period, guard).
   protocol::Status check_code_runnable(std::uint8_t code_id) const;
   void begin_exposure(std::uint64_t time_us);
+  /// Pre-arms the next exposure's table if the guard accepts it from now on
+  /// (withdrawing a different one first); nothing unless armed and idle between exposures.
+  void update_prearm();
+  /// Withdraws the pre-armed table; true if an edge had started it (then adopted).
+  bool withdraw_prearm();
+  /// Records the pre-armed table an edge started as the exposure in progress.
+  void adopt_prearm(const PrearmStart& start);
+  /// The guard's verdict on `stats` at `slot_time_us` for an exposure whose
+  /// LEDs light at `start_us`, given the history of lit exposures.
+  GuardVerdict guard_verdict(const LedOnStats& stats, std::uint32_t slot_time_us,
+                             std::uint64_t start_us) const;
+  /// Records a lit exposure (or self test) starting at `start_us` in the guard's history.
+  void record_lit_exposure(const LedOnStats& stats, std::uint64_t start_us,
+                           std::uint32_t slot_time_us);
   std::uint32_t slot_time_for_next_exposure(int code_length, std::uint16_t& flags) const;
   /// Records the exposure just started (lit) for the next one's seam check.
   void note_lit_exposure(const LedOnStats& stats, std::uint64_t start_us,
@@ -146,9 +182,20 @@ class Controller final : public PortListener {
   std::uint8_t config_flags_ = 0;
 
   CodeUpload upload_;
-  std::array<SlotTable, 2> tables_{};
+  std::array<SlotTable, 3> tables_{};
   int playing_table_ = 0;   ///< table of the active code
   int pending_table_ = -1;  ///< table taking over at the next exposure, -1 if none
+  /// The table pre-armed in the port (the next exposure's), if any.
+  struct Prearm {
+    bool active = false;
+    int table = 0;
+    std::uint32_t slot_time_us = 0;
+    std::uint16_t flags = 0;
+  };
+  Prearm prearm_;
+  /// An adopted pre-armed start whose edge callback is still to come: that
+  /// callback is the exposure's own edge, not a missed trigger.
+  bool adopted_edge_pending_ = false;
 
   // The exposure in progress (or the last one).
   std::uint64_t exposure_start_us_ = 0;
@@ -164,6 +211,9 @@ class Controller final : public PortListener {
   bool have_lit_exposure_ = false;
   std::uint64_t lit_end_us_ = 0;
   std::array<std::uint64_t, kMaxLeds> lit_trailing_on_us_{};
+  std::uint64_t lit_start_us_ = 0;  ///< start of the last lit exposure
+  /// The self test's table (its own, so a self test never writes a code's table).
+  std::array<std::uint32_t, kMaxLeds + 1> self_test_words_{};
   // Strobe pulse measurement (slave mode).
   bool strobe_active_ = false;
   std::uint64_t strobe_start_us_ = 0;

@@ -2,9 +2,11 @@
 // The bootloader's DFU mode interface: plain USB DFU 1.1 (not DfuSe) over the
 // Flash seam, as the USB contract in docs/protocol.md says.
 //
-// - DNLOAD block n (wValue = n from 0, at most wTransferSize bytes) goes to
-//   region.load_address + n * wTransferSize. Blocks must come in order
-//   (otherwise dfuERROR, errADDRESS); a block past the region: errADDRESS.
+// - DNLOAD block n (wValue = n from 0, at most wTransferSize bytes) goes right
+//   after the bytes of blocks 0..n-1: region.load_address + bytes received so
+//   far, so any transfer size the host picks (dfu-util -t 512) gives a
+//   contiguous image. Blocks must come in order (otherwise dfuERROR,
+//   errADDRESS); a block past the region: errADDRESS.
 //   Each flash sector is erased when a write first reaches it; a sector that
 //   starts below the application region (the bootloader's, the config page)
 //   is never erased or written.
@@ -18,7 +20,7 @@
 //   downloaded); failure: dfuERROR with errFIRMWARE, the device stays in DFU
 //   mode; success (bitManifestationTolerant): the next GETSTATUS says dfuIDLE
 //   and the application starts at the next USB reset or DFU_DETACH.
-// - UPLOAD block n returns the region from n * wTransferSize: up to the image
+// - UPLOAD block n returns the region from the bytes already uploaded: up to the image
 //   size of a valid-looking header, else the whole region; a short block
 //   (fewer bytes than wLength) ends the upload (dfuIDLE).
 // - ABORT returns to dfuIDLE from dfuIDLE and every download or upload state
@@ -106,6 +108,8 @@ class DfuMode final : public UsbFunction {
   bool block_pending_ = false;
   bool manifest_done_ = false;
   std::uint16_t pending_block_number_ = 0;
+  std::uint32_t pending_offset_ = 0;  ///< where the pending block goes in the region
+  std::uint32_t upload_offset_ = 0;   ///< bytes sent by this upload so far
   std::size_t pending_length_ = 0;
   std::array<std::uint8_t, kDfuTransferSize> block_{};
 };

@@ -54,14 +54,21 @@ class QemuPort final : public Port {
   PortStatus start_slot_table(std::span<const std::uint32_t> words,
                               std::uint32_t slot_time_us) override;
   void stop_slot_table() override;
+  /// \brief Not supported (no hardware trigger path on QEMU): every exposure
+  /// starts from its edge's callback.
+  PortStatus prearm_slot_table(std::span<const std::uint32_t>, std::uint32_t) override {
+    return PortStatus::kError;
+  }
+  PrearmStart cancel_prearm() override { return {}; }
   void configure_strobe_input(bool active_low) override { strobe_active_low_ = active_low; }
   PortStatus start_frame_timer(std::uint32_t period_us, std::uint32_t trigger_pulse_us) override;
   void stop_frame_timer() override;
   std::int32_t encoder_count() override { return encoder_.load(std::memory_order_relaxed); }
-  std::size_t config_page_size() override { return config_page_.size(); }
-  PortStatus read_config_page(std::span<std::uint8_t> out) override;
-  PortStatus erase_config_page() override;
-  PortStatus write_config_page(std::span<const std::uint8_t> data) override;
+  std::size_t config_page_size() override { return kConfigPageSize; }
+  PortStatus read_config_page(int copy, std::size_t offset, std::span<std::uint8_t> out) override;
+  PortStatus erase_config_page(int copy) override;
+  PortStatus write_config_page(int copy, std::size_t offset,
+                               std::span<const std::uint8_t> data) override;
   void kick_watchdog() override {}
   ResetCause reset_cause() override { return ResetCause::kPowerOn; }
   void enter_bootloader() override {}
@@ -106,7 +113,7 @@ class QemuPort final : public Port {
   std::atomic<std::int32_t> encoder_{0};
   std::atomic<std::uint32_t> led_writes_{0};
   std::array<std::uint16_t, kMaxLeds> brightness_{};
-  std::array<std::uint8_t, kConfigPageSize>
+  std::array<std::array<std::uint8_t, kConfigPageSize>, kConfigCopies>
       config_page_;  ///< zero-initialised in .bss, erased in the constructor
 };
 

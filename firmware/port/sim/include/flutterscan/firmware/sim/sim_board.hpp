@@ -44,6 +44,7 @@
 #include <vector>
 
 #include "flutterscan/common/image_header.hpp"
+#include "flutterscan/firmware/boot_decision.hpp"
 #include "flutterscan/firmware/command_handler.hpp"
 #include "flutterscan/firmware/controller.hpp"
 #include "flutterscan/firmware/settings.hpp"
@@ -123,6 +124,14 @@ class SimBoard {
   /// \brief Resets the chip (power cycle, reset button; `dfu_requested`: as if
   /// the application had asked for the bootloader). Calls the callback too.
   void reset(bool dfu_requested = false);
+  /// \brief A watchdog reset: SRAM (the BootRecord) survives, the bootloader
+  /// decides as on the chip (boot_decision.hpp: 3 unconfirmed starts in a row
+  /// keep it in DFU mode). Calls the callback too.
+  void watchdog_reset();
+  /// \brief The recovery pin (PB2) held high from now on (or released).
+  void set_recovery_pin(bool held) { recovery_pin_ = held; }
+  /// \brief Application starts since the last confirmation (the BootRecord).
+  std::uint32_t unconfirmed_starts() const { return firmware::unconfirmed_starts(boot_record_); }
 
   // Host side (usbdevfs) ----------------------------------------------------------
   ControlResult control_transfer(std::span<const std::uint8_t, 8> setup,
@@ -168,7 +177,7 @@ class SimBoard {
   int self_resets() const { return self_resets_; }
 
  private:
-  void boot(bool dfu_requested);
+  void boot(bool dfu_requested, ResetCause cause = ResetCause::kPowerOn);
   void teardown();
   /// After a host-side call: main loop, then a reset if the image asked for one.
   void after_host_call();
@@ -181,6 +190,9 @@ class SimBoard {
   int self_resets_ = 0;
   int bootloader_entries_seen_ = 0;
   std::function<void(BoardMode, std::uint32_t)> reenumerate_callback_;
+  BootRecord boot_record_{};  ///< no-init SRAM: invalid after a power-on
+  bool recovery_pin_ = false;
+  BootConfirmation confirmation_;
 
   std::array<std::uint8_t, 18> device_descriptor_{};
   std::unique_ptr<SimUsbController> usb_;

@@ -38,6 +38,21 @@ class SimFlash final : public Flash {
   /// \brief Back to the state just after construction: every byte erased,
   /// no erase or program counted, no failure injected (reuses the memory).
   void reset();
+  /// \brief Power fails during the flash operation (erase or program) numbered
+  /// `operation` from now (0: the next): an erase sets only the first `bytes`
+  /// bytes of its sector to 0xFF, a program writes only its first `bytes`
+  /// bytes; every operation after it fails until restore_power().
+  void lose_power_at_operation(int operation, std::size_t bytes) {
+    power_loss_countdown_ = operation;
+    power_loss_bytes_ = bytes;
+  }
+  /// \brief Power is back (what the loss left stays).
+  void restore_power() {
+    power_loss_countdown_ = -1;
+    powered_off_ = false;
+  }
+  /// \brief Erases and programs so far.
+  int operations() const { return operations_; }
   /// \brief Makes the next erase (`erase`) or program (`program`) calls fail.
   void set_failures(bool erase, bool program) {
     erase_fails_ = erase;
@@ -52,6 +67,12 @@ class SimFlash final : public Flash {
   std::vector<int> programs_;
   bool erase_fails_ = false;
   bool program_fails_ = false;
+  int operations_ = 0;
+  int power_loss_countdown_ = -1;
+  std::size_t power_loss_bytes_ = 0;
+  bool powered_off_ = false;
+  /// Counts an operation; the bytes it may complete (all, or a power loss's).
+  std::size_t operation_budget(std::size_t bytes);
 };
 
 }  // namespace flutterscan::firmware::sim

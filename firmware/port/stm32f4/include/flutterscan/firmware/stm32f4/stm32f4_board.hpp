@@ -15,6 +15,7 @@
 //   PA11/PA12 USB OTG FS DM/DP, PA9 VBUS sense (for the USB driver to come)
 //   PA13/PA14 SWD
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 
@@ -65,7 +66,9 @@ inline constexpr std::uint32_t kFlashBase = 0x08000000;
 /// Bootloader: sector 0 (16 KiB).
 inline constexpr std::uint32_t kBootloaderBase = kFlashBase;
 inline constexpr std::uint32_t kBootloaderSize = 16 * 1024;
-/// Config page: sector 1 (16 KiB, so SaveConfig erases 16 KiB, not 64 or 128).
+/// Config page: sector 1 (16 KiB, so SaveConfig erases 16 KiB, not 64 or 128);
+/// the second copy is in sector 11 (kConfigSectors), no other 16 KiB sector
+/// being free: SaveConfig erases one of them, the one without the newest copy.
 inline constexpr int kConfigSector = 1;
 inline constexpr std::uint32_t kConfigBase = 0x08004000;
 inline constexpr std::uint32_t kConfigSize = 16 * 1024;
@@ -98,6 +101,10 @@ constexpr int flash_sector_of(std::uint32_t address) {
   return -1;
 }
 
+/// The config pages, one copy each (Port::read_config_page's `copy`): sector 1,
+/// and the last sector, which no application image can reach.
+inline constexpr std::array<int, 2> kConfigSectors{kConfigSector, 11};
+
 // ---------------------------------------------------------------------------
 // Bootloader hand-off: a word at the bottom of SRAM that neither image's
 // .data/.bss covers (both linker scripts start SRAM above it). The app writes
@@ -105,6 +112,13 @@ constexpr int flash_sector_of(std::uint32_t address) {
 inline constexpr std::uint32_t kBootRequestAddress = 0x20000000;
 inline constexpr std::uint32_t kBootRequestReserved = 16;  ///< bytes kept free there
 inline constexpr std::uint32_t kBootRequestMagic = 0xB007DF11;
+/// The BootRecord (boot_decision.hpp: unconfirmed application starts) right
+/// after the hand-off word, inside the same reserved 16 bytes.
+inline constexpr std::uint32_t kBootRecordAddress = kBootRequestAddress + 4;
+/// Recovery pin: PB2 (BOOT1, unused by the ROM while BOOT0 is low), 10 kOhm to
+/// ground on the board; a jumper to 3.3 V at reset keeps the bootloader in DFU mode.
+inline constexpr int kRecoveryPort = 1;  // GPIOB
+inline constexpr int kRecoveryPin = 2;
 
 /// \brief The board configuration of the product image: four LEDs on PC0..PC3
 /// (boards with three LEDs leave PC3 unconnected; the code sets led_count 3).

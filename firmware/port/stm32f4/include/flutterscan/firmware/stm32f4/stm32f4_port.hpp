@@ -16,20 +16,24 @@
 //   frame start and inactive after the trigger pulse; OC3 drives the camera
 //   trigger on PB10 (master mode) and OC3REF is TIM2's TRGO, so pre-armed
 //   tables start on the frame edge in hardware too.
-// - Pre-arming: after an exposure's table completes, the same table and slot
-//   time are loaded again and TIM1 waits for the trigger. The edge interrupt
-//   then reports the edge; when the controller answers with the same table and
-//   slot setting (the normal case) the running sequence is confirmed; a slot
-//   time of the same prescaler is corrected in flight; anything else (a code
-//   switch, another prescaler) stops it and starts the new table in software,
-//   so that exposure's first slot is late by the interrupt latency (~1-2 us)
-//   and the old code's first slot shows for that long. An exposure the
-//   controller does not start (guard, state) is stopped at once, LEDs off.
-//   The first exposure after Arm always starts in software.
+// - Pre-arming (prearm_slot_table): only on the controller's request, for a
+//   table its guard has already accepted for any start from then on (issue
+//   15, finding 3: the port used to re-arm the last table by itself and the
+//   guard's refusal came after the LEDs were on). DMA and TIM1 are loaded and
+//   TIM1 waits for its trigger; the edge starts it in hardware. The edge
+//   interrupt records the start (its capture time) and the controller adopts
+//   it from the callback (cancel_prearm); a started table is never stopped
+//   for want of a confirmation. cancel_prearm from the main loop (SelectCode,
+//   Disarm) first removes the trigger, then reports a start that happened
+//   behind the interrupt lock (time: now, no earlier than the start). Without
+//   a pre-arm the callback starts the table in software, late by the
+//   interrupt latency, never before the guard decided. The controller never
+//   rewrites a table the DMA may read (controller.hpp).
 // - Encoder: TIM5 (32-bit) in encoder mode 3 on PA0/PA1.
 // - Brightness: TIM3 CH1..CH4 PWM at 20 kHz on PC6..PC9.
-// - Config page: flash sector 1 (16 KiB at 0x08004000), erased and
-//   programmed through the flash interface.
+// - Config pages: flash sector 1 (16 KiB at 0x08004000) and sector 11 (the
+//   first 16 KiB of its 128 KiB used), erased and programmed through the flash
+//   interface; SaveConfig rewrites only the one without the newest copy.
 // - Watchdog: IWDG; reset cause from RCC_CSR; enter_bootloader: hand-off word
 //   in SRAM, then a system reset.
 // ARM only. Only one instance may exist (it owns the interrupt handlers).
@@ -67,14 +71,18 @@ class Stm32f4Port final : public Port {
   PortStatus start_slot_table(std::span<const std::uint32_t> words,
                               std::uint32_t slot_time_us) override;
   void stop_slot_table() override;
+  PortStatus prearm_slot_table(std::span<const std::uint32_t> words,
+                               std::uint32_t slot_time_us) override;
+  PrearmStart cancel_prearm() override;
   void configure_strobe_input(bool active_low) override;
   PortStatus start_frame_timer(std::uint32_t period_us, std::uint32_t trigger_pulse_us) override;
   void stop_frame_timer() override;
   std::int32_t encoder_count() override;
   std::size_t config_page_size() override;
-  PortStatus read_config_page(std::span<std::uint8_t> out) override;
-  PortStatus erase_config_page() override;
-  PortStatus write_config_page(std::span<const std::uint8_t> data) override;
+  PortStatus read_config_page(int copy, std::size_t offset, std::span<std::uint8_t> out) override;
+  PortStatus erase_config_page(int copy) override;
+  PortStatus write_config_page(int copy, std::size_t offset,
+                               std::span<const std::uint8_t> data) override;
   void kick_watchdog() override;
   ResetCause reset_cause() override { return reset_cause_; }
   [[noreturn]] void enter_bootloader() override;
@@ -94,12 +102,11 @@ class Stm32f4Port final : public Port {
   void load_slot_hardware(std::span<const std::uint32_t> words, const TimerPeriod& setting);
   /// Stops TIM1 and the DMA stream; writes nothing to the LEDs.
   void stop_slot_hardware();
-  void prearm();
   void handle_strobe_capture(bool active, std::uint32_t captured);
   void handle_frame_compare();
   /// The listener callback for an edge that may have started a pre-armed table.
   template <typename Callback>
-  void run_trigger_callback(Callback&& callback);
+  void run_trigger_callback(std::uint64_t edge_us, Callback&& callback);
 
   LedPinMap pins_;
   std::uint32_t all_off_word_;
@@ -114,10 +121,8 @@ class Stm32f4Port final : public Port {
   SlotState slot_state_ = SlotState::kIdle;
   std::span<const std::uint32_t> slot_words_;  ///< the table playing or pre-armed
   TimerPeriod slot_setting_;
-  bool prearm_enabled_ = false;   ///< exposures run: pre-arm after each table
-  bool in_trigger_callback_ = false;
-  bool hardware_started_ = false;  ///< a pre-armed table started on this edge
-  bool start_confirmed_ = false;
+  PrearmStart prearm_start_;           ///< a pre-armed table an edge started, not yet taken
+  bool prearm_edge_reported_ = false;  ///< its edge's callback has run
 
   bool strobe_active_low_ = false;
   bool frame_running_ = false;
