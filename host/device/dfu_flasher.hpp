@@ -51,6 +51,12 @@ enum class DfuState : std::uint8_t {
 /// Bytes per DNLOAD/UPLOAD block (the contract's wTransferSize).
 inline constexpr std::size_t kDfuBlockSize = 1024;
 
+/// The longest the flasher waits on one bwPollTimeout (a sector erase takes under
+/// 2 s): a device asking for more (up to 4.6 hours) is waited on this long.
+inline constexpr std::chrono::milliseconds kMaxDfuPollSleep{5000};
+/// The longest the flasher waits for one block (or the manifest) in all.
+inline constexpr std::chrono::milliseconds kMaxDfuBusyWait{60'000};
+
 /// \brief A GETSTATUS reply.
 struct DfuStatus {
   std::uint8_t status = 0;  ///< bStatus (0 OK, 0x0A errFIRMWARE, ...)
