@@ -122,7 +122,9 @@ class SimCamera final : public CameraSource {
     if (o_.tile_width + 2 * sim::kMinBeltPx > o_.width)
       return "camera sim: tile_width " + std::to_string(o_.tile_width) +
              " does not fit the view width " + std::to_string(o_.width);
-    if (!(o_.speed_px_per_s > 0)) return "camera sim: speed_px_per_s must be > 0";
+    if (!(o_.speed_px_per_s > 0))
+      return "camera sim: option speed_px_per_s = " + number_text(o_.speed_px_per_s) +
+             " must be > 0 (the labels ride a moving belt; target=white stands still)";
     return common_checks();
   }
 

@@ -27,6 +27,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   if (json.is_discarded()) return 0;
   auto model = imaging::from_descriptor(json);
   if (!model.ok()) {
+    fuzz::trace("descriptor refused: " + model.error());
     FUZZ_CHECK(!model.error().empty(), "a refused descriptor without a message");
     return 0;
   }
@@ -56,10 +57,12 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                                                            : imaging::BayerMode::kRawPlanes)
                    : imaging::deblur(electrons, m, options);
   if (!result.ok()) {
+    fuzz::trace("deblur refused: " + result.error());
     FUZZ_CHECK(!result.error().empty(), "a refused deblur without a message");
     return 0;
   }
   const imaging::Plane& latent = result.value().latent;
+  fuzz::trace("deblurred, blur " + std::to_string(m.blur_px));
   FUZZ_CHECK(latent.width == kWidth && latent.height == kHeight,
              "latent " + std::to_string(latent.width) + " x " + std::to_string(latent.height));
   for (float v : latent.pixels)

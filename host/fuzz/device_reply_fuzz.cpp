@@ -1,18 +1,22 @@
 // libFuzzer target: the host's parsing of what a controller sends, fed as a
 // hostile or broken device would send it.
 //
-// Byte 0 picks the surface:
-// - even: the controller client (host/device/controller_client.hpp) over a fake
+// Byte 0 % 3 picks the surface:
+// - 0: the controller client (host/device/controller_client.hpp) over a fake
 //   Transport. Each request the client writes lets the device answer with the
 //   next scripted IN reports (0-3 of them, any bytes: replies, exposure events,
 //   junk), optionally with the command and sequence bytes of the request copied
 //   in so that they get past the matching and into the payload parsers. The
-//   client connects (GetInfo handshake), then runs up to 24 commands chosen by
+//   client connects (GetInfo handshake), then runs up to 8 commands chosen by
 //   the input and reads the events that came in. When the script runs out the
 //   device is gone.
-// - odd: the DFU request sequence (dfu_flasher.hpp) against a bootloader whose
+// - 1: the DFU request sequence (dfu_flasher.hpp) against a bootloader whose
 //   every GETSTATUS and UPLOAD reply and every transfer result is scripted:
 //   dfu_get_status, dfu_make_idle, dfu_download of a small image, dfu_upload.
+// - 2: reports one after the other (a length byte, then the bytes) through the
+//   parsers the client uses on each: parse_message, the status texts, and
+//   decode_payload of every reply type and the exposure event (fast: most of a
+//   campaign's executions; the client's reply wait makes mode 0 slow).
 // Oracles: every failure carries a message; the flasher never sleeps more than
 // kMaxDfuPollSleep at a time nor kMaxDfuBusyWait on one block (a device asking
 // for 4.6 hours per poll would have hung `flutterscan flash`); UPLOAD returns at
@@ -35,7 +39,9 @@ namespace {
 /// A device whose IN reports come from the input, released request by request.
 class ScriptedTransport final : public Transport {
  public:
-  explicit ScriptedTransport(fuzz::Bytes& in) : in_(in) {}
+  /// `events_sent` outlives the transport (the client's reader thread may drop it first).
+  ScriptedTransport(fuzz::Bytes& in, std::shared_ptr<std::uint64_t> events_sent)
+      : in_(in), events_sent_(std::move(events_sent)) {}
 
   Expected<Done> write_report(std::span<const std::uint8_t> report) override {
     std::lock_guard lock(mutex_);
@@ -55,7 +61,7 @@ class ScriptedTransport final : public Transport {
         out[0] = report[0];
         out[1] = report[1];
       }
-      if (out[0] == static_cast<std::uint8_t>(Command::kExposureEvent)) ++events_sent_;
+      if (out[0] == static_cast<std::uint8_t>(Command::kExposureEvent)) ++*events_sent_;
       queue_.push_back(out);
     }
     changed_.notify_all();
@@ -83,47 +89,46 @@ class ScriptedTransport final : public Transport {
   }
   std::string description() const override { return "scripted device"; }
 
-  std::uint64_t events_sent() const {
-    std::lock_guard lock(mutex_);
-    return events_sent_;
-  }
-
  private:
   fuzz::Bytes& in_;
   mutable std::mutex mutex_;
   std::condition_variable changed_;
   std::deque<Report> queue_;
   bool gone_ = false;
-  std::uint64_t events_sent_ = 0;
+  std::shared_ptr<std::uint64_t> events_sent_;  ///< written on the writing thread only
 };
 
 template <typename T>
 void check_outcome(const Expected<T>& result, const char* what) {
+  fuzz::trace(std::string(what) + ": " + (result.ok() ? "ok" : result.error().message));
   if (!result.ok())
     FUZZ_CHECK(!result.error().message.empty(), std::string(what) + " failed without a message");
 }
 
 void fuzz_client(fuzz::Bytes& in) {
-  std::shared_ptr<ScriptedTransport> transport;
+  auto events_sent = std::make_shared<std::uint64_t>(0);
+  bool opened = false;
   ClientOptions options;
-  options.reply_timeout = std::chrono::milliseconds(5);
-  options.retries = in.u8() % 2;
+  options.reply_timeout = std::chrono::milliseconds(3);  // 1 ms rounds to none
+  options.retries = 0;
+  in.u8();  // (was: retries; kept so that the corpus stays valid)
   options.reconnect = false;
   options.event_queue_limit = 8;
   auto opener = [&]() -> Expected<std::unique_ptr<Transport>> {
-    if (transport) return fail<std::unique_ptr<Transport>>(ErrorKind::kGone, "opened once");
-    auto t = std::make_unique<ScriptedTransport>(in);
-    transport = std::shared_ptr<ScriptedTransport>(t.get(), [](ScriptedTransport*) {});
-    return Expected<std::unique_ptr<Transport>>::success(std::move(t));
+    if (opened) return fail<std::unique_ptr<Transport>>(ErrorKind::kGone, "opened once");
+    opened = true;
+    return Expected<std::unique_ptr<Transport>>::success(
+        std::make_unique<ScriptedTransport>(in, events_sent));
   };
   auto client = ControllerClient::connect(opener, options);
   if (!client.ok()) {
+    fuzz::trace("connect: " + client.error().message);
     FUZZ_CHECK(!client.error().message.empty(), "connect failed without a message");
     return;
   }
   ControllerClient& c = *client.value();
   std::uint64_t events_seen = 0;
-  for (int i = 0; i < 24 && c.connected(); ++i) {
+  for (int i = 0; i < 8 && c.connected(); ++i) {
     switch (in.u8() % 12) {
       case 0:
         check_outcome(c.status(), "status");
@@ -177,9 +182,9 @@ void fuzz_client(fuzz::Bytes& in) {
   }
   while (c.next_event(std::chrono::milliseconds(0))) ++events_seen;
   const ClientStats stats = c.stats();
-  FUZZ_CHECK(stats.events <= transport->events_sent(),
-             "the client counted " + std::to_string(stats.events) + " events of " +
-                 std::to_string(transport->events_sent()) + " sent");
+  FUZZ_CHECK(stats.events <= *events_sent, "the client counted " + std::to_string(stats.events) +
+                                               " events of " + std::to_string(*events_sent) +
+                                               " sent");
   FUZZ_CHECK(events_seen <= stats.events, "more events read than received");
 }
 
@@ -250,14 +255,55 @@ void fuzz_dfu(fuzz::Bytes& in) {
              "the flasher waited " + std::to_string(slept.count()) + " ms on a busy device");
 }
 
+/// Reports one by one as the client's parsers take them: header, status, the
+/// payload of every reply type and the exposure event.
+void fuzz_reports(fuzz::Bytes& in) {
+  while (!in.empty()) {
+    const std::size_t length = in.u8() % (protocol::kReportSize + 8);
+    const std::vector<std::uint8_t> report = in.take(length);
+    const auto message = protocol::parse_message(report);
+    const bool fits = report.size() >= protocol::kHeaderSize &&
+                      report.size() <= protocol::kReportSize &&
+                      report[2] <= report.size() - protocol::kHeaderSize;
+    FUZZ_CHECK(message.ok() == fits, "parse_message disagrees with the report's lengths");
+    if (!message.ok()) continue;
+    const auto payload = message.value().payload;
+    FUZZ_CHECK(payload.size() == report[2], "payload length");
+    const auto command = static_cast<protocol::Command>(report[0]);
+    const auto status = static_cast<protocol::Status>(report[3]);
+    FUZZ_CHECK(!rejection_message(command, status).empty() && command_name(command) != nullptr,
+               "texts");
+    FUZZ_CHECK(!protocol_mismatch_message(report[0]).empty(), "mismatch text");
+    auto decodes = [&](auto tag) {
+      using T = decltype(tag);
+      const auto decoded = protocol::decode_payload<T>(payload);
+      FUZZ_CHECK(decoded.ok() == (payload.size() == sizeof(T)), "decode_payload length check");
+    };
+    decodes(protocol::InfoReply{});
+    decodes(protocol::StatusReply{});
+    decodes(protocol::SetCodeReply{});
+    decodes(protocol::SelectCodeReply{});
+    decodes(protocol::SelfTestReply{});
+    decodes(protocol::SaveConfigReply{});
+    decodes(protocol::ExposureEvent{});
+  }
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size > 16 * 1024) return 0;
   fuzz::Bytes in(data, size);
-  if (in.u8() % 2 == 0)
-    fuzz_client(in);
-  else
-    fuzz_dfu(in);
+  switch (in.u8() % 3) {
+    case 0:
+      fuzz_client(in);
+      break;
+    case 1:
+      fuzz_dfu(in);
+      break;
+    default:
+      fuzz_reports(in);
+      break;
+  }
   return 0;
 }

@@ -49,6 +49,7 @@ void fuzz_file(fuzz::Bytes& in) {
   const auto bytes = in.rest();
   auto frame = app::decode_frame(bytes, "fuzz");
   if (!frame.ok()) {
+    fuzz::trace("file refused: " + frame.error());
     FUZZ_CHECK(frame.error().find("fuzz") != std::string::npos,
                "a refusal that does not name the file: " + frame.error());
     return;
@@ -80,6 +81,7 @@ void fuzz_camera_frame(fuzz::Bytes& in) {
   const bool mono = f == PixelFormat::kMono8 || f == PixelFormat::kMono16;
   auto dn = capture::frame_to_dn(frame);
   if (!dn.ok()) {
+    fuzz::trace("frame refused: " + dn.error());
     FUZZ_CHECK(!dn.error().empty(), "a refused frame without a message");
   } else {
     FUZZ_CHECK(
@@ -98,6 +100,7 @@ void fuzz_camera_frame(fuzz::Bytes& in) {
     FUZZ_CHECK(!electrons.error().empty(), "a refused conversion without a message");
     return;
   }
+  fuzz::trace("frame converted");
   check_finite(electrons.value().electrons, "electrons");
   FUZZ_CHECK(electrons.value().saturated_share >= 0 && electrons.value().saturated_share <= 1,
              "saturated share");

@@ -28,6 +28,13 @@ namespace flutterscan::fuzz {
       ::flutterscan::fuzz::oracle_failed(#condition, (detail), __FILE__, __LINE__); \
   } while (false)
 
+/// \brief With FUZZ_TRACE=1 in the environment: one line per outcome (to check
+/// that seeds get where they should).
+inline void trace(const std::string& text) {
+  static const bool on = std::getenv("FUZZ_TRACE") != nullptr;
+  if (on) std::fprintf(stderr, "  %s\n", text.c_str());
+}
+
 /// \brief Typed values from the input, front to back; zeros after the end.
 class Bytes {
  public:

@@ -13,6 +13,7 @@
 #include <fstream>
 #include <iterator>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "flutterscan/common/image_header.hpp"
@@ -34,9 +35,12 @@ void put(const std::string& target, const std::string& name, const Bytes& bytes)
              static_cast<std::streamsize>(bytes.size()));
 }
 
-Bytes with_mode(std::uint8_t mode, const std::string& text) {
-  Bytes out{mode};
-  out.insert(out.end(), text.begin(), text.end());
+/// `mode` then `body` (built by size, not insert: GCC 12 warns falsely on the latter).
+template <typename Body>
+Bytes with_mode(std::uint8_t mode, const Body& body) {
+  Bytes out(1 + body.size());
+  out[0] = mode;
+  std::copy(body.begin(), body.end(), out.begin() + 1);
   return out;
 }
 
@@ -101,9 +105,7 @@ void frame_seeds() {
         cv::randu(mat, 0, depth == CV_8U ? 255 : 4095);
         std::vector<std::uint8_t> encoded;
         cv::imencode(ext, mat, encoded);
-        Bytes seed{0};
-        seed.insert(seed.end(), encoded.begin(), encoded.end());
-        put("frame_decode", "file-" + std::to_string(n++) + ext, seed);
+        put("frame_decode", "file-" + std::to_string(n++) + ext, with_mode(0, encoded));
       }
   // Camera frames: format, width, height, bit depth, stride byte (< 200: packed), pixels.
   for (std::uint8_t format = 0; format < 9; ++format) {
@@ -139,7 +141,7 @@ Bytes firmware(std::size_t payload) {
 
 std::string hex_line(std::uint8_t type, std::uint16_t address, const std::uint8_t* data,
                      std::size_t n) {
-  char text[8];
+  char text[16];
   std::string line = ":";
   unsigned sum = static_cast<unsigned>(n) + (address >> 8) + (address & 0xFF) + type;
   std::snprintf(text, sizeof text, "%02X%04X%02X", static_cast<unsigned>(n), address, type);
@@ -156,8 +158,7 @@ std::string hex_line(std::uint8_t type, std::uint16_t address, const std::uint8_
 void firmware_seeds() {
   const Bytes image = firmware(700);
   const std::uint32_t base = kStm32f405AppRegion.load_address;
-  Bytes bin{0};
-  bin.insert(bin.end(), image.begin(), image.end());
+  const Bytes bin = with_mode(0, image);
   put("firmware_image", "bin", bin);
   put("firmware_image", "bin-restamp", [&] {
     Bytes b = bin;
@@ -191,10 +192,10 @@ void firmware_seeds() {
   le32(elf, 64, base);
   le32(elf, 68, static_cast<std::uint32_t>(image.size()));
   le32(elf, 72, static_cast<std::uint32_t>(image.size()));
-  elf.insert(elf.end(), image.begin(), image.end());
-  Bytes elf_seed{2};
-  elf_seed.insert(elf_seed.end(), elf.begin(), elf.end());
-  put("firmware_image", "elf", elf_seed);
+  const std::size_t headers = elf.size();
+  elf.resize(headers + image.size());
+  std::copy(image.begin(), image.end(), elf.begin() + static_cast<std::ptrdiff_t>(headers));
+  put("firmware_image", "elf", with_mode(2, elf));
 }
 
 void device_seeds() {
@@ -211,7 +212,7 @@ void device_seeds() {
     for (std::uint8_t b : payload) report[i++] = b;
     client.insert(client.end(), report.begin(), report.end());
   };
-  reply(0x05, 40, 0, {1, 0});
+  reply(0x05, 28, 0, {1, 0});  // GetInfo: protocol major 1, 28 bytes
   for (std::uint8_t command : {0, 1, 3, 4, 11, 2, 5, 6}) {
     client.push_back(command);
     reply(0x05, 0, 0, {});
@@ -225,20 +226,56 @@ void device_seeds() {
   report[2] = 24;
   event.insert(event.end(), report.begin(), report.end());
   put("device_reply", "client-event", event);
-  // DFU: GETSTATUS replies (status, poll timeout, state, string) for idle, busy, done.
-  Bytes dfu{1};
-  for (int i = 0; i < 40; ++i) {
-    dfu.push_back(1);  // transfer ok
-    dfu.push_back(2);  // a 6-byte GETSTATUS
-    const std::uint8_t state = i % 3 == 0 ? 2 : (i % 3 == 1 ? 4 : 5);
-    for (std::uint8_t b : {std::uint8_t{0}, std::uint8_t{10}, std::uint8_t{0}, std::uint8_t{0},
-                           state, std::uint8_t{0}})
-      dfu.push_back(b);
+  // DFU, in the order fuzz_dfu asks: GETSTATUS (a "how" byte 2, then its 6 bytes:
+  // status, bwPollTimeout, state, string), transfer results (1: ok), the image size
+  // (2049 bytes: 3 blocks) and the upload length (1500: one full block, one short).
+  auto dfu_seed = [](std::uint8_t poll_high) {
+    Bytes dfu{1};
+    auto status = [&](std::uint8_t state) {
+      for (std::uint8_t b : {std::uint8_t{2}, std::uint8_t{0}, std::uint8_t{10}, std::uint8_t{0},
+                             poll_high, state, std::uint8_t{0}})
+        dfu.push_back(b);
+    };
+    status(2);                                 // dfu_get_status: dfuIDLE
+    status(2);                                 // dfu_make_idle
+    dfu.push_back(0x00), dfu.push_back(0x08);  // image size 2049
+    status(2);                                 // download: make_idle
+    for (int block = 0; block < 3; ++block) {
+      dfu.push_back(1);  // DNLOAD ok
+      status(4);         // dfuDNBUSY
+      status(5);         // dfuDNLOAD-IDLE
+    }
+    dfu.push_back(1);                          // the zero-length DNLOAD
+    status(7);                                 // dfuMANIFEST
+    status(2);                                 // dfuIDLE
+    dfu.push_back(0xDC), dfu.push_back(0x05);  // upload 1500 bytes
+    status(2);                                 // upload: make_idle
+    dfu.push_back(2);                          // a full block
+    for (int i = 0; i < 1024; ++i) dfu.push_back(static_cast<std::uint8_t>(i));
+    dfu.push_back(1), dfu.push_back(0x10), dfu.push_back(0x00);  // a short block of 16
+    for (int i = 0; i < 16; ++i) dfu.push_back(static_cast<std::uint8_t>(i));
+    status(9);         // dfuUPLOAD-IDLE
+    dfu.push_back(1);  // ABORT ok
+    status(2);
+    return dfu;
+  };
+  // Reports for the parsers: a length byte, then the report (GetInfo, GetStatus
+  // with a refusal, an exposure event, a short one).
+  Bytes reports{2};
+  for (const auto& [command, length, status] : {std::tuple{0x01, 28, 0}, std::tuple{0x09, 0, 5},
+                                                std::tuple{0x80, 32, 0}, std::tuple{0x02, 2, 0}}) {
+    reports.push_back(64);
+    Bytes r(64, 0);
+    r[0] = static_cast<std::uint8_t>(command);
+    r[2] = static_cast<std::uint8_t>(length);
+    r[3] = static_cast<std::uint8_t>(status);
+    for (std::size_t i = 4; i < 4 + static_cast<std::size_t>(length); ++i)
+      r[i] = static_cast<std::uint8_t>(i);
+    for (std::uint8_t b : r) reports.push_back(b);
   }
-  put("device_reply", "dfu", dfu);
-  Bytes slow = dfu;
-  slow[4] = 0xFF, slow[5] = 0xFF, slow[6] = 0xFF;  // bwPollTimeout 4.6 hours
-  put("device_reply", "dfu-slow", slow);
+  put("device_reply", "reports", reports);
+  put("device_reply", "dfu", dfu_seed(0));
+  put("device_reply", "dfu-slow", dfu_seed(0xFF));  // bwPollTimeout 0xFF000A ms: 4.6 hours
 }
 
 void pipeline_seeds() {

@@ -5,7 +5,7 @@
 // black level, gain, bit depth), the code (a one-of-3 code of 3..52 slots) and
 // the processing (method, model choice, blur checks, rolling shutter) go
 // through check_config, the blur range check, frame_model, frame_to_electrons
-// and deblur_fitting_model, on an RGB16 or mono16 frame of 16..80 x 16..48 px
+// and deblur_fitting_model, on an RGB16 or mono16 frame of 16..48 x 12..16 px
 // with a few label-like bars.
 // Oracles: an accepted config's frame either is flagged blur-out-of-range, or
 // gets a model, or is refused with a message; a deblurred frame is finite and of
@@ -16,11 +16,18 @@
 
 #include "capture/frame_pixels.hpp"
 #include "fuzz_support.hpp"
+#include "imaging/capture_descriptor.hpp"
 #include "session/frame_model.hpp"
 #include "session/model_fit.hpp"
 #include "session/session_config.hpp"
 
 using namespace flutterscan;
+
+namespace {
+imaging::Method options_method(const session::SessionConfig& config) {
+  return config.processing.method;
+}
+}  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   if (size > 4096) return 0;
@@ -53,6 +60,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   config.processing.choose_model = in.flag();
   config.processing.blur_check_every = in.u8() % 3;
   if (const std::string problem = session::check_config(config); !problem.empty()) {
+    fuzz::trace("config refused: " + problem);
     FUZZ_CHECK(problem.find('.') != std::string::npos, "a refusal naming no key: " + problem);
     return 0;
   }
@@ -65,8 +73,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   capture::Frame frame;
   const bool mono = in.u8() % 4 == 0;
   frame.format.pixel_format = mono ? capture::PixelFormat::kMono16 : capture::PixelFormat::kRgb16;
-  frame.format.width = 16 + static_cast<int>(in.u8() % 65);
-  frame.format.height = 16 + static_cast<int>(in.u8() % 33);
+  // A few sizes only: FFT plans are made once per row length, and cached.
+  static constexpr int kWidths[] = {16, 24, 32, 48}, kHeights[] = {12, 16};
+  frame.format.width = kWidths[in.u8() % 4];
+  frame.format.height = kHeights[in.u8() % 2];
   frame.format.bit_depth = o.bit_depth;
   const int samples = mono ? 1 : 3;
   frame.data.resize(static_cast<std::size_t>(frame.format.width) * frame.format.height * samples *
@@ -84,16 +94,24 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
 
   const std::string out_of_range = session::blur_out_of_range(event, o, frame.format);
   if (!out_of_range.empty()) {
+    fuzz::trace(out_of_range);
     FUZZ_CHECK(out_of_range.find("blur-out-of-range") != std::string::npos, out_of_range);
     return 0;  // flagged, the session goes on
   }
   auto model = session::frame_model(event, config.controller.parsed_code, config, frame.format);
   if (!model.ok()) {
+    fuzz::trace("model refused: " + model.error());
     FUZZ_CHECK(!model.error().empty(), "a model refused without a message");
     return 0;
   }
+  fuzz::trace("model " + imaging::to_descriptor(model.value()).dump() + ", method " +
+              imaging::method_name(options_method(config)) + ", choose " +
+              std::to_string(config.processing.choose_model) + ", line time " +
+              std::to_string(o.line_time_us) + ", " + std::to_string(frame.format.width) + "x" +
+              std::to_string(frame.format.height));
   auto electrons = capture::frame_to_electrons(frame, model.value());
   if (!electrons.ok()) {
+    fuzz::trace("conversion refused: " + electrons.error());
     FUZZ_CHECK(!electrons.error().empty(), "a conversion refused without a message");
     return 0;
   }
@@ -112,6 +130,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       session::deblur_fitting_model(electrons.value().saturated_share, electrons.value().electrons,
                                     model.value(), options, fit, in.u8());
   if (!fitted.ok()) {
+    fuzz::trace("deblur refused: " + fitted.error());
     FUZZ_CHECK(!fitted.error().empty(), "a deblur refused without a message");
     FUZZ_CHECK(fitted.error().find("does not fit") == std::string::npos &&
                    fitted.error().find("not shorter than the image") == std::string::npos,
@@ -119,6 +138,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     return 0;
   }
   const imaging::Plane& latent = fitted.value().latent;
+  fuzz::trace("deblurred, blur " + std::to_string(model.value().blur_px));
   FUZZ_CHECK(latent.width == frame.format.width && latent.height == frame.format.height,
              "latent of another size");
   for (float v : latent.pixels) FUZZ_CHECK(std::isfinite(v), "a deblurred pixel is not finite");

@@ -17,6 +17,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const std::string text(reinterpret_cast<const char*>(data), size);
   auto parsed = session::parse_config(text, "fuzz.toml");
   if (!parsed.ok()) {
+    fuzz::trace("parse: " + parsed.error());
     FUZZ_CHECK(parsed.error().rfind("fuzz.toml", 0) == 0,
                "parse error without the file: " + parsed.error());
     return 0;
@@ -24,6 +25,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   session::SessionConfig config = parsed.value();
   const std::string problem = session::check_config(config);
   if (!problem.empty()) {
+    fuzz::trace("check: " + problem);
     bool names_a_key = false;
     for (const char* section :
          {"camera.", "controller.", "optics.", "processing.", "output.", "results."})

@@ -197,6 +197,7 @@ Result<BlurEstimate, std::string> estimate_blur(const Image& electrons, const Ca
   if (row_step < 1) return Out::failure("the row step must be 1 or more");
   // Before anything is sized by the blur: the frame, and the largest blur searched.
   if (auto problem = image_problem(electrons); !problem.empty()) return Out::failure(problem);
+  if (auto problem = model_scale_problem(model); !problem.empty()) return Out::failure(problem);
   if (auto problem = blur_fit_problem(max_px, extent_along_motion(electrons, model.direction), 2,
                                       "the largest blur searched");
       !problem.empty())
@@ -259,6 +260,7 @@ Result<double, std::string> cross_channel_residual(const Image& electrons,
   if (row_step < 1) return Out::failure("the row step must be 1 or more");
   // Before anything is sized by the blur (the cost's rows are padded by it).
   if (auto problem = image_problem(electrons); !problem.empty()) return Out::failure(problem);
+  if (auto problem = model_scale_problem(model); !problem.empty()) return Out::failure(problem);
   if (auto problem = blur_fit_problem(
           model.blur_px, extent_along_motion(electrons, model.direction), 2, "the blur");
       !problem.empty())

@@ -82,6 +82,7 @@ Result<DeblurResult, std::string> deblur(const Image& electrons, const CaptureMo
   using Out = Result<DeblurResult, std::string>;
   if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
   if (auto problem = image_problem(electrons); !problem.empty()) return Out::failure(problem);
+  if (auto problem = model_scale_problem(model); !problem.empty()) return Out::failure(problem);
   if (electrons.channel_count() != model.channels)
     return Out::failure("the frame has " + std::to_string(electrons.channel_count()) +
                         " channels but the capture model " + std::to_string(model.channels));

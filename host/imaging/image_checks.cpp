@@ -28,6 +28,19 @@ std::string image_problem(const Image& image) {
   return {};
 }
 
+std::string model_scale_problem(const CaptureModel& model) {
+  for (double v : model.crosstalk)
+    if (!(v <= kMaxCrosstalk))
+      return "a crosstalk entry (" + std::to_string(v) + ") is beyond " +
+             std::to_string(static_cast<int>(kMaxCrosstalk));
+  for (const auto* values : {&model.led_electrons, &model.ambient_electrons})
+    for (double v : *values)
+      if (!(v <= kMaxModelElectrons))
+        return "the model's light (" + std::to_string(v) + " e-) is beyond " +
+               std::to_string(static_cast<long long>(kMaxModelElectrons)) + " e-";
+  return {};
+}
+
 int extent_along_motion(const Image& image, Direction direction) {
   const bool along_x = direction == Direction::kPlusX || direction == Direction::kMinusX;
   return along_x ? image.width() : image.height();

@@ -15,6 +15,11 @@ namespace flutterscan::imaging {
 /// empty if it can.
 std::string image_problem(const Image& image);
 
+/// \brief Why the model's light scale cannot be computed with (crosstalk entries
+/// beyond kMaxCrosstalk, LED or ambient electrons beyond kMaxModelElectrons: the
+/// PSFs' spectra, squared in float, would overflow to inf and NaN); empty if fine.
+std::string model_scale_problem(const CaptureModel& model);
+
 /// \brief The image's extent along `direction`'s motion, pixels.
 int extent_along_motion(const Image& image, Direction direction);
 

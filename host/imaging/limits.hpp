@@ -18,4 +18,11 @@ inline constexpr int kMaxFrameSidePx = 16384;
 /// The most pixels of one frame (a 64-megapixel sensor).
 inline constexpr long long kMaxFramePixels = 64LL << 20;
 
+/// The largest crosstalk entry (a camera channel's response to an LED relative to
+/// its own, about 0..1 in practice).
+inline constexpr double kMaxCrosstalk = 1000;
+
+/// The most electrons per slot (LED) or per exposure (ambient) a model may say.
+inline constexpr double kMaxModelElectrons = 1e9;
+
 }  // namespace flutterscan::imaging

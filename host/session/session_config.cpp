@@ -355,6 +355,13 @@ std::string check_config(SessionConfig& c) {
     return problem("controller.sync", "must be slave or master");
   if (c.controller.sync == "master" && c.controller.frame_period_us == 0)
     return problem("controller.frame_period_us", "must be set (> 0) for master sync");
+  // The controller takes 0 (unset) or kMinFramePeriodUs..kMaxFramePeriodUs, in any sync mode.
+  if (c.controller.frame_period_us != 0 &&
+      (c.controller.frame_period_us < protocol::kMinFramePeriodUs ||
+       c.controller.frame_period_us > protocol::kMaxFramePeriodUs))
+    return outside("controller.frame_period_us", c.controller.frame_period_us,
+                   "0 (unset) or " + std::to_string(protocol::kMinFramePeriodUs) + ".." +
+                       std::to_string(protocol::kMaxFramePeriodUs) + " us");
   if (!(c.optics.px_per_count > 0))
     return problem("optics.px_per_count", "must be > 0" + got(c.optics.px_per_count));
   // Sizes bounded where they enter (docs/session.md, "Bounds"): a blur is at most
@@ -410,6 +417,12 @@ std::string check_config(SessionConfig& c) {
     return outside("optics.read_noise_e", c.optics.read_noise_e, "[0, 10000] e-");
   if (!(c.optics.paper_reflectance > 0 && c.optics.paper_reflectance <= 1))
     return outside("optics.paper_reflectance", c.optics.paper_reflectance, "(0, 1]");
+  for (std::size_t i = 0; i < c.optics.crosstalk.size(); ++i)
+    if (!(c.optics.crosstalk[i] >= 0 && c.optics.crosstalk[i] <= kMaxCrosstalk))
+      return outside(
+          "optics.crosstalk[" + std::to_string(i / 3) + "][" + std::to_string(i % 3) + "]",
+          c.optics.crosstalk[i], "[0, " + number_text(kMaxCrosstalk) + "]",
+          "a channel's response to an LED, about 0..1");
   const double full_scale_dn = std::pow(2.0, c.optics.bit_depth) - 1;
   if (!(c.optics.black_level_dn >= 0 && c.optics.black_level_dn < full_scale_dn))
     return outside(

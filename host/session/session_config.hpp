@@ -123,6 +123,7 @@ inline constexpr double kMaxPxPerCount = 1000;      ///< optics.px_per_count
 inline constexpr double kMaxElectrons = 1e9;        ///< optics.electrons, full_well_e
 inline constexpr std::size_t kMaxQueueDepth = 256;  ///< processing.queue_depth
 inline constexpr double kMaxDiskBudgetMb = 1e9;     ///< output.disk_budget_mb (a petabyte)
+inline constexpr double kMaxCrosstalk = 100;        ///< each optics.crosstalk entry
 
 /// \brief Reads a TOML file over the defaults; the error names the file, the key and the line.
 Result<SessionConfig, std::string> load_config(const std::string& path);

@@ -27,7 +27,7 @@ namespace {
 
 namespace fs = std::filesystem;
 
-struct Run {
+struct RunResult {
   int exit_code = -1;  ///< 128 + N when killed by signal N
   std::string out, err;
 };
@@ -38,7 +38,7 @@ std::string slurp(const fs::path& path) {
 }
 
 /// Runs the binary with `args`, output captured in files under `dir`; killed after 300 s.
-Run run(const std::vector<std::string>& args, const fs::path& dir) {
+RunResult run(const std::vector<std::string>& args, const fs::path& dir) {
   std::vector<std::string> storage{FLUTTERSCAN_BINARY};
   storage.insert(storage.end(), args.begin(), args.end());
   std::vector<char*> argv;
@@ -56,7 +56,7 @@ Run run(const std::vector<std::string>& args, const fs::path& dir) {
     execv(argv[0], argv.data());
     _exit(127);
   }
-  Run r;
+  RunResult r;
   int status = 0;
   if (pid > 0 && waitpid(pid, &status, 0) == pid)
     r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
@@ -142,7 +142,7 @@ TEST_P(HostileConfig, RefusedNamingTheKeyOrRunWithEveryFrameCounted) {
     fs::create_directories(base);
     const fs::path config = base / "session.toml";
     std::ofstream(config) << example_with(key, value);
-    const Run r =
+    const RunResult r =
         run({"scan", "--config", config.string(), "--camera", "sim", "--controller", "sim",
              "--frames", "3", "--out", (base / "sessions").string(), "--no-progress"},
             base);
@@ -156,8 +156,10 @@ TEST_P(HostileConfig, RefusedNamingTheKeyOrRunWithEveryFrameCounted) {
                                 : key.table == "camera"       ? key.name
                                                               : dotted;
       EXPECT_NE(r.err.find(named), std::string::npos) << r.err;
-      if (key.table != "camera.options")
+      // The file too, when the config check refused it (the camera refuses what it cannot take).
+      if (key.table != "camera.options" && key.table != "camera") {
         EXPECT_NE(r.err.find(config.string()), std::string::npos) << "the file: " << r.err;
+      }
       continue;
     }
     // Ran: every captured frame accounted for, the failed ones in the printed summary.
@@ -183,8 +185,8 @@ std::vector<std::string> swept_keys() {
 }
 
 INSTANTIATE_TEST_SUITE_P(SessionExample, HostileConfig, ::testing::ValuesIn(swept_keys()),
-                         [](const ::testing::TestParamInfo<std::string>& info) {
-                           std::string name = info.param;
+                         [](const ::testing::TestParamInfo<std::string>& key) {
+                           std::string name = key.param;
                            for (char& c : name)
                              if (c == '.') c = '_';
                            return name;
