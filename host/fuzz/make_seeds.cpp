@@ -201,7 +201,7 @@ void firmware_seeds() {
 void device_seeds() {
   // Client: a GetInfo reply echoed (protocol major 1 in the first payload byte), then
   // replies to a few commands and an exposure event.
-  Bytes client{0, 0};
+  Bytes client{0};  // (the device_client target: no mode byte; a byte kept for the format)
   auto reply = [&](std::uint8_t how, std::uint8_t length, std::uint8_t status,
                    std::initializer_list<std::uint8_t> payload) {
     client.push_back(how);
@@ -212,20 +212,20 @@ void device_seeds() {
     for (std::uint8_t b : payload) report[i++] = b;
     client.insert(client.end(), report.begin(), report.end());
   };
-  reply(0x05, 28, 0, {1, 0});  // GetInfo: protocol major 1, 28 bytes
+  reply(0x00, 28, 0, {1, 0});  // GetInfo: protocol major 1, 28 bytes
   for (std::uint8_t command : {0, 1, 3, 4, 11, 2, 5, 6}) {
     client.push_back(command);
-    reply(0x05, 0, 0, {});
+    reply(0x00, 0, 0, {});
   }
-  put("device_reply", "client", client);
+  put("device_client", "client", client);
   Bytes event = client;
   event.push_back(11);
-  event.push_back(0x01);
+  event.push_back(0x04);  // one report, not echoed: an exposure event
   Bytes report(64, 0);
   report[0] = 0x80;
-  report[2] = 24;
+  report[2] = 32;
   event.insert(event.end(), report.begin(), report.end());
-  put("device_reply", "client-event", event);
+  put("device_client", "client-event", event);
   // DFU, in the order fuzz_dfu asks: GETSTATUS (a "how" byte 2, then its 6 bytes:
   // status, bwPollTimeout, state, string), transfer results (1: ok), the image size
   // (2049 bytes: 3 blocks) and the upload length (1500: one full block, one short).
