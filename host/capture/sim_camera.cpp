@@ -629,8 +629,10 @@ std::string sim_options_problem(const SimConveyorOptions& o) {
     return "camera sim: width x height = " + std::to_string(o.width) + " x " +
            std::to_string(o.height) + " is more than " + std::to_string(imaging::kMaxFramePixels) +
            " pixels";
-  if (o.tile_width < 16 || o.tile_width > o.width)
-    return outside("tile_width", o.tile_width, "16..width (" + std::to_string(o.width) + ") px");
+  // (open() checks that a label's tile fits the view when there are labels.)
+  if (o.tile_width < 16 || o.tile_width > imaging::kMaxFrameSidePx)
+    return outside("tile_width", o.tile_width,
+                   "16.." + std::to_string(imaging::kMaxFrameSidePx) + " px");
   if (o.gap < 0 || o.gap > imaging::kMaxFrameSidePx)
     return outside("gap", o.gap, "0.." + std::to_string(imaging::kMaxFrameSidePx) + " px");
   if (o.frame_period_us < 1 || o.frame_period_us > 60'000'000)
