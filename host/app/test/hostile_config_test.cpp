@@ -178,6 +178,42 @@ TEST_P(HostileConfig, RefusedNamingTheKeyOrRunWithEveryFrameCounted) {
   fs::remove_all(base);
 }
 
+// A px_per_count the config allows but no frame can hold (the sim's encoder gives
+// about 104 counts per exposure: 10,400 px on a 960 px view): every frame is flagged
+// blur-out-of-range, logged and counted, the session ends normally.
+TEST(HostileConfigKeys, AnEncoderBlurLongerThanTheFrameIsFlaggedAndCounted) {
+  Key key;
+  for (const auto& k : numeric_keys())
+    if (k.dotted() == "optics.px_per_count") key = k;
+  ASSERT_FALSE(key.name.empty());
+  const char* tmp = std::getenv("TMPDIR");
+  const fs::path base = fs::path(tmp && *tmp ? tmp : "/tmp") /
+                        ("flutterscan-hostile-flag-" + std::to_string(getpid()));
+  fs::remove_all(base);
+  fs::create_directories(base);
+  std::ofstream(base / "session.toml") << example_with(key, "100");
+  const RunResult r = run({"scan", "--config", (base / "session.toml").string(), "--frames", "3",
+                           "--out", (base / "sessions").string(), "--no-progress"},
+                          base);
+  ASSERT_EQ(r.exit_code, 0) << r.out << r.err;
+  fs::path summary, log;
+  for (const auto& entry : fs::recursive_directory_iterator(base / "sessions")) {
+    if (entry.path().filename() == "summary.json") summary = entry.path();
+    if (entry.path().filename() == "session.jsonl") log = entry.path();
+  }
+  ASSERT_FALSE(summary.empty());
+  const auto s = nlohmann::json::parse(slurp(summary));
+  const std::uint64_t captured = s.value("frames_captured", std::uint64_t{0});
+  EXPECT_EQ(captured, 3u);
+  EXPECT_EQ(s.value("frames_failed", std::uint64_t{0}), captured);
+  EXPECT_EQ(s["frames_flagged"].value("blur-out-of-range", std::uint64_t{0}), captured);
+  EXPECT_NE(r.out.find("failed 3 (blur-out-of-range 3)"), std::string::npos) << r.out;
+  const std::string lines = slurp(log);
+  EXPECT_NE(lines.find("optics.px_per_count 100"), std::string::npos) << lines.substr(0, 600);
+  EXPECT_NE(lines.find("\"blur-out-of-range\""), std::string::npos);
+  fs::remove_all(base);
+}
+
 std::vector<std::string> swept_keys() {
   std::vector<std::string> names;
   for (const auto& k : numeric_keys()) names.push_back(k.dotted());
