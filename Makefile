@@ -41,9 +41,12 @@ demo: build
 bench: build
 	tools/bench
 
-# The firmware core under libFuzzer (FUZZ_RUNS executions, default 10 million).
+# libFuzzer: the firmware core (tools/fuzz, FUZZ_RUNS executions, default 10
+# million), then every host target (tools/fuzz-host, host/fuzz/README.md;
+# FUZZ_RUNS per target, default 1 million). `make test` replays the host corpora.
 fuzz: deps
 	tools/fuzz
+	tools/fuzz-host
 
 asan: deps
 	cmake --preset host-asan -DFLUTTERSCAN_WERROR=$(WERROR) >/dev/null
@@ -54,4 +57,4 @@ format:
 	git ls-files '*.cpp' '*.hpp' | xargs clang-format -i
 
 clean:
-	rm -rf build build-debug build-asan build-arm-common build-fw-qemu build-fw-stm32f405
+	rm -rf build build-debug build-asan build-fuzz build-arm-common build-fw-qemu build-fw-stm32f405

@@ -5,8 +5,13 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <iterator>
+#include <limits>
 #include <random>
 #include <sstream>
+#include <vector>
+
+#include "imaging/limits.hpp"
 
 namespace flutterscan::app {
 namespace {
@@ -44,17 +49,85 @@ std::string commit(const std::string& temporary, const std::string& path) {
 
 }  // namespace
 
+Result<std::pair<std::uint32_t, std::uint32_t>, std::string> declared_frame_size(
+    std::span<const std::uint8_t> b) {
+  using Out = Result<std::pair<std::uint32_t, std::uint32_t>, std::string>;
+  static constexpr std::uint8_t kPng[] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1A, '\n'};
+  if (b.size() >= 8 && std::equal(std::begin(kPng), std::end(kPng), b.begin())) {
+    // The first chunk is IHDR: width and height, big-endian, at bytes 16 and 20.
+    if (b.size() < 24 || std::string(b.begin() + 12, b.begin() + 16) != "IHDR")
+      return Out::failure("a PNG without its IHDR header");
+    auto be32 = [&](std::size_t at) {
+      return std::uint32_t{b[at]} << 24 | std::uint32_t{b[at + 1]} << 16 |
+             std::uint32_t{b[at + 2]} << 8 | b[at + 3];
+    };
+    return Out::success({be32(16), be32(20)});
+  }
+  const bool little = b.size() >= 4 && b[0] == 'I' && b[1] == 'I' && b[2] == 42 && b[3] == 0;
+  const bool big = b.size() >= 4 && b[0] == 'M' && b[1] == 'M' && b[2] == 0 && b[3] == 42;
+  if (!little && !big) return Out::failure("not a PNG or TIFF image");
+  auto read = [&](std::size_t at, int bytes) -> std::uint64_t {
+    std::uint64_t v = 0;
+    for (int i = 0; i < bytes; ++i) {
+      const std::uint64_t byte = b[at + static_cast<std::size_t>(i)];
+      v |= little ? byte << (8 * i) : byte << (8 * (bytes - 1 - i));
+    }
+    return v;
+  };
+  if (b.size() < 8) return Out::failure("a TIFF without its header");
+  const std::uint64_t ifd = read(4, 4);
+  if (ifd + 2 > b.size()) return Out::failure("a TIFF whose first directory is past its end");
+  const std::uint64_t entries = read(ifd, 2);
+  std::uint64_t width = 0, height = 0;
+  for (std::uint64_t e = 0; e < entries; ++e) {
+    const std::uint64_t at = ifd + 2 + 12 * e;
+    if (at + 12 > b.size()) return Out::failure("a TIFF directory past the file's end");
+    const auto tag = read(at, 2), type = read(at + 2, 2);
+    const std::uint64_t value = type == 3 ? read(at + 8, 2) : read(at + 8, 4);  // SHORT or LONG
+    if (tag == 256) width = value;
+    if (tag == 257) height = value;
+  }
+  if (width == 0 || height == 0) return Out::failure("a TIFF without ImageWidth and ImageLength");
+  return Out::success({static_cast<std::uint32_t>(width), static_cast<std::uint32_t>(height)});
+}
+
 Result<LoadedFrame, std::string> read_frame(const std::string& path) {
   using Out = Result<LoadedFrame, std::string>;
   if (!fs::exists(path)) return Out::failure("'" + path + "' does not exist");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) return Out::failure("cannot read '" + path + "'");
+  const std::vector<std::uint8_t> bytes{std::istreambuf_iterator<char>(in),
+                                        std::istreambuf_iterator<char>()};
+  return decode_frame(bytes, path);
+}
+
+Result<LoadedFrame, std::string> decode_frame(std::span<const std::uint8_t> bytes,
+                                              const std::string& path) {
+  using Out = Result<LoadedFrame, std::string>;
+  const auto size = declared_frame_size(bytes);
+  if (!size.ok()) return Out::failure("cannot read '" + path + "': " + size.error());
+  const auto [width, height] = size.value();
+  if (width < 1 || height < 1 || width > imaging::kMaxFrameSidePx ||
+      height > imaging::kMaxFrameSidePx ||
+      std::uint64_t{width} * height > static_cast<std::uint64_t>(imaging::kMaxFramePixels))
+    return Out::failure("'" + path + "' declares " + std::to_string(width) + " x " +
+                        std::to_string(height) + " px: frames are 1.." +
+                        std::to_string(imaging::kMaxFrameSidePx) + " px a side and at most " +
+                        std::to_string(imaging::kMaxFramePixels) + " pixels");
+  if (bytes.size() > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+    return Out::failure("'" + path + "' is larger than 2 GB");
   cv::Mat mat;
   try {
-    mat = cv::imread(path, cv::IMREAD_UNCHANGED);
+    const cv::Mat encoded(1, static_cast<int>(bytes.size()), CV_8U,
+                          const_cast<std::uint8_t*>(bytes.data()));
+    mat = cv::imdecode(encoded, cv::IMREAD_UNCHANGED);
   } catch (const cv::Exception& e) {
     return Out::failure("cannot read '" + path + "': " + e.what());
   }
   if (mat.empty())
     return Out::failure("cannot read '" + path + "': not a PNG or TIFF image OpenCV can decode");
+  if (mat.dims != 2 || mat.cols != static_cast<int>(width) || mat.rows != static_cast<int>(height))
+    return Out::failure("'" + path + "' decodes to another size than its header declares");
   if (mat.depth() != CV_8U && mat.depth() != CV_16U)
     return Out::failure("'" + path + "' is not an 8- or 16-bit image");
   if (mat.channels() == 4)

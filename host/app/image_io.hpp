@@ -5,7 +5,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include <cstdint>
+#include <span>
 #include <string>
+#include <utility>
 
 #include "flutterscan/common/result.hpp"
 #include "imaging/image.hpp"
@@ -19,6 +22,18 @@ struct LoadedFrame {
 
 /// \brief Reads an 8- or 16-bit grey or RGB PNG/TIFF. The error names the file and the problem.
 Result<LoadedFrame, std::string> read_frame(const std::string& path);
+
+/// \brief The same from the file's bytes (`name` names them in errors). Only PNG
+/// and TIFF are decoded, and only after their header's size is checked against
+/// imaging::kMaxFrameSidePx and kMaxFramePixels (a 100-byte file must not make the
+/// decoder allocate gigabytes).
+Result<LoadedFrame, std::string> decode_frame(std::span<const std::uint8_t> bytes,
+                                              const std::string& name);
+
+/// \brief The width and height a PNG or TIFF header declares (the first image of a
+/// TIFF); the error says why there is none (not PNG or TIFF, truncated header).
+Result<std::pair<std::uint32_t, std::uint32_t>, std::string> declared_frame_size(
+    std::span<const std::uint8_t> bytes);
 
 /// \brief Writes planes (1 or 3) as a 16-bit PNG; values are rounded and clipped to 0..65535.
 std::string write_png16(const std::string& path, const imaging::Image& image);

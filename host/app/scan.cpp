@@ -57,6 +57,11 @@ void run(const ScanOptions& o) {
       throw UsageError("--camera-option '" + option + "' must be KEY=VALUE");
     config.camera.options.emplace_back(option.substr(0, equals), option.substr(equals + 1));
   }
+  // Bad values are refused here, before any device is touched, naming the file.
+  session::SessionConfig checked = config;
+  if (auto problem = session::check_config(checked); !problem.empty())
+    throw UsageError((o.config.empty() ? std::string("config") : "--config " + o.config) + ": " +
+                     problem);
   run_session_command(config, !o.no_progress);
 }
 

@@ -27,6 +27,17 @@ std::string format_number(double value, int decimals) {
   return text;
 }
 
+/// " (blur-out-of-range 3, error 1)": the flags of the failed frames, counted
+/// (summary.json's frames_flagged), or nothing when no frame failed.
+std::string failed_flags(const nlohmann::json& summary) {
+  if (summary.value("frames_failed", 0) == 0 || !summary.contains("frames_flagged")) return {};
+  std::string text;
+  for (const char* flag : {"blur-out-of-range", "error"})
+    if (const auto n = summary["frames_flagged"].value(flag, 0); n > 0)
+      text += (text.empty() ? " (" : ", ") + std::string(flag) + " " + std::to_string(n);
+  return text.empty() ? text : text + ")";
+}
+
 }  // namespace
 
 void run_session_command(session::SessionConfig config, bool progress) {
@@ -60,11 +71,12 @@ void run_session_command(session::SessionConfig config, bool progress) {
   const auto& s = outcome.summary;
   std::cout << "session  " << outcome.folder << "\n"
             << "frames   " << s.value("frames_processed", 0) << " processed of "
-            << s.value("frames_captured", 0) << " captured; dropped "
-            << s.value("frames_dropped", 0) << " (processing behind), "
-            << s.value("camera_frames_lost", 0) << " lost by the camera, "
-            << s.value("frames_without_event", 0) << " without exposure event, "
-            << s.value("events_without_frame", 0) << " events without frame\n"
+            << s.value("frames_captured", 0) << " captured; failed " << s.value("frames_failed", 0)
+            << failed_flags(s) << ", dropped " << s.value("frames_dropped", 0)
+            << " (processing behind), " << s.value("camera_frames_lost", 0)
+            << " lost by the camera, " << s.value("frames_without_event", 0)
+            << " without exposure event, " << s.value("events_without_frame", 0)
+            << " events without frame\n"
             << "objects  " << s.value("objects_read", 0) << " of " << s.value("objects", 0)
             << " read (" << format_number(100 * s.value("object_read_rate", 0.0), 1)
             << "%), mean decode rate per object "

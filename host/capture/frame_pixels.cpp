@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <bit>
 #include <cstring>
+#include <limits>
 #include <vector>
 
 namespace flutterscan::capture {
@@ -39,6 +40,9 @@ std::string layout_problem(const Frame& frame) {
   const std::string where = "frame " + std::to_string(frame.sequence);
   const std::size_t row_bytes = row_stride(f);
   const auto pixels_bytes = static_cast<std::size_t>(f.width) * bytes_per_pixel(f.pixel_format);
+  // YUYV packs two pixels in 4 bytes (Y0 U Y1 V): a width that is odd has no V for its last pixel.
+  if (f.pixel_format == PixelFormat::kYuyv && f.width % 2 != 0)
+    return where + ": yuyv needs an even width, not " + std::to_string(f.width);
   if (row_bytes < pixels_bytes)
     return where + ": row stride " + std::to_string(row_bytes) + " shorter than a row of " +
            std::to_string(f.width) + " pixels";
@@ -84,9 +88,19 @@ Result<imaging::Image, std::string> frame_to_dn(const Frame& frame) {
   const std::string where = "frame " + std::to_string(frame.sequence);
   if (f.width <= 0 || f.height <= 0) return Out::failure(where + ": empty size");
   if (f.pixel_format == PixelFormat::kMjpeg) {
+    // An empty or broken buffer (a camera can deliver one) is an error, never an exception.
+    if (frame.data.empty() ||
+        frame.data.size() > static_cast<std::size_t>(std::numeric_limits<int>::max()))
+      return Out::failure(where + ": MJPEG frame of " + std::to_string(frame.data.size()) +
+                          " bytes");
     cv::Mat bytes(1, static_cast<int>(frame.data.size()), CV_8U,
                   const_cast<std::uint8_t*>(frame.data.data()));
-    cv::Mat bgr = cv::imdecode(bytes, cv::IMREAD_COLOR);
+    cv::Mat bgr;
+    try {
+      bgr = cv::imdecode(bytes, cv::IMREAD_COLOR);
+    } catch (const cv::Exception& e) {
+      return Out::failure(where + ": MJPEG data does not decode: " + e.what());
+    }
     if (bgr.empty() || bgr.cols != f.width || bgr.rows != f.height)
       return Out::failure(where + ": MJPEG data does not decode to " + std::to_string(f.width) +
                           "x" + std::to_string(f.height));

@@ -11,11 +11,13 @@
 #include <mutex>
 #include <numeric>
 #include <random>
+#include <sstream>
 #include <thread>
 
 #include "capture/backends.hpp"
 #include "device/virtual_controller.hpp"
 #include "imaging/capture_descriptor.hpp"
+#include "imaging/limits.hpp"
 #include "sim/forward_model.hpp"
 #include "sim/scene.hpp"
 
@@ -85,6 +87,19 @@ Lighting lighting_from(const std::vector<device::LedTransition>& transitions) {
   return light;
 }
 
+std::string number_text(double value) {
+  std::ostringstream text;
+  text.precision(15);
+  text << value;
+  return text.str();
+}
+
+std::string outside(const std::string& key, double value, const std::string& range,
+                    const std::string& why = {}) {
+  return "camera sim: option " + key + " = " + number_text(value) + " is outside " + range +
+         (why.empty() ? "" : ": " + why);
+}
+
 class SimCamera final : public CameraSource {
  public:
   SimCamera(device::VirtualController& controller, SimConveyorOptions options)
@@ -93,7 +108,7 @@ class SimCamera final : public CameraSource {
   std::string name() const override { return "sim"; }
 
   std::string open() override {
-    if (o_.width < 64 || o_.height < 64) return "camera sim: width and height must be >= 64";
+    if (auto problem = sim_options_problem(o_); !problem.empty()) return problem;
     if (auto problem = parse_sim_target(o_.target, reflectance_); !problem.empty()) return problem;
     if (!(o_.falloff >= 0 && o_.falloff <= 0.9)) return "camera sim: falloff must be within 0..0.9";
     if (o_.falloff > 0 && reflectance_ < 0)
@@ -107,16 +122,13 @@ class SimCamera final : public CameraSource {
     if (o_.tile_width + 2 * sim::kMinBeltPx > o_.width)
       return "camera sim: tile_width " + std::to_string(o_.tile_width) +
              " does not fit the view width " + std::to_string(o_.width);
-    if (!(o_.speed_px_per_s > 0)) return "camera sim: speed_px_per_s must be > 0";
+    if (!(o_.speed_px_per_s > 0))
+      return "camera sim: option speed_px_per_s = " + number_text(o_.speed_px_per_s) +
+             " must be > 0 (the labels ride a moving belt; target=white stands still)";
     return common_checks();
   }
 
   std::string common_checks() const {
-    if (o_.jitter < 0 || o_.jitter > 0.5) return "camera sim: jitter must be within 0..0.5";
-    if (o_.drop_probability < 0 || o_.drop_probability >= 1)
-      return "camera sim: drop_probability must be within 0..1 (exclusive)";
-    if (o_.exposure_us >= o_.frame_period_us)
-      return "camera sim: exposure_us must be shorter than frame_period_us";
     if (o_.ring_frames > 0 && o_.jitter > 0)
       return "camera sim: ring_frames replays identical frames: it needs jitter 0";
     if (o_.crosstalk.size() != 9) return "camera sim: crosstalk needs 9 values (3x3)";
@@ -130,6 +142,10 @@ class SimCamera final : public CameraSource {
     if (wanted.height) o_.height = *wanted.height;
     if (wanted.pixel_format && *wanted.pixel_format != PixelFormat::kRgb16)
       return "camera sim: only pixel format rgb16 (12-bit RGB in 16-bit containers)";
+    if (wanted.exposure_us && !(*wanted.exposure_us >= 1 && *wanted.exposure_us <= 10e6))
+      return outside("exposure_us", *wanted.exposure_us, "1..10000000 us");
+    if (wanted.frame_rate_hz && !(*wanted.frame_rate_hz <= 1e6))
+      return outside("frame_rate_hz", *wanted.frame_rate_hz, "(0, 1000000] Hz");
     if (wanted.exposure_us) o_.exposure_us = static_cast<std::uint32_t>(*wanted.exposure_us);
     if (wanted.frame_rate_hz && *wanted.frame_rate_hz > 0)
       o_.frame_period_us = static_cast<std::uint32_t>(1e6 / *wanted.frame_rate_hz);
@@ -600,6 +616,72 @@ std::string apply_sim_options(const std::vector<std::pair<std::string, std::stri
   return {};
 }
 
+std::string sim_options_problem(const SimConveyorOptions& o) {
+  if (!(o.jitter >= 0 && o.jitter <= 0.5)) return outside("jitter", o.jitter, "[0, 0.5]");
+  if (!(o.drop_probability >= 0 && o.drop_probability < 1))
+    return outside("drop_probability", o.drop_probability, "[0, 1)");
+  const std::string side_range = "64.." + std::to_string(imaging::kMaxFrameSidePx) + " px";
+  if (o.width < 64 || o.width > imaging::kMaxFrameSidePx)
+    return outside("width", o.width, side_range);
+  if (o.height < 64 || o.height > imaging::kMaxFrameSidePx)
+    return outside("height", o.height, side_range);
+  if (static_cast<long long>(o.width) * o.height > imaging::kMaxFramePixels)
+    return "camera sim: width x height = " + std::to_string(o.width) + " x " +
+           std::to_string(o.height) + " is more than " + std::to_string(imaging::kMaxFramePixels) +
+           " pixels";
+  // (open() checks that a label's tile fits the view when there are labels.)
+  if (o.tile_width < 16 || o.tile_width > imaging::kMaxFrameSidePx)
+    return outside("tile_width", o.tile_width,
+                   "16.." + std::to_string(imaging::kMaxFrameSidePx) + " px");
+  if (o.gap < 0 || o.gap > imaging::kMaxFrameSidePx)
+    return outside("gap", o.gap, "0.." + std::to_string(imaging::kMaxFrameSidePx) + " px");
+  if (o.frame_period_us < 1 || o.frame_period_us > 60'000'000)
+    return outside("frame_period_us", o.frame_period_us, "1..60000000 us");
+  if (o.exposure_us < 1 || o.exposure_us > 10'000'000)
+    return outside("exposure_us", o.exposure_us, "1..10000000 us");
+  if (o.exposure_us >= o.frame_period_us)
+    return outside("exposure_us", o.exposure_us,
+                   "1.." + std::to_string(o.frame_period_us - 1) + " us",
+                   "shorter than frame_period_us = " + std::to_string(o.frame_period_us));
+  if (!(o.counts_per_px > 0 && o.counts_per_px <= kMaxSimCountsPerPx))
+    return outside("counts_per_px", o.counts_per_px,
+                   "(0, " + number_text(kMaxSimCountsPerPx) + "]");
+  // The belt moves along the frame's width: over the exposure it may move at most the
+  // view's width less one pixel (the longest blur a frame can hold), at any jitter.
+  const double longest_blur_px = std::min(static_cast<double>(o.width) - 1, imaging::kMaxBlurPx);
+  const double jitter_factor = o.jitter > 0 ? 1.8 : 1.0;  // expose_one's clamp
+  const double fastest = longest_blur_px / (o.exposure_us * 1e-6) / jitter_factor;
+  if (!(o.speed_px_per_s >= 0 && o.speed_px_per_s <= fastest))
+    return outside("speed_px_per_s", o.speed_px_per_s, "[0, " + number_text(fastest) + "] px/s",
+                   "over exposure_us = " + std::to_string(o.exposure_us) +
+                       (o.jitter > 0 ? " (jittered up to x1.8)" : "") +
+                       " the belt may move at most " + number_text(longest_blur_px) +
+                       " px, the longest blur of a " + std::to_string(o.width) + " px wide view");
+  // The encoder's velocity is a 32-bit count per second.
+  if (o.speed_px_per_s * 1.8 * o.counts_per_px > 1e9)
+    return "camera sim: speed_px_per_s x counts_per_px = " +
+           number_text(o.speed_px_per_s * o.counts_per_px) +
+           " counts/s is more than the encoder counts (1e9 counts/s)";
+  if (!(o.electrons > 0 && o.electrons <= 1e9))
+    return outside("electrons", o.electrons, "(0, 1e9] e-");
+  if (!(o.cap > 0 && o.cap <= 1000)) return outside("cap", o.cap, "(0, 1000]");
+  if (!(o.full_well > 0 && o.full_well <= 1e9))
+    return outside("full_well", o.full_well, "(0, 1e9] e-");
+  if (!(o.read_noise >= 0 && o.read_noise <= 1e4))
+    return outside("read_noise", o.read_noise, "[0, 10000] e-");
+  if (!(std::abs(o.clock_drift_ppm) <= 1e4))
+    return outside("clock_drift_ppm", o.clock_drift_ppm, "[-10000, 10000] ppm");
+  if (o.clock_offset_ns < 0 || o.clock_offset_ns > 1'000'000'000'000'000'000LL)
+    return outside("clock_offset_ns", static_cast<double>(o.clock_offset_ns), "[0, 1e18] ns");
+  const double frame_bytes = static_cast<double>(o.width) * o.height * 6;
+  if (o.ring_frames < 0 || o.ring_frames * frame_bytes > kMaxSimRingBytes)
+    return outside(
+        "ring_frames", o.ring_frames,
+        "0.." + number_text(std::floor(kMaxSimRingBytes / frame_bytes)),
+        "the ring holds every frame (at most " + number_text(kMaxSimRingBytes / 1e9) + " GB)");
+  return {};
+}
+
 std::string parse_sim_target(const std::string& target, double& reflectance) {
   reflectance = -1;
   if (target == "labels") return {};
@@ -643,7 +725,11 @@ CameraBackend sim_camera_backend() {
     SimConveyorOptions options;
     error = apply_sim_options(context.options, options);
     if (!error.empty()) return std::unique_ptr<CameraSource>();
-    return make_sim_camera(*context.controller, options);
+    // The sim's open() only checks its options: a refusal here is bad input (exit 2).
+    auto camera = make_sim_camera(*context.controller, options);
+    error = camera->open();
+    if (!error.empty()) return std::unique_ptr<CameraSource>();
+    return camera;
   };
   backend.list = [] {
     CameraInfo info;

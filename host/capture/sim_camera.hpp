@@ -84,6 +84,16 @@ struct SimTruth {
   double px_per_count = 0;  ///< 1 / counts_per_px
 };
 
+/// The most encoder counts per pixel of belt travel the sim takes.
+inline constexpr double kMaxSimCountsPerPx = 10000;
+/// The most memory ring_frames may take, bytes.
+inline constexpr double kMaxSimRingBytes = 2e9;
+
+/// \brief The first option out of its range, naming the option, its value and the
+/// range (empty if none): checked when the camera is made, so a bad option is bad
+/// input, and again by open() after configure() (camera.width, exposure, rate).
+std::string sim_options_problem(const SimConveyorOptions& options);
+
 /// \brief The true values behind `options`.
 SimTruth sim_truth(const SimConveyorOptions& options);
 

@@ -137,7 +137,8 @@ namespace {
 Expected<DfuState> poll_until(DfuControl& dfu, std::initializer_list<DfuState> done_states,
                               std::initializer_list<DfuState> busy_states, const DfuSleeper& sleep,
                               const std::string& what) {
-  for (int poll = 0; poll < kMaxPolls; ++poll) {
+  std::chrono::milliseconds waited{0};
+  for (int poll = 0; poll < kMaxPolls && waited <= kMaxDfuBusyWait; ++poll) {
     const auto status = dfu_get_status(dfu);
     if (!status.ok()) return fail<DfuState>(status.error());
     const DfuStatusReply s = status.value();
@@ -151,7 +152,9 @@ Expected<DfuState> poll_until(DfuControl& dfu, std::initializer_list<DfuState> d
     if (std::find(busy_states.begin(), busy_states.end(), s.state) == busy_states.end())
       return fail<DfuState>(ErrorKind::kBadReply, std::string("unexpected DFU state ") +
                                                       dfu_state_name(s.state) + " after " + what);
-    sleep(std::chrono::milliseconds(s.poll_timeout_ms));
+    const auto nap = std::min(std::chrono::milliseconds(s.poll_timeout_ms), kMaxDfuPollSleep);
+    sleep(nap);
+    waited += nap;
   }
   return fail<DfuState>(ErrorKind::kTimeout, "the bootloader stayed busy after " + what);
 }

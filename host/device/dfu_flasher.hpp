@@ -28,6 +28,12 @@ using protocol::DfuRequest;
 using protocol::DfuState;
 using protocol::DfuStatusReply;
 
+/// The longest the flasher waits on one bwPollTimeout (a sector erase takes under
+/// 2 s): a device asking for more (up to 4.6 hours) is waited on this long.
+inline constexpr std::chrono::milliseconds kMaxDfuPollSleep{5000};
+/// The longest the flasher waits for one block (or the manifest) in all.
+inline constexpr std::chrono::milliseconds kMaxDfuBusyWait{60'000};
+
 /// \brief The DFU status code's name and meaning ("errFIRMWARE: firmware corrupt").
 std::string dfu_status_text(std::uint8_t status);
 /// \brief The DFU state's name ("dfuIDLE").

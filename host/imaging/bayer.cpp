@@ -5,6 +5,7 @@
 #include <cmath>
 #include <vector>
 
+#include "imaging/image_checks.hpp"
 #include "imaging/motion_frame.hpp"
 
 namespace flutterscan::imaging {
@@ -217,6 +218,18 @@ Result<DeblurResult, std::string> deblur_bayer(const Plane& mosaic_electrons,
     return Out::failure("a Bayer mosaic needs a 3-channel (RGB) capture model");
   if (mosaic_electrons.width < 2 || mosaic_electrons.height < 2)
     return Out::failure("a Bayer mosaic must be at least 2x2 pixels");
+  // Before anything is sized by the blur or scaled by the light (image_checks.hpp).
+  if (mosaic_electrons.pixels.size() !=
+      static_cast<std::size_t>(mosaic_electrons.width) * mosaic_electrons.height)
+    return Out::failure("the mosaic holds " + std::to_string(mosaic_electrons.pixels.size()) +
+                        " pixels, not width x height");
+  if (auto problem = model_scale_problem(model); !problem.empty()) return Out::failure(problem);
+  const bool along_x =
+      model.direction == Direction::kPlusX || model.direction == Direction::kMinusX;
+  if (auto problem = blur_fit_problem(
+          model.blur_px, along_x ? mosaic_electrons.width : mosaic_electrons.height, 1, "the blur");
+      !problem.empty())
+    return Out::failure(problem);
   if (mode == BayerMode::kDemosaicFirst)
     return deblur(demosaic_bilinear(mosaic_electrons), model, options);
   if (!(options.gradient_variance > 0) || !std::isfinite(options.gradient_variance))

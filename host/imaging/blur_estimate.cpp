@@ -8,6 +8,7 @@
 #include <numeric>
 #include <vector>
 
+#include "imaging/image_checks.hpp"
 #include "imaging/joint_wiener.hpp"
 #include "imaging/motion_frame.hpp"
 #include "imaging/row_fft.hpp"
@@ -194,6 +195,13 @@ Result<BlurEstimate, std::string> estimate_blur(const Image& electrons, const Ca
         "every channel sees the same code, so the frame carries no blur information this way: "
         "estimating the blur needs a multi-LED code such as a one-of-3 triplet");
   if (row_step < 1) return Out::failure("the row step must be 1 or more");
+  // Before anything is sized by the blur: the frame, and the largest blur searched.
+  if (auto problem = image_problem(electrons); !problem.empty()) return Out::failure(problem);
+  if (auto problem = model_scale_problem(model); !problem.empty()) return Out::failure(problem);
+  if (auto problem = blur_fit_problem(max_px, extent_along_motion(electrons, model.direction), 2,
+                                      "the largest blur searched");
+      !problem.empty())
+    return Out::failure(problem);
   ConsistencyCost cost(electrons, model, static_cast<int>(std::floor(max_px)) + 2, row_step);
   if (max_px + 2 >= cost.width())
     return Out::failure("the largest blur searched (" + std::to_string(max_px) +
@@ -250,6 +258,13 @@ Result<double, std::string> cross_channel_residual(const Image& electrons,
     return Out::failure("the cross-channel residual needs two or more channels");
   if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
   if (row_step < 1) return Out::failure("the row step must be 1 or more");
+  // Before anything is sized by the blur (the cost's rows are padded by it).
+  if (auto problem = image_problem(electrons); !problem.empty()) return Out::failure(problem);
+  if (auto problem = model_scale_problem(model); !problem.empty()) return Out::failure(problem);
+  if (auto problem = blur_fit_problem(
+          model.blur_px, extent_along_motion(electrons, model.direction), 2, "the blur");
+      !problem.empty())
+    return Out::failure(problem);
   ConsistencyCost cost(electrons, model, static_cast<int>(std::floor(model.blur_px)) + 2, row_step);
   if (model.blur_px + 2 >= cost.width())
     return Out::failure("the blur does not fit the frame along the motion");

@@ -5,6 +5,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "imaging/limits.hpp"
+
 namespace flutterscan::imaging {
 namespace {
 
@@ -26,6 +28,9 @@ std::string capture_model_problem(const CaptureModel& m) {
         m.led_of_bit[static_cast<std::size_t>(k)] >= m.leds)
       return "led_of_bit[" + std::to_string(k) + "] names no LED";
   if (!std::isfinite(m.blur_px) || m.blur_px < 0) return "blur must be a finite number >= 0 pixels";
+  if (m.blur_px > kMaxBlurPx)  // imaging/limits.hpp: the PSF and padded rows grow with it
+    return "blur " + std::to_string(m.blur_px) + " px is beyond the longest blur, " +
+           std::to_string(static_cast<int>(kMaxBlurPx)) + " px";
   if (!std::isfinite(m.speed_ratio) || m.speed_ratio < kMinSpeedRatio ||
       m.speed_ratio > 1 / kMinSpeedRatio)
     return "the speed ratio (end / start of the exposure) must be between " +

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "imaging/image_checks.hpp"
 #include "imaging/joint_wiener.hpp"
 #include "imaging/motion_frame.hpp"
 #include "imaging/richardson_lucy.hpp"
@@ -80,6 +81,8 @@ Result<DeblurResult, std::string> deblur(const Image& electrons, const CaptureMo
                                          const DeblurOptions& options) {
   using Out = Result<DeblurResult, std::string>;
   if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
+  if (auto problem = image_problem(electrons); !problem.empty()) return Out::failure(problem);
+  if (auto problem = model_scale_problem(model); !problem.empty()) return Out::failure(problem);
   if (electrons.channel_count() != model.channels)
     return Out::failure("the frame has " + std::to_string(electrons.channel_count()) +
                         " channels but the capture model " + std::to_string(model.channels));

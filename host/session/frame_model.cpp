@@ -1,8 +1,11 @@
 #include "session/frame_model.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <sstream>
 
 #include "imaging/capture_descriptor.hpp"
+#include "imaging/limits.hpp"
 
 namespace flutterscan::session {
 
@@ -10,7 +13,34 @@ double belt_speed_px_per_us(const ExposureRecord& event, const OpticsConfig& opt
   const double duration_us = static_cast<double>(event.slot_count) * event.slot_time_us;
   if (duration_us <= 0) return 0;
   if (!optics.encoder) return optics.nominal_blur_px / duration_us;
-  return std::abs(event.encoder_delta) * optics.px_per_count / duration_us;
+  return std::abs(static_cast<double>(event.encoder_delta)) * optics.px_per_count / duration_us;
+}
+
+std::string blur_out_of_range(const ExposureRecord& event, const OpticsConfig& optics,
+                              const capture::FrameFormat& format) {
+  imaging::Direction direction = imaging::Direction::kPlusX;
+  imaging::parse_direction(optics.direction, direction);
+  const bool along_x =
+      direction == imaging::Direction::kPlusX || direction == imaging::Direction::kMinusX;
+  const int along = along_x ? format.width : format.height;
+  const double longest = std::min(static_cast<double>(along) - 1, imaging::kMaxBlurPx);
+  const double blur = optics.encoder
+                          ? std::abs(static_cast<double>(event.encoder_delta)) * optics.px_per_count
+                          : optics.nominal_blur_px;
+  if (std::isfinite(blur) && blur >= 0 && blur <= longest) return {};
+  std::ostringstream text;
+  text.precision(15);
+  text << "exposure " << event.frame_counter << ": blur-out-of-range: ";
+  if (optics.encoder)
+    text << "encoder counts " << event.encoder_delta << " x optics.px_per_count "
+         << optics.px_per_count << " = ";
+  else
+    text << "optics.nominal_blur_px = ";
+  text << blur << " px is outside [0, " << longest << "] px (the frame is " << along
+       << " px along the motion" << (longest < along - 1 ? ", and a blur is at most " : "");
+  if (longest < along - 1) text << imaging::kMaxBlurPx << " px";
+  text << ")";
+  return text.str();
 }
 
 Result<imaging::CaptureModel, std::string> frame_model(const ExposureRecord& event,
@@ -25,7 +55,8 @@ Result<imaging::CaptureModel, std::string> frame_model(const ExposureRecord& eve
   const OpticsConfig& o = config.optics;
   imaging::CaptureModel m;
   m.code = code;
-  m.blur_px = o.encoder ? std::abs(event.encoder_delta) * o.px_per_count : o.nominal_blur_px;
+  m.blur_px = o.encoder ? std::abs(static_cast<double>(event.encoder_delta)) * o.px_per_count
+                        : o.nominal_blur_px;
   imaging::parse_direction(o.direction, m.direction);
   if (event.encoder_delta < 0) {
     switch (m.direction) {

@@ -22,6 +22,13 @@ Result<imaging::CaptureModel, std::string> frame_model(const ExposureRecord& eve
                                                        const SessionConfig& config,
                                                        const capture::FrameFormat& format);
 
+/// \brief The blur `event` implies on a frame of `format` when it is out of range,
+/// as a message naming the encoder counts, optics.px_per_count, the blur and the
+/// range [0, min(frame along the motion - 1, imaging::kMaxBlurPx)]; empty if in
+/// range. The session flags such a frame `blur-out-of-range` and goes on.
+std::string blur_out_of_range(const ExposureRecord& event, const OpticsConfig& optics,
+                              const capture::FrameFormat& format);
+
 /// \brief Belt speed during the exposure, image pixels per controller microsecond:
 /// from the encoder, or (optics.encoder = false) the nominal blur over the exposure.
 double belt_speed_px_per_us(const ExposureRecord& event, const OpticsConfig& optics);

@@ -60,6 +60,13 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
          {"clock_residual_us", std::round(job.residual_us * 10) / 10},
          {"method", imaging::method_name(config.processing.method)}};
   if (!job.match_note.empty()) log["match_note"] = job.match_note;
+  // A blur the encoder implies but the frame cannot hold: flagged, counted, the session goes on.
+  if (auto problem = blur_out_of_range(job.event, config.optics, job.frame.format);
+      !problem.empty()) {
+    log["error"] = problem;
+    log["flags"] = nlohmann::json::array({"blur-out-of-range"});
+    return out;
+  }
   auto model = frame_model(job.event, config.controller.parsed_code, config, job.frame.format);
   auto converted = model.ok() ? capture::frame_to_electrons(job.frame, model.value())
                               : Result<capture::ElectronFrame, std::string>::failure(model.error());

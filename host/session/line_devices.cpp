@@ -83,7 +83,7 @@ std::unique_ptr<capture::CameraSource> open_camera(const CameraConfig& camera,
     return nullptr;
   }
   if (auto p = source->configure(camera.settings); !p.empty()) {
-    error = p;
+    error = "[camera] settings: " + p;
     bad_input = true;
     return nullptr;
   }

@@ -4,11 +4,14 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <sstream>
+#include <utility>
 
 #include "codes/library.hpp"
 #include "flutterscan/common/protocol.hpp"
 #include "imaging/capture_descriptor.hpp"
+#include "imaging/limits.hpp"
 
 namespace flutterscan::session {
 namespace {
@@ -38,6 +41,12 @@ class TableReader {
     } else {
       if (auto v = node->value_exact<std::int64_t>()) {
         if (*v < 0 && std::is_unsigned_v<T>) return fail(key, *node, "an integer >= 0");
+        // A value the field cannot hold is refused, never truncated into range.
+        if (!std::in_range<T>(*v))
+          return fail(key, *node,
+                      "an integer within " + std::to_string(std::numeric_limits<T>::min()) + ".." +
+                          std::to_string(std::numeric_limits<T>::max()) + " (got " +
+                          std::to_string(*v) + ")");
         return void(value = static_cast<T>(*v));
       }
       fail(key, *node, "an integer");
@@ -78,6 +87,21 @@ std::string known_keys_problem(const toml::table& table, const std::string& pref
     }
   }
   return {};
+}
+
+/// A number as the config would show it (shortest form that reads back).
+std::string number_text(double value) {
+  std::ostringstream text;
+  text.precision(15);
+  text << value;
+  return text.str();
+}
+
+/// "KEY = VALUE is outside RANGE": the key, what it was and what it may be.
+std::string outside(const std::string& key, double value, const std::string& range,
+                    const std::string& why = {}) {
+  return key + " = " + number_text(value) + " is outside " + range + (why.empty() ? "" : ": ") +
+         why;
 }
 
 }  // namespace
@@ -293,6 +317,7 @@ Result<SessionConfig, std::string> load_config(const std::string& path) {
 
 std::string check_config(SessionConfig& c) {
   auto problem = [](const std::string& key, const std::string& what) { return key + " " + what; };
+  auto got = [](double value) { return " (got " + number_text(value) + ")"; };
   c.controller.scheme.reset();
   if (c.controller.code == "auto") {
     if (!(c.optics.electrons > 0) || !(c.optics.read_noise_e > 0) || !(c.optics.cap >= 1))
@@ -300,9 +325,11 @@ std::string check_config(SessionConfig& c) {
                      "auto needs optics.read_noise_e > 0 (flutterscan calibrate noise) and "
                      "optics.cap >= 1; optics.electrons, if given, > 0");
     if (c.controller.probe_frames < 1 || c.controller.probe_frames > 100)
-      return problem("controller.probe_frames", "must be within 1..100");
+      return problem("controller.probe_frames",
+                     "must be within 1..100" + got(c.controller.probe_frames));
     if (!(c.optics.paper_reflectance > 0 && c.optics.paper_reflectance <= 1))
-      return problem("optics.paper_reflectance", "must be within (0, 1]");
+      return problem("optics.paper_reflectance",
+                     "must be within (0, 1]" + got(c.optics.paper_reflectance));
     // Provisional: the session measures the light and chooses again (light_probe.hpp).
     c.controller.scheme =
         codes::choose_scheme(c.optics.electrons, c.optics.read_noise_e, c.optics.cap);
@@ -322,49 +349,124 @@ std::string check_config(SessionConfig& c) {
     return problem("controller.code", "must be a code of the 3 LEDs");
   if (c.controller.slot_time_us < protocol::kMinSlotTimeUs ||
       c.controller.slot_time_us > protocol::kMaxSlotTimeUs)
-    return problem("controller.slot_time_us", "must be within " +
-                                                  std::to_string(protocol::kMinSlotTimeUs) + ".." +
-                                                  std::to_string(protocol::kMaxSlotTimeUs));
+    return problem("controller.slot_time_us",
+                   "must be within " + std::to_string(protocol::kMinSlotTimeUs) + ".." +
+                       std::to_string(protocol::kMaxSlotTimeUs) + got(c.controller.slot_time_us));
   if (c.controller.sync != "slave" && c.controller.sync != "master")
     return problem("controller.sync", "must be slave or master");
   if (c.controller.sync == "master" && c.controller.frame_period_us == 0)
     return problem("controller.frame_period_us", "must be set (> 0) for master sync");
-  if (!(c.optics.px_per_count > 0)) return problem("optics.px_per_count", "must be > 0");
+  // The controller takes 0 (unset) or kMinFramePeriodUs..kMaxFramePeriodUs, in any sync mode.
+  if (c.controller.frame_period_us != 0 &&
+      (c.controller.frame_period_us < protocol::kMinFramePeriodUs ||
+       c.controller.frame_period_us > protocol::kMaxFramePeriodUs))
+    return outside("controller.frame_period_us", c.controller.frame_period_us,
+                   "0 (unset) or " + std::to_string(protocol::kMinFramePeriodUs) + ".." +
+                       std::to_string(protocol::kMaxFramePeriodUs) + " us");
+  if (!(c.optics.px_per_count > 0))
+    return problem("optics.px_per_count", "must be > 0" + got(c.optics.px_per_count));
+  // Sizes bounded where they enter (docs/session.md, "Bounds"): a blur is at most
+  // imaging::kMaxBlurPx, and a frame's side at most imaging::kMaxFrameSidePx.
+  const std::string blur_range = "(0, " + number_text(imaging::kMaxBlurPx) + "] px";
+  if (c.optics.px_per_count > kMaxPxPerCount)
+    return outside("optics.px_per_count", c.optics.px_per_count,
+                   "(0, " + number_text(kMaxPxPerCount) + "]",
+                   "one encoder count would move the belt that many pixels (a blur of " +
+                       number_text(imaging::kMaxBlurPx) + " px is the most a frame may have)");
   if (!c.optics.encoder && !(c.optics.nominal_blur_px > 0))
     return problem("optics.nominal_blur_px",
                    "must be > 0 when optics.encoder = false (the blur at the line's speed; "
-                   "flutterscan calibrate speed measures it)");
+                   "flutterscan calibrate speed measures it)" +
+                       got(c.optics.nominal_blur_px));
+  if (c.optics.nominal_blur_px < 0 || c.optics.nominal_blur_px > imaging::kMaxBlurPx)
+    return outside(
+        "optics.nominal_blur_px", c.optics.nominal_blur_px,
+        c.optics.encoder ? "[0, " + number_text(imaging::kMaxBlurPx) + "] px" : blur_range);
+  for (const auto& [key, side] : {std::pair{"camera.width", c.camera.settings.width},
+                                  std::pair{"camera.height", c.camera.settings.height}})
+    if (side && (*side < 1 || *side > imaging::kMaxFrameSidePx))
+      return outside(key, *side, "1.." + std::to_string(imaging::kMaxFrameSidePx) + " px");
+  if (const auto& e = c.camera.settings.exposure_us; e && !(*e > 0 && *e <= 10e6))
+    return outside("camera.exposure_us", *e, "(0, 10000000] us");
+  if (const auto& g = c.camera.settings.gain_db; g && !(*g >= 0 && *g <= 100))
+    return outside("camera.gain_db", *g, "[0, 100] dB");
+  if (const auto& f = c.camera.settings.frame_rate_hz; f && !(*f > 0 && *f <= 100000))
+    return outside("camera.frame_rate_hz", *f, "(0, 100000] Hz");
   if (!(c.optics.line_time_us >= 0 && c.optics.line_time_us < 1000))
-    return problem("optics.line_time_us", "must be 0 (global shutter) up to 1000 us");
+    return problem("optics.line_time_us",
+                   "must be 0 (global shutter) up to 1000 us" + got(c.optics.line_time_us));
   if (c.processing.blur_check_every < 0)
-    return problem("processing.blur_check_every", "must be >= 0");
+    return problem("processing.blur_check_every",
+                   "must be >= 0" + got(c.processing.blur_check_every));
   if (!(c.processing.blur_tolerance_pct >= 0 && c.processing.blur_tolerance_pct < 100))
     return problem("processing.blur_tolerance",
-                   "must be a percentage >= 0 and < 100 (0: the encoder's blur exactly)");
+                   "must be a percentage >= 0 and < 100 (0: the encoder's blur exactly)" +
+                       got(c.processing.blur_tolerance_pct));
   if (auto why = reader::check_symbologies(c.processing.symbologies); !why.empty())
     return problem("processing.symbologies", "'" + c.processing.symbologies + "': " + why);
   imaging::Direction direction;
   if (!imaging::parse_direction(c.optics.direction, direction))
     return problem("optics.direction", "must be +x, -x, +y or -y");
-  if (!(c.optics.electrons > 0)) return problem("optics.electrons", "must be > 0");
-  if (!(c.optics.cap > 0)) return problem("optics.cap", "must be > 0");
+  if (!(c.optics.electrons > 0))
+    return problem("optics.electrons", "must be > 0" + got(c.optics.electrons));
+  if (!(c.optics.cap > 0)) return problem("optics.cap", "must be > 0" + got(c.optics.cap));
   if (c.optics.bit_depth < 8 || c.optics.bit_depth > 16)
-    return problem("optics.bit_depth", "must be within 8..16");
+    return problem("optics.bit_depth", "must be within 8..16" + got(c.optics.bit_depth));
+  // Electron counts: a pixel holds at most kMaxElectrons (float planes keep them exact enough).
+  for (const auto& [key, value] : {std::pair{"optics.electrons", c.optics.electrons},
+                                   std::pair{"optics.full_well_e", c.optics.full_well_e}})
+    if (!(value > 0 && value <= kMaxElectrons))
+      return outside(key, value, "(0, " + number_text(kMaxElectrons) + "] e-");
+  if (c.optics.cap > 1000) return outside("optics.cap", c.optics.cap, "(0, 1000]");
+  if (!(c.optics.read_noise_e >= 0 && c.optics.read_noise_e <= 10000))
+    return outside("optics.read_noise_e", c.optics.read_noise_e, "[0, 10000] e-");
+  if (!(c.optics.paper_reflectance > 0 && c.optics.paper_reflectance <= 1))
+    return outside("optics.paper_reflectance", c.optics.paper_reflectance, "(0, 1]");
+  for (std::size_t i = 0; i < c.optics.crosstalk.size(); ++i)
+    if (!(c.optics.crosstalk[i] >= 0 && c.optics.crosstalk[i] <= kMaxCrosstalk))
+      return outside(
+          "optics.crosstalk[" + std::to_string(i / 3) + "][" + std::to_string(i % 3) + "]",
+          c.optics.crosstalk[i], "[0, " + number_text(kMaxCrosstalk) + "]",
+          "a channel's response to an LED, about 0..1");
+  const double full_scale_dn = std::pow(2.0, c.optics.bit_depth) - 1;
+  if (!(c.optics.black_level_dn >= 0 && c.optics.black_level_dn < full_scale_dn))
+    return outside(
+        "optics.black_level_dn", c.optics.black_level_dn,
+        "[0, " + number_text(full_scale_dn) + ") DN",
+        "below the full scale of optics.bit_depth = " + std::to_string(c.optics.bit_depth));
+  if (!(c.optics.gain_e_per_dn >= 0 && c.optics.gain_e_per_dn <= kMaxElectrons))
+    return outside("optics.gain_e_per_dn", c.optics.gain_e_per_dn,
+                   "[0, " + number_text(kMaxElectrons) + "] e-/DN",
+                   "0 means full well at full scale");
   if (c.processing.workers < 1 || c.processing.workers > 64)
-    return problem("processing.workers", "must be within 1..64");
+    return problem("processing.workers", "must be within 1..64" + got(c.processing.workers));
   if (c.processing.threads_per_worker < 1 || c.processing.threads_per_worker > 64)
-    return problem("processing.threads_per_worker", "must be within 1..64");
-  if (c.processing.queue_depth < 1) return problem("processing.queue_depth", "must be >= 1");
-  if (c.processing.max_seconds < 0) return problem("processing.max_seconds", "must be >= 0");
+    return problem("processing.threads_per_worker",
+                   "must be within 1..64" + got(c.processing.threads_per_worker));
+  if (c.processing.queue_depth < 1 || c.processing.queue_depth > kMaxQueueDepth)
+    return outside("processing.queue_depth", static_cast<double>(c.processing.queue_depth),
+                   "1.." + std::to_string(kMaxQueueDepth) + " frames",
+                   "every waiting frame holds its pixels");
+  if (c.processing.max_seconds < 0)
+    return problem("processing.max_seconds", "must be >= 0" + got(c.processing.max_seconds));
   if (!(c.processing.match_tolerance_us > 0))
-    return problem("processing.match_tolerance_us", "must be > 0");
+    return problem("processing.match_tolerance_us",
+                   "must be > 0" + got(c.processing.match_tolerance_us));
   if (!(c.processing.object_match_px > 0))
-    return problem("processing.object_match_px", "must be > 0");
+    return problem("processing.object_match_px", "must be > 0" + got(c.processing.object_match_px));
   if (c.output.dir.empty()) return problem("output.dir", "must not be empty");
-  if (c.output.keep_first_frames < 0) return problem("output.keep_first_frames", "must be >= 0");
-  if (!(c.output.disk_budget_mb >= 0)) return problem("output.disk_budget_mb", "must be >= 0");
+  if (c.output.keep_first_frames < 0)
+    return problem("output.keep_first_frames", "must be >= 0" + got(c.output.keep_first_frames));
+  if (!(c.output.disk_budget_mb >= 0))
+    return problem("output.disk_budget_mb", "must be >= 0" + got(c.output.disk_budget_mb));
+  if (c.output.disk_budget_mb > kMaxDiskBudgetMb)  // held in bytes as a 64-bit count
+    return outside("output.disk_budget_mb", c.output.disk_budget_mb,
+                   "[0, " + number_text(kMaxDiskBudgetMb) + "] MB");
   if (c.results.tcp_port < -1 || c.results.tcp_port > 65535)
-    return problem("results.tcp_port", "must be -1 (off), 0 (any) or a port number");
+    return problem("results.tcp_port",
+                   "must be -1 (off), 0 (any) or a port number" + got(c.results.tcp_port));
+  if (!c.results.serial.empty() && (c.results.serial_baud < 50 || c.results.serial_baud > 4000000))
+    return outside("results.serial_baud", c.results.serial_baud, "50..4000000");
   return {};
 }
 

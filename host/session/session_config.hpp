@@ -121,6 +121,13 @@ struct SessionConfig {
   ResultsConfig results;
 };
 
+/// The bounds check_config holds sizes to (besides imaging/limits.hpp's).
+inline constexpr double kMaxPxPerCount = 1000;      ///< optics.px_per_count
+inline constexpr double kMaxElectrons = 1e9;        ///< optics.electrons, full_well_e
+inline constexpr std::size_t kMaxQueueDepth = 256;  ///< processing.queue_depth
+inline constexpr double kMaxDiskBudgetMb = 1e9;     ///< output.disk_budget_mb (a petabyte)
+inline constexpr double kMaxCrosstalk = 100;        ///< each optics.crosstalk entry
+
 /// \brief Reads a TOML file over the defaults; the error names the file, the key and the line.
 Result<SessionConfig, std::string> load_config(const std::string& path);
 /// \brief Reads TOML text (`origin` names it in errors).

@@ -1,0 +1,66 @@
+#include "imaging/image_checks.hpp"
+
+#include <cmath>
+#include <sstream>
+
+#include "imaging/limits.hpp"
+
+namespace flutterscan::imaging {
+
+std::string image_problem(const Image& image) {
+  if (image.channels.empty()) return "the image has no channel";
+  const int width = image.channels[0].width, height = image.channels[0].height;
+  if (width < 1 || height < 1)
+    return "the image is empty (" + std::to_string(width) + " x " + std::to_string(height) + ")";
+  if (width > kMaxFrameSidePx || height > kMaxFrameSidePx)
+    return "the image (" + std::to_string(width) + " x " + std::to_string(height) +
+           ") has a side beyond " + std::to_string(kMaxFrameSidePx) + " px";
+  for (std::size_t c = 0; c < image.channels.size(); ++c) {
+    const Plane& plane = image.channels[c];
+    if (plane.width != width || plane.height != height)
+      return "channel " + std::to_string(c) + " is " + std::to_string(plane.width) + " x " +
+             std::to_string(plane.height) + ", channel 0 " + std::to_string(width) + " x " +
+             std::to_string(height);
+    if (plane.pixels.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
+      return "channel " + std::to_string(c) + " holds " + std::to_string(plane.pixels.size()) +
+             " pixels, not width x height";
+  }
+  return {};
+}
+
+std::string model_scale_problem(const CaptureModel& model) {
+  for (double v : model.crosstalk)
+    if (!(v <= kMaxCrosstalk))
+      return "a crosstalk entry (" + std::to_string(v) + ") is beyond " +
+             std::to_string(static_cast<int>(kMaxCrosstalk));
+  for (const auto* values : {&model.led_electrons, &model.ambient_electrons})
+    for (double v : *values)
+      if (!(v <= kMaxModelElectrons))
+        return "the model's light (" + std::to_string(v) + " e-) is beyond " +
+               std::to_string(static_cast<long long>(kMaxModelElectrons)) + " e-";
+  return {};
+}
+
+int extent_along_motion(const Image& image, Direction direction) {
+  const bool along_x = direction == Direction::kPlusX || direction == Direction::kMinusX;
+  return along_x ? image.width() : image.height();
+}
+
+std::string blur_fit_problem(double blur_px, int along, int margin, const std::string& what) {
+  if (std::isfinite(blur_px) && blur_px >= 0 && blur_px <= kMaxBlurPx &&
+      blur_px + margin < static_cast<double>(along))
+    return {};
+  std::ostringstream text;
+  text.precision(15);
+  text << what << " (" << blur_px << " px) ";
+  if (!std::isfinite(blur_px) || blur_px < 0)
+    text << "must be a finite number >= 0";
+  else if (blur_px > kMaxBlurPx)
+    text << "is beyond the longest blur, " << kMaxBlurPx << " px";
+  else
+    text << "does not fit the frame along the motion (" << along << " px"
+         << (margin > 0 ? ", less " + std::to_string(margin) : std::string()) << ")";
+  return text.str();
+}
+
+}  // namespace flutterscan::imaging

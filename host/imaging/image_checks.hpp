@@ -1,0 +1,31 @@
+#pragma once
+// Preconditions the public imaging functions check at their entry, so that a
+// hostile frame or model is an error result, never an out-of-bounds access or
+// an allocation sized by a wild value (issue 20).
+
+#include <string>
+
+#include "imaging/capture_model.hpp"
+#include "imaging/image.hpp"
+
+namespace flutterscan::imaging {
+
+/// \brief Why `image` cannot be processed (no channel, an empty plane, planes of
+/// different sizes, pixels not width x height, a side beyond kMaxFrameSidePx);
+/// empty if it can.
+std::string image_problem(const Image& image);
+
+/// \brief Why the model's light scale cannot be computed with (crosstalk entries
+/// beyond kMaxCrosstalk, LED or ambient electrons beyond kMaxModelElectrons: the
+/// PSFs' spectra, squared in float, would overflow to inf and NaN); empty if fine.
+std::string model_scale_problem(const CaptureModel& model);
+
+/// \brief The image's extent along `direction`'s motion, pixels.
+int extent_along_motion(const Image& image, Direction direction);
+
+/// \brief Why a blur of `blur_px` does not fit `along` pixels along the motion
+/// with `margin` pixels to spare (not finite, negative, beyond kMaxBlurPx, or
+/// blur + margin >= along); empty if it fits. `what` names the blur in the message.
+std::string blur_fit_problem(double blur_px, int along, int margin, const std::string& what);
+
+}  // namespace flutterscan::imaging
