@@ -100,6 +100,14 @@ TEST(Protocol, RequestWithStatusByteSetIsRefused) {
   EXPECT_TRUE(parse_message(report).ok());  // replies may carry a status
 }
 
+TEST(Protocol, ControllerStatesHaveTheirNamesAndOthersAreUnknown) {
+  EXPECT_STREQ(controller_state_name(0), "idle");
+  EXPECT_STREQ(controller_state_name(1), "armed");
+  EXPECT_STREQ(controller_state_name(2), "exposing");
+  EXPECT_STREQ(controller_state_name(3), "fault");
+  EXPECT_STREQ(controller_state_name(4), "unknown");
+}
+
 TEST(Protocol, PayloadMustHaveTheExactSize) {
   std::array<std::uint8_t, 13> bytes{};
   EXPECT_EQ(decode_payload<SetTimingRequest>(std::span(bytes).first(11)).error(),

@@ -116,6 +116,18 @@ TEST_F(UsbDeviceTest, DescriptorsAreCutToWLengthAndStringZeroListsEnUs) {
   EXPECT_EQ(serial.data[48], '6');
 }
 
+TEST(SetupPacket, BytesAreTheWireOrderParseReadsBack) {
+  constexpr usb::SetupPacket packet{0xA1, 0x03, 0x1234, 0x0001, 0x0006};
+  constexpr std::array<std::uint8_t, 8> wire{0xA1, 0x03, 0x34, 0x12, 0x01, 0x00, 0x06, 0x00};
+  EXPECT_EQ(packet.bytes(), wire);
+  const usb::SetupPacket back = usb::SetupPacket::parse(wire);
+  EXPECT_EQ(back.request_type, 0xA1);
+  EXPECT_EQ(back.request, 0x03);
+  EXPECT_EQ(back.value, 0x1234);
+  EXPECT_EQ(back.index, 0x0001);
+  EXPECT_EQ(back.length, 0x0006);
+}
+
 TEST(UsbSerial, UniqueIdBytesInAddressOrderAsUpperCaseHex) {
   const std::array<std::uint8_t, 12> uid{0x00, 0x01, 0xAB, 0xCD, 0xEF, 0x10,
                                          0x9F, 0xFF, 0x7E, 0x22, 0x5A, 0xA5};

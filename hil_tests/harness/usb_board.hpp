@@ -12,6 +12,8 @@
 #include <span>
 #include <vector>
 
+#include "flutterscan/firmware/usb/usb_types.hpp"
+
 namespace flutterscan::hil {
 
 /// \brief How a control transfer ended.
@@ -41,14 +43,7 @@ class UsbBoard {
 constexpr std::array<std::uint8_t, 8> make_setup(std::uint8_t request_type, std::uint8_t request,
                                                  std::uint16_t value, std::uint16_t index,
                                                  std::uint16_t length) {
-  return {request_type,
-          request,
-          static_cast<std::uint8_t>(value & 0xFF),
-          static_cast<std::uint8_t>(value >> 8),
-          static_cast<std::uint8_t>(index & 0xFF),
-          static_cast<std::uint8_t>(index >> 8),
-          static_cast<std::uint8_t>(length & 0xFF),
-          static_cast<std::uint8_t>(length >> 8)};
+  return firmware::usb::SetupPacket{request_type, request, value, index, length}.bytes();
 }
 
 }  // namespace flutterscan::hil

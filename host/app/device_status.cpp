@@ -10,20 +10,6 @@
 namespace flutterscan::app {
 namespace {
 
-const char* state_name(std::uint8_t state) {
-  switch (static_cast<protocol::ControllerState>(state)) {
-    case protocol::ControllerState::kIdle:
-      return "idle";
-    case protocol::ControllerState::kArmed:
-      return "armed";
-    case protocol::ControllerState::kExposing:
-      return "exposing";
-    case protocol::ControllerState::kFault:
-      return "fault";
-  }
-  return "unknown";
-}
-
 const char* mode_name(std::uint8_t mode) {
   switch (static_cast<protocol::SyncMode>(mode)) {
     case protocol::SyncMode::kSlave:
@@ -76,7 +62,7 @@ std::string flags_text(std::uint8_t flags) {
 void run(const DeviceTarget& target) {
   DeviceSession session(target);
   const auto s = value_or_throw(session.client().status());
-  std::printf("state            %s\n", state_name(s.state));
+  std::printf("state            %s\n", protocol::controller_state_name(s.state));
   std::printf("mode             %s\n", mode_name(s.sync_mode));
   std::printf("active code      %s\n", code_id_text(s.active_code_id).c_str());
   std::printf("pending code     %s\n", code_id_text(s.pending_code_id).c_str());

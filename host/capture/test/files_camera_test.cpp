@@ -4,6 +4,7 @@
 #include "capture/files_camera.hpp"
 
 #include <gtest/gtest.h>
+#include <unistd.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
@@ -18,12 +19,26 @@ namespace {
 namespace fs = std::filesystem;
 using namespace std::chrono_literals;
 
-fs::path fresh_folder(const std::string& name) {
-  const fs::path folder = fs::temp_directory_path() / ("flutterscan_files_" + name);
-  fs::remove_all(folder);
-  fs::create_directories(folder);
-  return folder;
-}
+/// A fresh folder under the temp directory, removed with the object.
+class ScratchFolder {
+ public:
+  explicit ScratchFolder(const std::string& name)
+      : path_(fs::temp_directory_path() /
+              ("flutterscan_files_" + name + "_" + std::to_string(::getpid()))) {
+    fs::remove_all(path_);
+    fs::create_directories(path_);
+  }
+  ~ScratchFolder() {
+    std::error_code ignored;
+    fs::remove_all(path_, ignored);
+  }
+  ScratchFolder(const ScratchFolder&) = delete;
+  ScratchFolder& operator=(const ScratchFolder&) = delete;
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
 
 /// A 16-bit RGB frame whose red value is `red` everywhere, with a descriptor.
 void write_frame(const fs::path& folder, const std::string& stem, std::uint16_t red,
@@ -39,7 +54,8 @@ void write_frame(const fs::path& folder, const std::string& stem, std::uint16_t 
 }
 
 TEST(FilesCamera, ReplaysInNameOrderWithRecordedIdsAndCountsGaps) {
-  const fs::path folder = fresh_folder("replay");
+  const ScratchFolder scratch("replay");
+  const fs::path& folder = scratch.path();
   write_frame(folder, "f002", 300, 11, 2000);
   write_frame(folder, "f001", 100, 10, 1000);
   write_frame(folder, "f003", 900, 13, 4000);
@@ -75,7 +91,8 @@ TEST(FilesCamera, ReplaysInNameOrderWithRecordedIdsAndCountsGaps) {
 }
 
 TEST(FilesCamera, RefusesAFolderWithoutFrames) {
-  const fs::path folder = fresh_folder("empty");
+  const ScratchFolder scratch("empty");
+  const fs::path& folder = scratch.path();
   auto camera = make_files_camera(folder.string());
   const std::string problem = camera->open();
   EXPECT_NE(problem.find(folder.string()), std::string::npos) << problem;
@@ -85,7 +102,8 @@ TEST(FilesCamera, RefusesAFolderWithoutFrames) {
 }
 
 TEST(FilesCamera, RefusesAnotherSizeThanRecorded) {
-  const fs::path folder = fresh_folder("size");
+  const ScratchFolder scratch("size");
+  const fs::path& folder = scratch.path();
   write_frame(folder, "a", 1, 0, 0);
   auto camera = make_files_camera(folder.string());
   ASSERT_EQ(camera->open(), "");

@@ -39,12 +39,26 @@ Bytes make_image(std::uint16_t board_id, std::size_t payload_size = 3000) {
   return image;
 }
 
-fs::path temp_file(const std::string& name) {
-  const fs::path dir =
-      fs::temp_directory_path() / ("flutterscan_image_test_" + std::to_string(::getpid()));
-  fs::create_directories(dir);
-  return dir / name;
+/// The folder of this process's image files under the temp directory.
+fs::path temp_folder() {
+  return fs::temp_directory_path() / ("flutterscan_image_test_" + std::to_string(::getpid()));
 }
+
+fs::path temp_file(const std::string& name) {
+  fs::create_directories(temp_folder());
+  return temp_folder() / name;
+}
+
+/// Removes the image files once every test has run.
+class TempFolderCleanup : public ::testing::Environment {
+ public:
+  void TearDown() override {
+    std::error_code ignored;
+    fs::remove_all(temp_folder(), ignored);
+  }
+};
+[[maybe_unused]] ::testing::Environment* const kTempFolderCleanup =
+    ::testing::AddGlobalTestEnvironment(new TempFolderCleanup);
 
 void write_file(const fs::path& path, const Bytes& bytes) {
   std::ofstream(path, std::ios::binary)

@@ -182,9 +182,8 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
     const double saturated = converted.value().saturated_share;
     lap("guards");
     const auto windows = reader::decode_windows(reader::find_paper_runs(latent), latent.width,
-                                                 latent.height, imaging::Direction::kPlusX);
-    const auto readout =
-        reader::read_barcodes(latent, reader::kDefaultSymbologies, true, windows);
+                                                latent.height, imaging::Direction::kPlusX);
+    const auto readout = reader::read_barcodes(latent, reader::kDefaultSymbologies, true, windows);
     lap("decode");
     if (r == 0)
       std::cout << "stage frame: blur " << model.value().blur_px << " px refined to "

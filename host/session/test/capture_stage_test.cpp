@@ -70,7 +70,7 @@ struct CaptureRun {
 /// Capture of `frames` frames with all their events, the workers' queue `queue_depth` deep
 /// and nobody taking from it.
 CaptureRun capture(ScriptedCamera& camera, int frames, std::size_t queue_depth,
-            const ProcessingConfig& limits, bool stop_requested) {
+                   const ProcessingConfig& limits, bool stop_requested) {
   EventInbox inbox;
   receive_events(inbox, frames);
   OpticsConfig optics;

@@ -73,7 +73,8 @@ TEST(ModelFit, NominalGreyFrameKeepsTheSimplestModel) {
   EXPECT_EQ(fitted.value().log["model"]["chosen"],
             "grey latent, global code phase, blur from the encoder");
   EXPECT_LT(fitted.value().log["guards"]["residual_ratio"].get<double>(), 1.5);
-  EXPECT_EQ(reader::code_texts(reader::read_barcodes(fitted.value().latent)), std::vector<std::string>{"FIT-0042"});
+  EXPECT_EQ(reader::code_texts(reader::read_barcodes(fitted.value().latent)),
+            std::vector<std::string>{"FIT-0042"});
 }
 
 TEST(ModelFit, ColourPrintGetsPerChannelLatents) {
@@ -85,7 +86,8 @@ TEST(ModelFit, ColourPrintGetsPerChannelLatents) {
   ASSERT_TRUE(fitted.ok()) << fitted.error();
   EXPECT_EQ(fitted.value().log["model"]["chosen"],
             "per-channel latents, global code phase, blur from the encoder");
-  EXPECT_EQ(reader::code_texts(reader::read_barcodes(fitted.value().latent)), std::vector<std::string>{"FIT-0042"});
+  EXPECT_EQ(reader::code_texts(reader::read_barcodes(fitted.value().latent)),
+            std::vector<std::string>{"FIT-0042"});
 }
 
 TEST(ModelFit, WithoutAnEncoderTheBlurComesFromTheFrame) {
@@ -101,7 +103,8 @@ TEST(ModelFit, WithoutAnEncoderTheBlurComesFromTheFrame) {
   EXPECT_NEAR(fitted.value().log["model"]["blur_px"].get<double>(), 47.5, 0.3);
   EXPECT_EQ(fitted.value().log["model"]["chosen"],
             "grey latent, global code phase, blur estimated from the frame");
-  EXPECT_EQ(reader::code_texts(reader::read_barcodes(fitted.value().latent)), std::vector<std::string>{"FIT-0042"});
+  EXPECT_EQ(reader::code_texts(reader::read_barcodes(fitted.value().latent)),
+            std::vector<std::string>{"FIT-0042"});
 }
 
 TEST(ModelFit, TheBlurCheckCatchesAWrongEncoderReading) {

@@ -37,7 +37,7 @@ FrameOutcome dropped(std::uint64_t index) {
 }
 
 TEST(ResultsStage, OutcomesAreHandledInCaptureOrderAndObjectsPublishedOnce) {
-  testing::ScratchFolder scratch("results");
+  testing::ScratchFolder scratch("results_order");
   SessionFolder folder;
   ASSERT_EQ(folder.open(scratch.path().string(), 100), "");
   ResultsServer server;
@@ -81,7 +81,7 @@ TEST(ResultsStage, OutcomesAreHandledInCaptureOrderAndObjectsPublishedOnce) {
 }
 
 TEST(ResultsStage, AFrameThatFailedWithoutFlagsIsLoggedAsAnError) {
-  testing::ScratchFolder scratch("results");
+  testing::ScratchFolder scratch("results_error");
   SessionFolder folder;
   ASSERT_EQ(folder.open(scratch.path().string(), 100), "");
   ResultsServer server;

@@ -62,7 +62,8 @@ fs::path only_session(const fs::path& out) {
 }
 
 TEST(SessionCli, SigintMidSessionLeavesAValidCompleteFolder) {
-  const fs::path out = fresh_folder("sigint");
+  const ScratchFolder scratch("sigint");
+  const fs::path& out = scratch.path();
   const pid_t pid =
       spawn({"demo", "--frames", "100000", "--out", out.string(), "--no-progress"}, out);
   // Wait until the session has logged a few frames.
@@ -96,7 +97,8 @@ TEST(SessionCli, SigintMidSessionLeavesAValidCompleteFolder) {
 }
 
 TEST(SessionCli, BadConfigurationExitsTwoNamingTheKey) {
-  const fs::path out = fresh_folder("badconfig");
+  const ScratchFolder scratch("badconfig");
+  const fs::path& out = scratch.path();
   std::ofstream(out / "bad.toml") << "[processing]\nworkers = 0\n";
   const pid_t pid = spawn(
       {"scan", "--config", (out / "bad.toml").string(), "--out", out.string(), "--frames", "3"},
@@ -126,7 +128,8 @@ TEST(SessionReport, LoadsInHeadlessChromiumWithoutConsoleErrors) {
     std::cerr << "skipped: Debian's chromium is not installed (tools/install-deps installs it)\n";
     std::exit(77);
   }
-  const fs::path out = fresh_folder("chromium");
+  const ScratchFolder scratch("chromium");
+  const fs::path& out = scratch.path();
   const pid_t pid = spawn({"demo", "--frames", "40", "--out", out.string(), "--no-progress"}, out);
   ASSERT_EQ(wait_exit(pid), 0) << read_text(out / "stderr.txt");
   const fs::path report = only_session(out) / "report.html";

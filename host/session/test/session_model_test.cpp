@@ -19,7 +19,8 @@ namespace fs = std::filesystem;
 using namespace testing;
 
 TEST(SimSessionModels, WithoutAnEncoderEachFrameEstimatesItsBlur) {
-  const fs::path out = fresh_folder("no_encoder");
+  const ScratchFolder scratch("no_encoder");
+  const fs::path& out = scratch.path();
   SessionConfig config = small_sim_config(out, 40);
   config.optics.encoder = false;
   config.optics.nominal_blur_px = 48;  // the belt runs 52 px per exposure
@@ -46,7 +47,8 @@ TEST(SimSessionModels, WithoutAnEncoderEachFrameEstimatesItsBlur) {
 }
 
 TEST(SimSessionModels, SchemeAutoFollowsTheRegimeMap) {
-  const fs::path out = fresh_folder("scheme_auto");
+  const ScratchFolder scratch("scheme_auto");
+  const fs::path& out = scratch.path();
   SessionConfig config = small_sim_config(out, 30);
   config.controller.code = "auto";
   config.optics.electrons = 3000;
@@ -97,7 +99,8 @@ TEST(SimSessionModels, SchemeAutoMeasuresTheLightAndPicksItsScheme) {
     const char* scheme;
   };
   for (const Case c : {Case{1000, std::nullopt, "snapshot-2"}, Case{3000, 1000.0, "found-mse"}}) {
-    const fs::path out = fresh_folder("scheme_light");
+    const ScratchFolder scratch("scheme_light");
+    const fs::path& out = scratch.path();
     SessionConfig config = auto_scheme_config(out, c.true_electrons);
     if (c.configured) {
       config.optics.electrons = *c.configured;
@@ -140,7 +143,8 @@ TEST(SimSessionModels, SchemeAutoMeasuresTheLightAndPicksItsScheme) {
 // configured light the session fails naming why (a line failure, exit 1);
 // with one it falls back to it and says so.
 TEST(SimSessionModels, SchemeAutoFailsOrFallsBackWhenTheLightCannotBeMeasured) {
-  const fs::path out = fresh_folder("scheme_light_saturated");
+  const ScratchFolder scratch("scheme_light_saturated");
+  const fs::path& out = scratch.path();
   SessionConfig config = auto_scheme_config(out, 20000);
   std::atomic<bool> stop{false};
   const SessionOutcome failed = run_session(config, stop, {});
@@ -175,7 +179,8 @@ TEST(SimSessionModels, SchemeAutoFailsOrFallsBackWhenTheLightCannotBeMeasured) {
 }
 
 TEST(SimSessionModels, AFlatFieldIsAppliedAndABadOneRefusedBeforeStart) {
-  const fs::path out = fresh_folder("flat_field");
+  const ScratchFolder scratch("flat_field");
+  const fs::path& out = scratch.path();
   // A flat field of uniform light (every tile the same mixing): labels still read.
   imaging::FlatField flat;
   flat.width = 640;

@@ -6,7 +6,7 @@
 
 #include <fstream>
 
-#include "session/test/stage_test_support.hpp"
+#include "session/test/session_test_support.hpp"
 
 namespace flutterscan::session {
 namespace {
@@ -31,7 +31,7 @@ TEST(SessionStart, ASimCameraNeedsTheVirtualControllerInSlaveSync) {
 }
 
 TEST(SessionStart, AnUnreadableFlatFieldIsRefusedNamingTheFile) {
-  testing::ScratchFolder scratch("start");
+  testing::ScratchFolder scratch("start_flat_field");
   const auto path = scratch.path() / "flat.json";
   std::ofstream(path) << "{ not json";
   SessionConfig config;
@@ -53,7 +53,7 @@ TEST(SessionStart, ABadConfigurationIsRefusedFirst) {
 }
 
 TEST(SessionStart, TimestampedFoldersNeverReuseAName) {
-  testing::ScratchFolder scratch("start");
+  testing::ScratchFolder scratch("start_folder_names");
   OutputConfig output;
   output.dir = scratch.path().string();
   output.timestamped_subfolder = false;

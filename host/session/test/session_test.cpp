@@ -27,7 +27,8 @@ SessionOutcome run(const SessionConfig& config, const SessionHooks& hooks = {}) 
 }
 
 TEST(SimSession, EveryLabelReadEqualsItsGroundTruthAtNominalNoise) {
-  const fs::path out = fresh_folder("nominal");
+  const ScratchFolder scratch("nominal");
+  const fs::path& out = scratch.path();
   const SessionOutcome outcome = run(small_sim_config(out, 90));
   ASSERT_EQ(outcome.error, "");
   const auto& s = outcome.summary;
@@ -59,7 +60,8 @@ TEST(SimSession, EveryLabelReadEqualsItsGroundTruthAtNominalNoise) {
 }
 
 TEST(SimSession, JitterAndLostFramesAreReportedExactly) {
-  const fs::path out = fresh_folder("jitter");
+  const ScratchFolder scratch("jitter");
+  const fs::path& out = scratch.path();
   SessionConfig config = small_sim_config(out, 80);
   config.camera.options.push_back({"jitter", "0.05"});
   config.camera.options.push_back({"drop_probability", "0.12"});
@@ -86,7 +88,8 @@ TEST(SimSession, JitterAndLostFramesAreReportedExactly) {
 }
 
 TEST(SimSession, OverloadDropsAtTheQueueAndCountsEveryDrop) {
-  const fs::path out = fresh_folder("overload");
+  const ScratchFolder scratch("overload");
+  const fs::path& out = scratch.path();
   SessionConfig config = small_sim_config(out, 40);
   config.camera.options.push_back({"ring_frames", "4"});        // frames arrive as fast as copied
   config.processing.method = imaging::Method::kTotalVariation;  // slow on purpose
@@ -112,7 +115,8 @@ TEST(SimSession, OverloadDropsAtTheQueueAndCountsEveryDrop) {
 }
 
 TEST(SimSession, FrameFilesRotateWithinTheDiskBudgetAndTheLogNever) {
-  const fs::path out = fresh_folder("rotation");
+  const ScratchFolder scratch("rotation");
+  const fs::path& out = scratch.path();
   SessionConfig config = small_sim_config(out, 24);
   config.output.keep_first_frames = 24;  // every frame's files
   config.output.disk_budget_mb = 2.5;    // a raw 640x240 frame is ~0.6 MB
@@ -157,7 +161,8 @@ std::vector<std::string> read_lines_until_closed(int fd) {
 }
 
 TEST(SimSession, ATcpClientReadsOneLinePerObject) {
-  const fs::path out = fresh_folder("tcp");
+  const ScratchFolder scratch("tcp");
+  const fs::path& out = scratch.path();
   SessionConfig config = small_sim_config(out, 50);
   config.results.tcp_port = 0;
   config.output.report = false;

@@ -1,9 +1,12 @@
 #pragma once
-// Helpers for the session tests: a small, fast sim session configuration and
-// reading a session folder back.
+// Helpers for the session tests: a scratch folder, a small, fast sim session
+// configuration and reading a session folder back.
 
+#include <gtest/gtest.h>
+#include <unistd.h>
 #include <nlohmann/json.hpp>
 
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -13,13 +16,33 @@
 
 namespace flutterscan::session::testing {
 
-/// \brief A fresh, empty folder under the temp directory.
-inline std::filesystem::path fresh_folder(const std::string& name) {
-  const auto folder = std::filesystem::temp_directory_path() / ("flutterscan_session_" + name);
-  std::filesystem::remove_all(folder);
-  std::filesystem::create_directories(folder);
-  return folder;
-}
+/// \brief A fresh, empty folder under the temp directory (named for the test
+/// and this process: runs in other worktrees do not share it), removed with
+/// everything in it when the test has not failed (a failed test's stays, its
+/// path printed).
+class ScratchFolder {
+ public:
+  explicit ScratchFolder(const std::string& name)
+      : path_(std::filesystem::temp_directory_path() /
+              ("flutterscan_session_" + name + "_" + std::to_string(::getpid()))) {
+    std::filesystem::remove_all(path_);
+    std::filesystem::create_directories(path_);
+  }
+  ~ScratchFolder() {
+    if (::testing::Test::HasFailure()) {
+      std::printf("session folder kept for a look: %s\n", path_.c_str());
+      return;
+    }
+    std::error_code ignored;
+    std::filesystem::remove_all(path_, ignored);
+  }
+  ScratchFolder(const ScratchFolder&) = delete;
+  ScratchFolder& operator=(const ScratchFolder&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+
+ private:
+  std::filesystem::path path_;
+};
 
 /// \brief A sim session of `frames` exposures at 640x240 (a label every ~31 frames of belt),
 /// nominal noise (3000 e-, 4 e- read noise), written straight into `out`.

@@ -1,11 +1,6 @@
 #pragma once
 // Helpers for the session stages' unit tests: exposures with their frames on
-// one clock, and a scratch folder removed when the test ends.
-
-#include <gtest/gtest.h>
-
-#include <filesystem>
-#include <string>
+// one clock.
 
 #include "capture/camera_source.hpp"
 #include "session/frame_matcher.hpp"
@@ -38,27 +33,5 @@ inline capture::Frame frame_of(int k, std::int64_t arrival_ns = 1) {
   f.data.assign(8, 0);
   return f;
 }
-
-/// \brief A fresh folder under the temp directory, removed with the object.
-class ScratchFolder {
- public:
-  explicit ScratchFolder(const std::string& name)
-      : path_(std::filesystem::temp_directory_path() /
-              ("flutterscan_stage_" + name + "_" +
-               ::testing::UnitTest::GetInstance()->current_test_info()->name())) {
-    std::filesystem::remove_all(path_);
-    std::filesystem::create_directories(path_);
-  }
-  ~ScratchFolder() {
-    std::error_code ignored;
-    std::filesystem::remove_all(path_, ignored);
-  }
-  ScratchFolder(const ScratchFolder&) = delete;
-  ScratchFolder& operator=(const ScratchFolder&) = delete;
-  const std::filesystem::path& path() const { return path_; }
-
- private:
-  std::filesystem::path path_;
-};
 
 }  // namespace flutterscan::session::testing

@@ -80,7 +80,8 @@ TEST_P(BarcodeRoundTrip, RendersAndDecodesToItsContent) {
   const auto& param = GetParam();
   const imaging::Plane image = render_ok(make_spec(param.kind, param.content));
   ASSERT_FALSE(image.empty());
-  EXPECT_EQ(reader::code_texts(reader::read_barcodes(image)), std::vector<std::string>{param.content});
+  EXPECT_EQ(reader::code_texts(reader::read_barcodes(image)),
+            std::vector<std::string>{param.content});
 }
 
 TEST_P(BarcodeRoundTrip, FractionalModulesStillDecode) {
@@ -89,7 +90,8 @@ TEST_P(BarcodeRoundTrip, FractionalModulesStillDecode) {
   spec.module_px = 2.5;
   const imaging::Plane image = render_ok(spec);
   ASSERT_FALSE(image.empty());
-  EXPECT_EQ(reader::code_texts(reader::read_barcodes(image)), std::vector<std::string>{param.content});
+  EXPECT_EQ(reader::code_texts(reader::read_barcodes(image)),
+            std::vector<std::string>{param.content});
 }
 
 INSTANTIATE_TEST_SUITE_P(

@@ -172,6 +172,22 @@ constexpr const char* status_text(Status status) {
 /// \brief Controller states (GetStatus).
 enum class ControllerState : std::uint8_t { kIdle = 0, kArmed = 1, kExposing = 2, kFault = 3 };
 
+/// \brief The state as people read it (GetStatus's `state` byte): "idle", "armed",
+/// "exposing", "fault", or "unknown" for a number the protocol does not define.
+constexpr const char* controller_state_name(std::uint8_t state) {
+  switch (static_cast<ControllerState>(state)) {
+    case ControllerState::kIdle:
+      return "idle";
+    case ControllerState::kArmed:
+      return "armed";
+    case ControllerState::kExposing:
+      return "exposing";
+    case ControllerState::kFault:
+      return "fault";
+  }
+  return "unknown";
+}
+
 /// \brief How exposures are started.
 enum class SyncMode : std::uint8_t {
   kSlave = 0,    ///< the camera's strobe output starts each sequence

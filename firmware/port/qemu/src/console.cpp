@@ -97,20 +97,6 @@ bool parse_i32(std::string_view text, std::int32_t& out) {
   return true;
 }
 
-std::string_view state_name(std::uint8_t state) {
-  switch (static_cast<protocol::ControllerState>(state)) {
-    case protocol::ControllerState::kIdle:
-      return "idle";
-    case protocol::ControllerState::kArmed:
-      return "armed";
-    case protocol::ControllerState::kExposing:
-      return "exposing";
-    case protocol::ControllerState::kFault:
-      return "fault";
-  }
-  return "unknown";
-}
-
 std::string_view mode_name(std::uint8_t mode) {
   switch (static_cast<protocol::SyncMode>(mode)) {
     case protocol::SyncMode::kSlave:
@@ -243,7 +229,8 @@ void Console::cmd_status() {
   if (status != Status::kOk) return fail("GetStatus", status);
   const auto s = reply_payload<protocol::StatusReply>(reply);
   Line out;
-  out << "status state " << state_name(s.state) << " mode " << mode_name(s.sync_mode) << " code ";
+  out << "status state " << protocol::controller_state_name(s.state) << " mode "
+      << mode_name(s.sync_mode) << " code ";
   if (s.active_code_id == protocol::kNoCode)
     out << "none";
   else

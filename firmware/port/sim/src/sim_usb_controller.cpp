@@ -11,14 +11,7 @@ ControlResult SimUsbController::control_transfer(std::uint8_t request_type, std:
                                                  std::uint16_t value, std::uint16_t index,
                                                  std::uint16_t length,
                                                  std::span<const std::uint8_t> out_data) {
-  const std::array<std::uint8_t, 8> setup{request_type,
-                                          request,
-                                          static_cast<std::uint8_t>(value & 0xFF),
-                                          static_cast<std::uint8_t>(value >> 8),
-                                          static_cast<std::uint8_t>(index & 0xFF),
-                                          static_cast<std::uint8_t>(index >> 8),
-                                          static_cast<std::uint8_t>(length & 0xFF),
-                                          static_cast<std::uint8_t>(length >> 8)};
+  const auto setup = usb::SetupPacket{request_type, request, value, index, length}.bytes();
   return control_transfer(setup, out_data);
 }
 

@@ -5,6 +5,7 @@
 // specification (tables 9-2 to 9-6) and the HID 1.11 and DFU 1.1 class specs.
 // Freestanding C++20: no heap, no exceptions, no RTTI.
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -27,6 +28,18 @@ struct SetupPacket {
     return SetupPacket{bytes[0], bytes[1], static_cast<std::uint16_t>(bytes[2] | bytes[3] << 8),
                        static_cast<std::uint16_t>(bytes[4] | bytes[5] << 8),
                        static_cast<std::uint16_t>(bytes[6] | bytes[7] << 8)};
+  }
+
+  /// \brief The packet as it goes on the wire (the inverse of parse()).
+  constexpr std::array<std::uint8_t, 8> bytes() const {
+    return {request_type,
+            request,
+            static_cast<std::uint8_t>(value & 0xFF),
+            static_cast<std::uint8_t>(value >> 8),
+            static_cast<std::uint8_t>(index & 0xFF),
+            static_cast<std::uint8_t>(index >> 8),
+            static_cast<std::uint8_t>(length & 0xFF),
+            static_cast<std::uint8_t>(length >> 8)};
   }
 
   /// \brief Device-to-host data stage (or no data stage with direction bit set).
