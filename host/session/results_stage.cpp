@@ -63,6 +63,13 @@ void ResultsStage::handle_processed(FrameOutcome& f) {
   f.latency_ms = ms_between(f.arrival_ns, done);
   f.log["latency_ms"] = std::round(f.latency_ms * 100) / 100;
   results_.latency_ms.push_back(f.latency_ms);
+  if (const auto motion = f.log.find("motion"); motion != f.log.end() && motion->is_object()) {
+    if (motion->value("used", false))
+      results_.refined_minus_encoder_px.push_back(motion->value("refined_blur_px", 0.0) -
+                                                  motion->value("encoder_blur_px", 0.0));
+    else if (!motion->value("edges", true))
+      ++results_.frames_without_motion_edges;
+  }
   results_.processed_at_s.push_back(ms_between(start_ns_, done) * 1e-3);
   ++pipeline_.frames_processed;
   tracker_.observe(f.index, f.sequence, f.travel_px, f.sightings);

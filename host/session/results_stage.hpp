@@ -36,6 +36,10 @@ struct SessionResults {
   std::string save_error;  ///< the first frame file that could not be saved
   std::map<std::string, std::uint64_t> models_chosen;   ///< by model
   std::map<std::string, std::uint64_t> frames_flagged;  ///< by flag
+  /// Motion refinement: refined - encoder blur (px) of every frame deblurred with
+  /// its refined blur, and how many frames had no edges to refine it on.
+  std::vector<double> refined_minus_encoder_px;
+  std::uint64_t frames_without_motion_edges = 0;
 };
 
 class ResultsStage {

@@ -61,6 +61,14 @@ nlohmann::json session_summary(const SessionConfig& config, const SessionCounts&
   s["fps"] = duration_s > 0 ? std::round(counts.frames_processed / duration_s * 10) / 10 : 0.0;
   s["latency_ms_p50"] = std::round(percentile(results.latency_ms, 50) * 10) / 10;
   s["latency_ms_p99"] = std::round(percentile(results.latency_ms, 99) * 10) / 10;
+  // Motion refinement (processing.blur_tolerance): how far the frames moved the encoder's blur.
+  const auto& delta = results.refined_minus_encoder_px;
+  const auto px = [](double v) { return std::round(v * 1000) / 1000; };
+  s["motion_refinement"] = {{"frames_refined", delta.size()},
+                            {"frames_without_edges", results.frames_without_motion_edges},
+                            {"refined_minus_encoder_px_p5", px(percentile(delta, 5))},
+                            {"refined_minus_encoder_px_p50", px(percentile(delta, 50))},
+                            {"refined_minus_encoder_px_p95", px(percentile(delta, 95))}};
   s["clock_drift_ppm"] = std::round(counts.clocks.drift_ppm() * 10) / 10;
   s["clock_fit_points"] = counts.clocks.points;
   s["stopped_by"] = counts.stopped_by;

@@ -42,6 +42,14 @@ TEST(SimSession, EveryLabelReadEqualsItsGroundTruthAtNominalNoise) {
   EXPECT_EQ(s["frames_without_event"], 0);
   EXPECT_EQ(s["events_without_frame"], 0);
   EXPECT_NEAR(s["clock_drift_ppm"].get<double>(), 40.0, 1.0);  // the sim camera's clock
+  // Motion refinement on by default: frames with a label refine the encoder's blur, which the
+  // sim camera gives exactly, so the refined blur stays within a few hundredths of a pixel.
+  const auto& motion = s["motion_refinement"];
+  EXPECT_GT(motion["frames_refined"].get<int>(), 10) << motion.dump();
+  EXPECT_GT(motion["frames_without_edges"].get<int>() + motion["frames_refined"].get<int>(), 0);
+  EXPECT_LT(std::abs(motion["refined_minus_encoder_px_p50"].get<double>()), 0.05) << motion.dump();
+  EXPECT_LT(std::abs(motion["refined_minus_encoder_px_p5"].get<double>()), 0.2) << motion.dump();
+  EXPECT_LT(std::abs(motion["refined_minus_encoder_px_p95"].get<double>()), 0.2) << motion.dump();
   // Every object read, each as one object over several frames.
   for (const auto& o : s["object_results"]) {
     EXPECT_EQ(o["status"], "READ") << o.dump();
