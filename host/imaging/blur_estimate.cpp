@@ -10,6 +10,7 @@
 
 #include "imaging/image_checks.hpp"
 #include "imaging/joint_wiener.hpp"
+#include "imaging/golden_section.hpp"
 #include "imaging/motion_frame.hpp"
 #include "imaging/row_fft.hpp"
 
@@ -136,47 +137,7 @@ class ConsistencyCost {
   AlignedFloats product_, residual_;
 };
 
-/// Golden-section minimum of `cost` on [lo, hi] to within `tolerance`.
-template <typename Cost>
-double golden_minimum(Cost&& cost, double lo, double hi, double tolerance) {
-  const double ratio = (std::sqrt(5.0) - 1) / 2;
-  double a = hi - ratio * (hi - lo), b = lo + ratio * (hi - lo);
-  double fa = cost(a), fb = cost(b);
-  while (hi - lo > tolerance) {
-    if (fa < fb) {
-      hi = b;
-      b = a;
-      fb = fa;
-      a = hi - ratio * (hi - lo);
-      fa = cost(a);
-    } else {
-      lo = a;
-      a = b;
-      fa = fb;
-      b = lo + ratio * (hi - lo);
-      fb = cost(b);
-    }
-  }
-  return (lo + hi) / 2;
-}
 
-/// True if every channel's PSF is a multiple of every other's (one shared code).
-bool channels_share_one_code(const CaptureModel& model) {
-  std::vector<std::vector<double>> shapes;
-  for (int c = 0; c < model.channels; ++c) {
-    auto taps = channel_psf(model, c);
-    const double total = std::accumulate(taps.begin(), taps.end(), 0.0);
-    if (total > 0)
-      for (double& t : taps) t /= total;
-    shapes.push_back(std::move(taps));
-  }
-  for (std::size_t c = 1; c < shapes.size(); ++c) {
-    if (shapes[c].size() != shapes[0].size()) return false;
-    for (std::size_t i = 0; i < shapes[c].size(); ++i)
-      if (std::abs(shapes[c][i] - shapes[0][i]) > 1e-9) return false;
-  }
-  return true;
-}
 
 }  // namespace
 

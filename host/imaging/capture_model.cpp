@@ -76,6 +76,24 @@ std::vector<double> channel_psf(const CaptureModel& m, int channel) {
   return timeline_channel_psf(m, channel, slot_segments(m));
 }
 
+bool channels_share_one_code(const CaptureModel& model) {
+  std::vector<std::vector<double>> shapes;
+  for (int c = 0; c < model.channels; ++c) {
+    auto taps = channel_psf(model, c);
+    double total = 0;
+    for (double t : taps) total += t;
+    if (total > 0)
+      for (double& t : taps) t /= total;
+    shapes.push_back(std::move(taps));
+  }
+  for (std::size_t c = 1; c < shapes.size(); ++c) {
+    if (shapes[c].size() != shapes[0].size()) return false;
+    for (std::size_t i = 0; i < shapes[c].size(); ++i)
+      if (std::abs(shapes[c][i] - shapes[0][i]) > 1e-9) return false;
+  }
+  return true;
+}
+
 double channel_white_electrons(const CaptureModel& m, int channel) {
   double total = 0;
   for (double tap : channel_psf(m, channel)) total += tap;

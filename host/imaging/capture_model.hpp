@@ -69,6 +69,10 @@ std::vector<double> slot_edges(const CaptureModel& model);
 /// every slot alike. Sums to the white level of the channel.
 std::vector<double> channel_psf(const CaptureModel& model, int channel);
 
+/// \brief True if every channel's PSF is a multiple of every other's (one code
+/// on every channel): such a frame carries no motion information across channels.
+bool channels_share_one_code(const CaptureModel& model);
+
 /// \brief Expected electrons a white object gives channel c over the exposure.
 double channel_white_electrons(const CaptureModel& model, int channel);
 
