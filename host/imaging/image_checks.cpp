@@ -33,6 +33,10 @@ std::string model_scale_problem(const CaptureModel& model) {
     if (!(v <= kMaxCrosstalk))
       return "a crosstalk entry (" + std::to_string(v) + ") is beyond " +
              std::to_string(static_cast<int>(kMaxCrosstalk));
+  for (double v : model.led_electrons)  // a lit LED's light must survive float PSFs
+    if (v != 0 && !(v >= kMinLitElectrons))
+      return "the model's light (" + std::to_string(v) + " e- per slot) is below " +
+             std::to_string(kMinLitElectrons) + " e- (0 for an LED that is off)";
   for (const auto* values : {&model.led_electrons, &model.ambient_electrons})
     for (double v : *values)
       if (!(v <= kMaxModelElectrons))

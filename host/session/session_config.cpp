@@ -410,8 +410,8 @@ std::string check_config(SessionConfig& c) {
   // Electron counts: a pixel holds at most kMaxElectrons (float planes keep them exact enough).
   for (const auto& [key, value] : {std::pair{"optics.electrons", c.optics.electrons},
                                    std::pair{"optics.full_well_e", c.optics.full_well_e}})
-    if (!(value > 0 && value <= kMaxElectrons))
-      return outside(key, value, "(0, " + number_text(kMaxElectrons) + "] e-");
+    if (!(value >= 1 && value <= kMaxElectrons))
+      return outside(key, value, "[1, " + number_text(kMaxElectrons) + "] e-");
   if (c.optics.cap > 1000) return outside("optics.cap", c.optics.cap, "(0, 1000]");
   if (!(c.optics.read_noise_e >= 0 && c.optics.read_noise_e <= 10000))
     return outside("optics.read_noise_e", c.optics.read_noise_e, "[0, 10000] e-");
