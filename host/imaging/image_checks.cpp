@@ -24,6 +24,13 @@ std::string image_problem(const Image& image) {
     if (plane.pixels.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
       return "channel " + std::to_string(c) + " holds " + std::to_string(plane.pixels.size()) +
              " pixels, not width x height";
+    // Non-finite or absurd values (a black level of 1e85 in a descriptor) would turn
+    // the whole deconvolution into inf and NaN.
+    for (std::size_t i = 0; i < plane.pixels.size(); ++i)
+      if (!(std::abs(plane.pixels[i]) <= kMaxPixelValue))
+        return "channel " + std::to_string(c) + " has the value " +
+               std::to_string(plane.pixels[i]) + " at (" + std::to_string(i % width) + ", " +
+               std::to_string(i / width) + "): not a finite number within +-1e15";
   }
   return {};
 }
