@@ -40,6 +40,8 @@ std::string model_scale_problem(const CaptureModel& model) {
     if (!(v <= kMaxCrosstalk))
       return "a crosstalk entry (" + std::to_string(v) + ") is beyond " +
              std::to_string(static_cast<int>(kMaxCrosstalk));
+  if (!(model.gain >= 1e-6))  // electrons = DN x gain: a denormal gain makes every pixel 0
+    return "the conversion gain (" + std::to_string(model.gain) + " e-/DN) is below 1e-6";
   for (double v : model.led_electrons)  // a lit LED's light must survive float PSFs
     if (v != 0 && !(v >= kMinLitElectrons))
       return "the model's light (" + std::to_string(v) + " e- per slot) is below " +

@@ -429,9 +429,10 @@ std::string check_config(SessionConfig& c) {
         "optics.black_level_dn", c.optics.black_level_dn,
         "[0, " + number_text(full_scale_dn) + ") DN",
         "below the full scale of optics.bit_depth = " + std::to_string(c.optics.bit_depth));
-  if (!(c.optics.gain_e_per_dn >= 0 && c.optics.gain_e_per_dn <= kMaxElectrons))
+  if (!(c.optics.gain_e_per_dn == 0 ||
+        (c.optics.gain_e_per_dn >= 1e-3 && c.optics.gain_e_per_dn <= kMaxElectrons)))
     return outside("optics.gain_e_per_dn", c.optics.gain_e_per_dn,
-                   "[0, " + number_text(kMaxElectrons) + "] e-/DN",
+                   "0 or [0.001, " + number_text(kMaxElectrons) + "] e-/DN",
                    "0 means full well at full scale");
   if (c.processing.workers < 1 || c.processing.workers > 64)
     return problem("processing.workers", "must be within 1..64" + got(c.processing.workers));
