@@ -412,7 +412,8 @@ std::string check_config(SessionConfig& c) {
                                    std::pair{"optics.full_well_e", c.optics.full_well_e}})
     if (!(value >= 1 && value <= kMaxElectrons))
       return outside(key, value, "[1, " + number_text(kMaxElectrons) + "] e-");
-  if (c.optics.cap > 1000) return outside("optics.cap", c.optics.cap, "(0, 1000]");
+  if (!(c.optics.cap >= 0.01 && c.optics.cap <= 1000))  // it scales every LED's light
+    return outside("optics.cap", c.optics.cap, "[0.01, 1000]");
   if (!(c.optics.read_noise_e >= 0 && c.optics.read_noise_e <= 10000))
     return outside("optics.read_noise_e", c.optics.read_noise_e, "[0, 10000] e-");
   if (!(c.optics.paper_reflectance > 0 && c.optics.paper_reflectance <= 1))
