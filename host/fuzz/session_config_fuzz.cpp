@@ -38,8 +38,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
              std::to_string(o.px_per_count));
   FUZZ_CHECK(o.nominal_blur_px >= 0 && o.nominal_blur_px <= imaging::kMaxBlurPx,
              std::to_string(o.nominal_blur_px));
-  FUZZ_CHECK(o.electrons > 0 && o.electrons <= session::kMaxElectrons, "electrons");
-  FUZZ_CHECK(o.full_well_e > 0 && o.full_well_e <= session::kMaxElectrons, "full well");
+  FUZZ_CHECK(o.electrons >= 1 && o.electrons <= session::kMaxElectrons, "electrons");
+  FUZZ_CHECK(o.full_well_e >= 1 && o.full_well_e <= session::kMaxElectrons, "full well");
   FUZZ_CHECK(std::isfinite(o.black_level_dn) && o.black_level_dn >= 0, "black level");
   const auto& p = config.processing;
   FUZZ_CHECK(p.queue_depth >= 1 && p.queue_depth <= session::kMaxQueueDepth, "queue depth");

@@ -224,6 +224,8 @@ Result<DeblurResult, std::string> deblur_bayer(const Plane& mosaic_electrons,
     return Out::failure("the mosaic holds " + std::to_string(mosaic_electrons.pixels.size()) +
                         " pixels, not width x height");
   if (auto problem = model_scale_problem(model); !problem.empty()) return Out::failure(problem);
+  if (auto problem = image_problem(Image{{mosaic_electrons}}); !problem.empty())
+    return Out::failure(problem);
   const bool along_x =
       model.direction == Direction::kPlusX || model.direction == Direction::kMinusX;
   if (auto problem = blur_fit_problem(

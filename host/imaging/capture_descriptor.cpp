@@ -1,5 +1,6 @@
 #include "imaging/capture_descriptor.hpp"
 
+#include <cmath>
 #include <stdexcept>
 
 namespace flutterscan::imaging {
@@ -19,6 +20,18 @@ double number(const nlohmann::json& object, const char* name) {
   const auto& value = field(object, name);
   if (!value.is_number()) throw FieldError(std::string("field '") + name + "' must be a number");
   return value.get<double>();
+}
+
+/// A count or index (channels, LEDs, bits): an integer within +-1e6, so that the
+/// conversion to int is defined whatever the file says (issue 20).
+int small_integer(double value, const std::string& name) {
+  if (!(std::abs(value) <= 1e6) || value != std::floor(value))
+    throw FieldError("field '" + name + "' must be a whole number (within +-1000000)");
+  return static_cast<int>(value);
+}
+
+int integer_field(const nlohmann::json& object, const char* name) {
+  return small_integer(number(object, name), std::string(name));
 }
 
 std::vector<double> numbers(const nlohmann::json& value, const std::string& name) {
@@ -113,13 +126,13 @@ Result<CaptureModel, std::string> from_descriptor(const nlohmann::json& d) {
       throw FieldError(std::string("field 'format' must be \"") + kDescriptorFormat + "\"");
     const double version = number(d, "version");
     if (version != kDescriptorVersion)
-      throw FieldError("descriptor version " + std::to_string(static_cast<int>(version)) +
+      throw FieldError("descriptor version " + nlohmann::json(version).dump() +
                        " is not supported (this flutterscan reads version " +
                        std::to_string(kDescriptorVersion) + ")");
     CaptureModel m;
     const auto& code_field = field(d, "code");
     if (!code_field.is_string()) throw FieldError("field 'code' must be a string of digits");
-    const int code_leds = static_cast<int>(number(d, "code_leds"));
+    const int code_leds = integer_field(d, "code_leds");
     const auto code = LedCode::parse(code_field.get<std::string>(), code_leds);
     if (!code.ok()) {
       char message[160];
@@ -132,7 +145,7 @@ Result<CaptureModel, std::string> from_descriptor(const nlohmann::json& d) {
       throw FieldError("field 'led_of_bit' needs one entry per code bit (" +
                        std::to_string(code_leds) + ")");
     for (std::size_t k = 0; k < led_of_bit.size(); ++k)
-      m.led_of_bit[k] = static_cast<int>(led_of_bit[k]);
+      m.led_of_bit[k] = small_integer(led_of_bit[k], std::string("led_of_bit"));
     m.blur_px = number(d, "blur_px");
     if (d.contains("speed_ratio")) m.speed_ratio = number(d, "speed_ratio");
     if (d.contains("pixel_model")) {
@@ -147,8 +160,8 @@ Result<CaptureModel, std::string> from_descriptor(const nlohmann::json& d) {
     const auto& direction = field(d, "direction");
     if (!direction.is_string() || !parse_direction(direction.get<std::string>(), m.direction))
       throw FieldError("field 'direction' must be \"+x\", \"-x\", \"+y\" or \"-y\"");
-    m.channels = static_cast<int>(number(d, "channels"));
-    m.leds = static_cast<int>(number(d, "leds"));
+    m.channels = integer_field(d, "channels");
+    m.leds = integer_field(d, "leds");
     const auto& crosstalk = field(d, "crosstalk");
     if (!crosstalk.is_array()) throw FieldError("field 'crosstalk' must be an array of rows");
     m.crosstalk.clear();
@@ -165,7 +178,7 @@ Result<CaptureModel, std::string> from_descriptor(const nlohmann::json& d) {
     m.gain = number(d, "gain_e_per_dn");
     m.read_noise = number(d, "read_noise_e");
     m.full_well = number(d, "full_well_e");
-    m.bit_depth = static_cast<int>(number(d, "bit_depth"));
+    m.bit_depth = integer_field(d, "bit_depth");
     const auto& encoding = field(d, "encoding");
     const std::string encoding_text = encoding.is_string() ? encoding.get<std::string>() : "";
     if (encoding_text == "linear")

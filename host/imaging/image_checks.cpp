@@ -24,6 +24,13 @@ std::string image_problem(const Image& image) {
     if (plane.pixels.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
       return "channel " + std::to_string(c) + " holds " + std::to_string(plane.pixels.size()) +
              " pixels, not width x height";
+    // Non-finite or absurd values (a black level of 1e85 in a descriptor) would turn
+    // the whole deconvolution into inf and NaN.
+    for (std::size_t i = 0; i < plane.pixels.size(); ++i)
+      if (!(std::abs(plane.pixels[i]) <= kMaxPixelValue))
+        return "channel " + std::to_string(c) + " has the value " +
+               std::to_string(plane.pixels[i]) + " at (" + std::to_string(i % width) + ", " +
+               std::to_string(i / width) + "): not a finite number within +-1e15";
   }
   return {};
 }
@@ -33,6 +40,12 @@ std::string model_scale_problem(const CaptureModel& model) {
     if (!(v <= kMaxCrosstalk))
       return "a crosstalk entry (" + std::to_string(v) + ") is beyond " +
              std::to_string(static_cast<int>(kMaxCrosstalk));
+  if (!(model.gain >= 1e-6))  // electrons = DN x gain: a denormal gain makes every pixel 0
+    return "the conversion gain (" + std::to_string(model.gain) + " e-/DN) is below 1e-6";
+  for (double v : model.led_electrons)  // a lit LED's light must survive float PSFs
+    if (v != 0 && !(v >= kMinLitElectrons))
+      return "the model's light (" + std::to_string(v) + " e- per slot) is below " +
+             std::to_string(kMinLitElectrons) + " e- (0 for an LED that is off)";
   for (const auto* values : {&model.led_electrons, &model.ambient_electrons})
     for (double v : *values)
       if (!(v <= kMaxModelElectrons))

@@ -11,8 +11,8 @@
 namespace flutterscan::imaging {
 
 /// \brief Why `image` cannot be processed (no channel, an empty plane, planes of
-/// different sizes, pixels not width x height, a side beyond kMaxFrameSidePx);
-/// empty if it can.
+/// different sizes, pixels not width x height, a side beyond kMaxFrameSidePx, a
+/// value that is not finite or beyond kMaxPixelValue); empty if it can.
 std::string image_problem(const Image& image);
 
 /// \brief Why the model's light scale cannot be computed with (crosstalk entries

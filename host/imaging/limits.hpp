@@ -22,6 +22,13 @@ inline constexpr long long kMaxFramePixels = 64LL << 20;
 /// its own, about 0..1 in practice).
 inline constexpr double kMaxCrosstalk = 1000;
 
+/// The largest magnitude of a pixel the deconvolutions take (electrons or DN).
+inline constexpr float kMaxPixelValue = 1e15f;
+
+/// The least light per slot of an LED that is on (below it the PSF's taps
+/// vanish in float and the deconvolution divides by nothing).
+inline constexpr double kMinLitElectrons = 1e-3;
+
 /// The most electrons per slot (LED) or per exposure (ambient) a model may say.
 inline constexpr double kMaxModelElectrons = 1e9;
 

@@ -415,9 +415,10 @@ std::string check_config(SessionConfig& c) {
   // Electron counts: a pixel holds at most kMaxElectrons (float planes keep them exact enough).
   for (const auto& [key, value] : {std::pair{"optics.electrons", c.optics.electrons},
                                    std::pair{"optics.full_well_e", c.optics.full_well_e}})
-    if (!(value > 0 && value <= kMaxElectrons))
-      return outside(key, value, "(0, " + number_text(kMaxElectrons) + "] e-");
-  if (c.optics.cap > 1000) return outside("optics.cap", c.optics.cap, "(0, 1000]");
+    if (!(value >= 1 && value <= kMaxElectrons))
+      return outside(key, value, "[1, " + number_text(kMaxElectrons) + "] e-");
+  if (!(c.optics.cap >= 0.01 && c.optics.cap <= 1000))  // it scales every LED's light
+    return outside("optics.cap", c.optics.cap, "[0.01, 1000]");
   if (!(c.optics.read_noise_e >= 0 && c.optics.read_noise_e <= 10000))
     return outside("optics.read_noise_e", c.optics.read_noise_e, "[0, 10000] e-");
   if (!(c.optics.paper_reflectance > 0 && c.optics.paper_reflectance <= 1))
@@ -434,9 +435,10 @@ std::string check_config(SessionConfig& c) {
         "optics.black_level_dn", c.optics.black_level_dn,
         "[0, " + number_text(full_scale_dn) + ") DN",
         "below the full scale of optics.bit_depth = " + std::to_string(c.optics.bit_depth));
-  if (!(c.optics.gain_e_per_dn >= 0 && c.optics.gain_e_per_dn <= kMaxElectrons))
+  if (!(c.optics.gain_e_per_dn == 0 ||
+        (c.optics.gain_e_per_dn >= 1e-3 && c.optics.gain_e_per_dn <= kMaxElectrons)))
     return outside("optics.gain_e_per_dn", c.optics.gain_e_per_dn,
-                   "[0, " + number_text(kMaxElectrons) + "] e-/DN",
+                   "0 or [0.001, " + number_text(kMaxElectrons) + "] e-/DN",
                    "0 means full well at full scale");
   if (c.processing.workers < 1 || c.processing.workers > 64)
     return problem("processing.workers", "must be within 1..64" + got(c.processing.workers));
