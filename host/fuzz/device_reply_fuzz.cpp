@@ -110,7 +110,7 @@ void check_outcome(const Expected<T>& result, const char* what) {
     FUZZ_CHECK(!result.error().message.empty(), std::string(what) + " failed without a message");
 }
 
-void fuzz_client(fuzz::Bytes& in) {
+[[maybe_unused]] void fuzz_client(fuzz::Bytes& in) {
   auto events_sent = std::make_shared<std::uint64_t>(0);
   bool opened = false;
   ClientOptions options;
@@ -227,7 +227,7 @@ class ScriptedBootloader final : public DfuControl {
   fuzz::Bytes& in_;
 };
 
-void fuzz_dfu(fuzz::Bytes& in) {
+[[maybe_unused]] void fuzz_dfu(fuzz::Bytes& in) {
   ScriptedBootloader bootloader(in);
   std::uint64_t sleeps = 0;
   std::chrono::milliseconds slept{0};
@@ -262,7 +262,7 @@ void fuzz_dfu(fuzz::Bytes& in) {
 
 /// Reports one by one as the client's parsers take them: header, status, the
 /// payload of every reply type and the exposure event.
-void fuzz_reports(fuzz::Bytes& in) {
+[[maybe_unused]] void fuzz_reports(fuzz::Bytes& in) {
   while (!in.empty()) {
     const std::size_t length = in.u8() % (protocol::kReportSize + 8);
     const std::vector<std::uint8_t> report = in.take(length);
