@@ -90,7 +90,6 @@ Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
   nlohmann::json& times = out.log["fit_ms"];
 
   // 1. The blur.
-  out.encoder_blur_px = model.blur_px;
   const bool check_blur = config.encoder && config.blur_check_every > 0 &&
                           frame_index % static_cast<std::uint64_t>(config.blur_check_every) == 0;
   if ((!config.encoder || check_blur) && electrons.channel_count() >= 2) {

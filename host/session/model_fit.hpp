@@ -58,7 +58,6 @@ struct FittedFrame {
   /// the frame was deblurred with it.
   std::optional<imaging::MotionRefinement> refinement;
   bool refinement_used = false;
-  double encoder_blur_px = 0;  ///< the blur the encoder gave
 };
 
 /// \brief Deblurs one frame (`electrons`; `saturated_share` of its samples at
