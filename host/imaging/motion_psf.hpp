@@ -28,8 +28,8 @@ enum class PixelModel {
 
 /// \brief Adds the light `weight` of one slot, during which the scene moved
 /// from `start_px` to `start_px + width_px` (>= 0), to `taps` (tap j: light a
-/// white point deposits j pixels downstream). Light that would fall past the
-/// last tap lands on it; `taps` must hold pixel_model_taps(end) entries.
+/// white point deposits j pixels downstream). `taps` must hold
+/// pixel_model_taps(start_px + width_px) entries, or the light past them is lost.
 void deposit_slot(std::vector<double>& taps, double start_px, double width_px, double weight,
                   PixelModel model);
 
