@@ -24,6 +24,7 @@
 #include "imaging/crosstalk_calibration.hpp"
 #include "imaging/flat_field.hpp"
 #include "imaging/frame_conversion.hpp"
+#include "imaging/motion_frame.hpp"
 #include "imaging/photon_transfer.hpp"
 #include "session/frame_model.hpp"
 
@@ -66,8 +67,9 @@ void update_config(const CommonFlags& f, const std::string& what,
 }
 
 void add_common(CLI::App* command, CommonFlags& f) {
-  command->add_option("--bit-depth", f.bit_depth,
-                      "significant bits per sample of frames from files (live: the camera's)")
+  command
+      ->add_option("--bit-depth", f.bit_depth,
+                   "significant bits per sample of frames from files (live: the camera's)")
       ->check(CLI::Range(8, 16))
       ->capture_default_str();
   command->add_option("--config", f.config,
@@ -93,7 +95,8 @@ WhiteFrames white_frames(const CommonFlags& f, const std::string& dark,
     live.config = f.config;
     return capture_white_frames(live);
   }
-  if (dark.empty()) throw UsageError("--dark is required with --led (the frame with every LED off)");
+  if (dark.empty())
+    throw UsageError("--dark is required with --led (the frame with every LED off)");
   if (leds.empty()) throw UsageError("--led is required with --dark (one frame per LED lit alone)");
   WhiteFrames frames;
   frames.dark = load(dark);
@@ -163,8 +166,8 @@ void run_flat(const FlatFlags& f) {
   if (!(grid >> tiles_x >> separator >> tiles_y) || separator != 'x' || !grid.eof())
     throw UsageError("--grid must be COLUMNSxROWS, e.g. 8x6, not '" + f.grid + "'");
   const WhiteFrames frames = white_frames(f, f.dark, f.leds);
-  const auto flat = imaging::measure_flat_field(frames.dark, frames.lit, tiles_x, tiles_y,
-                                                frames.full_scale_dn);
+  const auto flat =
+      imaging::measure_flat_field(frames.dark, frames.lit, tiles_x, tiles_y, frames.full_scale_dn);
   if (!flat.ok()) throw UsageError(flat.error());
   if (auto error = write_text(f.output, imaging::flat_field_to_json(flat.value()).dump(1) + "\n");
       !error.empty())
@@ -211,8 +214,7 @@ struct NoiseFlags : CommonFlags {
 NoiseFrames noise_frames(const NoiseFlags& f) {
   check_live_or_files(f.live, !f.dark.empty() || !f.flats.empty(), "--dark and --flat");
   if (!f.live.camera.empty()) {
-    if (f.lit_slots.size() < 2)
-      throw UsageError("--lit-slots needs two or more light levels");
+    if (f.lit_slots.size() < 2) throw UsageError("--lit-slots needs two or more light levels");
     LiveFlags live = f.live;
     live.config = f.config;
     return capture_noise_frames(live, f.lit_slots);
@@ -335,8 +337,9 @@ std::vector<SpeedSample> speed_samples_live(const SpeedFlags& f) {
 void run_speed(const SpeedFlags& f) {
   check_live_or_files(f.live, !f.frames.empty(), "frame files");
   if (!f.live.camera.empty() && !f.encoder_counts.empty())
-    throw UsageError("--encoder-counts is for frames from files: live, the counts come from the "
-                     "controller's exposure events");
+    throw UsageError(
+        "--encoder-counts is for frames from files: live, the counts come from the "
+        "controller's exposure events");
   if (!(f.max_blur > f.min_blur)) throw UsageError("--max-blur must exceed --min-blur");
   const bool live = !f.live.camera.empty();
   const std::vector<SpeedSample> samples =
@@ -344,8 +347,10 @@ void run_speed(const SpeedFlags& f) {
   nlohmann::json per_frame = nlohmann::json::array();
   double weighted_ratio = 0, weights = 0, blur_sum = 0, blur_weights = 0;
   for (const auto& sample : samples) {
+    const auto frame = imaging::MotionFrame::make(sample.electrons, sample.model.direction);
+    if (!frame.ok()) throw UsageError("'" + sample.label + "': " + frame.error());
     const auto estimate =
-        imaging::estimate_blur(sample.electrons, sample.model, f.min_blur, f.max_blur);
+        imaging::estimate_blur(frame.value(), sample.model, f.min_blur, f.max_blur);
     if (!estimate.ok()) throw UsageError("'" + sample.label + "': " + estimate.error());
     const auto& e = estimate.value();
     nlohmann::json entry = {{"frame", sample.label}, {"blur_px", e.blur_px}};
@@ -411,8 +416,7 @@ void add_calibrate(CLI::App& app) {
       "Measure the capture model: crosstalk, flat field, noise, speed; from frames on disk or "
       "live with --camera (docs/calibration.md)");
   calibrate->require_subcommand(1);
-  const std::string white_frames_help =
-      "live: frames averaged for the dark frame and for each LED";
+  const std::string white_frames_help = "live: frames averaged for the dark frame and for each LED";
 
   auto xf = std::make_shared<CrosstalkFlags>();
   CLI::App* crosstalk = calibrate->add_subcommand(
@@ -420,7 +424,8 @@ void add_calibrate(CLI::App& app) {
   crosstalk->footer(
       "Live (--camera): with a white target under the camera, belt stopped, it disarms the "
       "controller for dark frames, then per LED uploads 1111.., 2222.., 4444.. (52 slots) as code "
-      "7, arms, averages --frames frames, and leaves the controller disarmed with code 0 selected.");
+      "7, arms, averages --frames frames, and leaves the controller disarmed with code 0 "
+      "selected.");
   crosstalk->add_option("--dark", xf->dark, "frame of the white target with every LED off")
       ->check(CLI::ExistingFile);
   crosstalk

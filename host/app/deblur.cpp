@@ -21,6 +21,7 @@
 #include "imaging/flat_field.hpp"
 #include "imaging/frame_conversion.hpp"
 #include "imaging/metrics.hpp"
+#include "imaging/motion_frame.hpp"
 #include "imaging/motion_refinement.hpp"
 #include "reader/barcode_reader.hpp"
 #include "sim/scene.hpp"
@@ -216,15 +217,18 @@ void run(const DeblurFlags& f) {
       f.blur_tolerance_pct >= 0 ? f.blur_tolerance_pct : (model.code.leds() >= 2 ? 10.0 : 0.0);
   nlohmann::json motion;
   start = std::chrono::steady_clock::now();
-  const bool along_x =
-      model.direction == imaging::Direction::kPlusX || model.direction == imaging::Direction::kMinusX;
-  const int along = along_x ? electrons.width() : electrons.height();
+  // RGB frames: turned once into the motion frame, where the blur is refined
+  // (multi-LED codes) and the frame deblurred; Bayer mosaics are split in their own geometry.
+  auto motion_frame = model.bayer_rggb
+                          ? Result<imaging::MotionFrame, std::string>::success({})
+                          : imaging::MotionFrame::make(std::move(electrons), model.direction);
+  if (!motion_frame.ok()) throw UsageError("'" + f.input + "': " + motion_frame.error());
   // (A blur that cannot fit the frame is left to deblur, which refuses it by name.)
   if (tolerance_pct > 0 && !model.bayer_rggb && model.code.leds() >= 2 &&
-      2 * model.blur_px * (1 + tolerance_pct / 100) + 8 < along) {
+      imaging::refinement_fits(model, tolerance_pct / 100, motion_frame.value().along())) {
     imaging::MotionRefinementOptions refine;
     refine.tolerance = tolerance_pct / 100;
-    const auto refined = imaging::refine_motion(electrons, model, refine);
+    const auto refined = imaging::refine_motion(motion_frame.value(), model, refine);
     if (!refined.ok()) throw UsageError("'" + f.input + "': refining the blur: " + refined.error());
     const auto& r = refined.value();
     motion = {{"given_blur_px", model.blur_px},
@@ -245,10 +249,12 @@ void run(const DeblurFlags& f) {
   }
   const double refine_ms = elapsed_ms(start);
   start = std::chrono::steady_clock::now();
-  const auto result =
-      model.bayer_rggb ? imaging::deblur_bayer(electrons.channels[0], model, options, *bayer_mode)
-                       : imaging::deblur(electrons, model, options);
+  auto result = model.bayer_rggb
+                    ? imaging::deblur_bayer(electrons.channels[0], model, options, *bayer_mode)
+                    : imaging::deblur(motion_frame.value(), model, options);
   if (!result.ok()) throw UsageError("'" + f.input + "': " + result.error());
+  if (!model.bayer_rggb)
+    result.value().latent = motion_frame.value().to_camera(result.value().latent);
   const double deblur_ms = elapsed_ms(start);
 
   start = std::chrono::steady_clock::now();

@@ -11,6 +11,7 @@
 #include "app/commands.hpp"
 #include "app/image_io.hpp"
 #include "imaging/capture_descriptor.hpp"
+#include "imaging/motion_frame.hpp"
 #include "sim/forward_model.hpp"
 #include "sim/pixel_integration.hpp"
 #include "sim/scene.hpp"
@@ -94,9 +95,7 @@ void run(const SimulateOptions& o) {
   spec.value().width = o.width;
   spec.value().height = o.height;
   spec.value().module_px = o.module;
-  const bool along_x = model.direction == imaging::Direction::kPlusX ||
-                       model.direction == imaging::Direction::kMinusX;
-  require(model.blur_px < (along_x ? o.width : o.height),
+  require(model.blur_px < imaging::length_along_motion(model.direction, o.width, o.height),
           "--blur must be shorter than the image along the motion");
   // The scene is rendered finer than the pixels so that it moves continuously
   // within each pixel; the truth is what a sharp capture of it records.

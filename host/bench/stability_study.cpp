@@ -269,8 +269,9 @@ std::vector<Factor> make_factors() {
       auto scores = standard_methods(electrons, m, truth, t.scene.content);
       for (const auto prior :
            {imaging::ColourPrior::kThreeBands, imaging::ColourPrior::kPrintPlane}) {
-        const auto r = imaging::deblur_per_channel(electrons, m,
-                                                   1.0 / imaging::kLabelGradientVariance, 1, prior);
+        const auto r =
+            imaging::deblur_per_channel(imaging::MotionFrame::make(electrons, m.direction).value(),
+                                        m, 1.0 / imaging::kLabelGradientVariance, 1, prior);
         scores.push_back(r.ok() ? judge(r.value().grey, truth, t.scene.content) : Score{});
       }
       return scores;
@@ -294,7 +295,9 @@ std::vector<Factor> make_factors() {
       for (int y = 0; y < electrons.height(); ++y)
         phases.push_back(sim::rolling_shutter_phase(y, x, kSlotTimeUs, m.code.length()));
       for (const auto method : kMethods) {
-        const auto r = imaging::deblur_row_phases(electrons, m, phases, options_for(method));
+        const auto r =
+            imaging::deblur_row_phases(imaging::MotionFrame::make(electrons, m.direction).value(),
+                                       m, phases, options_for(method));
         scores.push_back(r.ok() ? judge(r.value(), t.scene.grey, t.scene.content) : Score{});
       }
       return scores;

@@ -13,10 +13,12 @@
 // does not fit.
 
 #include <cmath>
+#include <utility>
 
 #include "capture/frame_pixels.hpp"
 #include "fuzz_support.hpp"
 #include "imaging/capture_descriptor.hpp"
+#include "imaging/motion_frame.hpp"
 #include "session/frame_model.hpp"
 #include "session/model_fit.hpp"
 #include "session/session_config.hpp"
@@ -126,9 +128,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fit.slot_time_us = event.slot_time_us;
   fit.blur_check_every = config.processing.blur_check_every;
   fit.fallback_blur_px = o.nominal_blur_px;
-  auto fitted =
-      session::deblur_fitting_model(electrons.value().saturated_share, electrons.value().electrons,
-                                    model.value(), options, fit, in.u8());
+  const auto motion =
+      imaging::MotionFrame::make(std::move(electrons.value().electrons), model.value().direction);
+  if (!motion.ok()) {
+    fuzz::trace("frame refused: " + motion.error());
+    FUZZ_CHECK(!motion.error().empty(), "a frame refused without a message");
+    return 0;
+  }
+  auto fitted = session::deblur_fitting_model(electrons.value().saturated_share, motion.value(),
+                                              model.value(), options, fit, in.u8());
   if (!fitted.ok()) {
     fuzz::trace("deblur refused: " + fitted.error());
     FUZZ_CHECK(!fitted.error().empty(), "a deblur refused without a message");
@@ -137,7 +145,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                "a blur the range check passed does not fit: " + fitted.error());
     return 0;
   }
-  const imaging::Plane& latent = fitted.value().latent;
+  const imaging::Plane latent = motion.value().to_camera(fitted.value().latent);
   fuzz::trace("deblurred, blur " + std::to_string(model.value().blur_px));
   FUZZ_CHECK(latent.width == frame.format.width && latent.height == frame.format.height,
              "latent of another size");

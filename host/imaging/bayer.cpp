@@ -24,9 +24,6 @@ int channel_at(int x, int y) {
   return kColours[static_cast<std::size_t>((y % 2) * 2 + (x % 2))].channel;
 }
 
-bool moves_along_x(Direction d) {
-  return d == Direction::kPlusX || d == Direction::kMinusX;
-}
 bool moves_forward(Direction d) {
   return d == Direction::kPlusX || d == Direction::kPlusY;
 }
@@ -226,10 +223,10 @@ Result<DeblurResult, std::string> deblur_bayer(const Plane& mosaic_electrons,
   if (auto problem = model_scale_problem(model); !problem.empty()) return Out::failure(problem);
   if (auto problem = image_problem(Image{{mosaic_electrons}}); !problem.empty())
     return Out::failure(problem);
-  const bool along_x =
-      model.direction == Direction::kPlusX || model.direction == Direction::kMinusX;
   if (auto problem = blur_fit_problem(
-          model.blur_px, along_x ? mosaic_electrons.width : mosaic_electrons.height, 1, "the blur");
+          model.blur_px,
+          length_along_motion(model.direction, mosaic_electrons.width, mosaic_electrons.height), 1,
+          "the blur");
       !problem.empty())
     return Out::failure(problem);
   if (mode == BayerMode::kDemosaicFirst)

@@ -8,9 +8,9 @@
 #include <numeric>
 #include <vector>
 
+#include "imaging/golden_section.hpp"
 #include "imaging/image_checks.hpp"
 #include "imaging/joint_wiener.hpp"
-#include "imaging/golden_section.hpp"
 #include "imaging/motion_frame.hpp"
 #include "imaging/row_fft.hpp"
 
@@ -26,44 +26,33 @@ constexpr double kMinimumContrast = 0.1;
 class ConsistencyCost {
  public:
   /// Every `row_step`-th row of the frame (along the motion) takes part.
-  ConsistencyCost(const Image& electrons, const CaptureModel& model, int longest_psf,
+  ConsistencyCost(const MotionFrame& frame, const CaptureModel& model, int longest_psf,
                   int row_step = 1)
       : model_(model) {
-    std::vector<Plane> rows;
-    std::vector<float> line;
-    for (const auto& plane : electrons.channels) {
-      const int along_rows = motion_rows(plane, model.direction);
-      Plane kept(along_rows == plane.height ? plane.width : plane.height,
-                 (along_rows + row_step - 1) / row_step);
-      for (int y = 0; y < kept.height; ++y) {
-        motion_row(plane, model.direction, y * row_step, line);
-        std::copy(line.begin(), line.end(), kept.row(y).begin());
-      }
-      rows.push_back(std::move(kept));
-    }
-    width_ = rows[0].width;
-    height_ = rows[0].height;
+    width_ = frame.along();
+    height_ = (frame.lines() + row_step - 1) / row_step;
     fft_ = std::make_unique<RowFft>(row_fft_length(width_ + longest_psf));
     bins_ = static_cast<std::size_t>(fft_->bins());
     const auto n = static_cast<std::size_t>(fft_->length());
     AlignedFloats padded(n);
     product_ = AlignedFloats(2 * bins_);
     residual_ = AlignedFloats(n);
-    for (const Plane& plane : rows) {
-      const double mean = std::accumulate(plane.pixels.begin(), plane.pixels.end(), 0.0) /
-                          static_cast<double>(plane.pixels.size());
-      variances_.push_back(channel_noise_variance(model, std::max(0.0, mean)));
+    for (const Plane& plane : frame.image().channels) {
+      double sum = 0;
       AlignedFloats spectra(2 * bins_ * static_cast<std::size_t>(height_));
       for (int y = 0; y < height_; ++y) {
         std::fill(padded.data(), padded.data() + n, 0.0f);
-        const auto row = plane.row(y);
+        const auto row = plane.row(y * row_step);
         std::copy(row.begin(), row.end(), padded.data());
+        sum += std::accumulate(row.begin(), row.end(), 0.0);
         // FFTW plans want the alignment they were made with: transform into the
         // aligned scratch, then store.
         fft_->forward(padded.data(), product_.complex());
         std::copy(product_.complex(), product_.complex() + bins_,
                   spectra.complex() + static_cast<std::size_t>(y) * bins_);
       }
+      const double mean = sum / (static_cast<double>(width_) * height_);
+      variances_.push_back(channel_noise_variance(model, std::max(0.0, mean)));
       spectra_.push_back(std::move(spectra));
     }
   }
@@ -137,16 +126,14 @@ class ConsistencyCost {
   AlignedFloats product_, residual_;
 };
 
-
-
 }  // namespace
 
-Result<BlurEstimate, std::string> estimate_blur(const Image& electrons, const CaptureModel& model,
+Result<BlurEstimate, std::string> estimate_blur(const MotionFrame& frame, const CaptureModel& model,
                                                 double min_px, double max_px, int row_step) {
   using Out = Result<BlurEstimate, std::string>;
   if (!(min_px > 0) || !(max_px > min_px) || !std::isfinite(max_px))
     return Out::failure("the blur search range must satisfy 0 < min < max");
-  if (electrons.channel_count() < 2 || electrons.channel_count() != model.channels)
+  if (frame.channel_count() < 2 || frame.channel_count() != model.channels)
     return Out::failure("estimating the blur needs two or more channels lit by different codes");
   CaptureModel nominal = model;
   nominal.blur_px = (min_px + max_px) / 2;
@@ -156,14 +143,12 @@ Result<BlurEstimate, std::string> estimate_blur(const Image& electrons, const Ca
         "every channel sees the same code, so the frame carries no blur information this way: "
         "estimating the blur needs a multi-LED code such as a one-of-3 triplet");
   if (row_step < 1) return Out::failure("the row step must be 1 or more");
-  // Before anything is sized by the blur: the frame, and the largest blur searched.
-  if (auto problem = image_problem(electrons); !problem.empty()) return Out::failure(problem);
+  // Before anything is sized by the blur: the largest blur searched.
   if (auto problem = model_scale_problem(model); !problem.empty()) return Out::failure(problem);
-  if (auto problem = blur_fit_problem(max_px, extent_along_motion(electrons, model.direction), 2,
-                                      "the largest blur searched");
+  if (auto problem = blur_fit_problem(max_px, frame.along(), 2, "the largest blur searched");
       !problem.empty())
     return Out::failure(problem);
-  ConsistencyCost cost(electrons, model, static_cast<int>(std::floor(max_px)) + 2, row_step);
+  ConsistencyCost cost(frame, model, static_cast<int>(std::floor(max_px)) + 2, row_step);
   if (max_px + 2 >= cost.width())
     return Out::failure("the largest blur searched (" + std::to_string(max_px) +
                         " px) does not fit the frame along the motion (" +
@@ -212,21 +197,19 @@ Result<BlurEstimate, std::string> estimate_blur(const Image& electrons, const Ca
   return Out::success(estimate);
 }
 
-Result<double, std::string> cross_channel_residual(const Image& electrons,
+Result<double, std::string> cross_channel_residual(const MotionFrame& frame,
                                                    const CaptureModel& model, int row_step) {
   using Out = Result<double, std::string>;
-  if (electrons.channel_count() < 2 || electrons.channel_count() != model.channels)
+  if (frame.channel_count() < 2 || frame.channel_count() != model.channels)
     return Out::failure("the cross-channel residual needs two or more channels");
   if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
   if (row_step < 1) return Out::failure("the row step must be 1 or more");
   // Before anything is sized by the blur (the cost's rows are padded by it).
-  if (auto problem = image_problem(electrons); !problem.empty()) return Out::failure(problem);
   if (auto problem = model_scale_problem(model); !problem.empty()) return Out::failure(problem);
-  if (auto problem = blur_fit_problem(
-          model.blur_px, extent_along_motion(electrons, model.direction), 2, "the blur");
+  if (auto problem = blur_fit_problem(model.blur_px, frame.along(), 2, "the blur");
       !problem.empty())
     return Out::failure(problem);
-  ConsistencyCost cost(electrons, model, static_cast<int>(std::floor(model.blur_px)) + 2, row_step);
+  ConsistencyCost cost(frame, model, static_cast<int>(std::floor(model.blur_px)) + 2, row_step);
   if (model.blur_px + 2 >= cost.width())
     return Out::failure("the blur does not fit the frame along the motion");
   return Out::success(cost(model.blur_px, 0, cost.height()).mean());

@@ -31,7 +31,7 @@
 
 #include "flutterscan/common/result.hpp"
 #include "imaging/capture_model.hpp"
-#include "imaging/image.hpp"
+#include "imaging/motion_frame.hpp"
 
 namespace flutterscan::imaging {
 
@@ -44,19 +44,19 @@ struct BlurEstimate {
   double residual_per_sample = 0;  ///< R / samples at the estimate: ~1 if the model fits
 };
 
-/// \brief Estimates the blur of `electrons` (one plane per channel, black level
-/// removed) between min_px and max_px from every `row_step`-th row along the
-/// motion; `model` gives everything else (its blur_px is ignored). Fails for
+/// \brief Estimates the blur of `frame` (electrons, one plane per channel, black
+/// level removed) between min_px and max_px from every `row_step`-th line along
+/// the motion; `model` gives everything else (its blur_px is ignored). Fails for
 /// fewer than two channels, channels that share one code, or a range that does
 /// not fit the frame.
-Result<BlurEstimate, std::string> estimate_blur(const Image& electrons, const CaptureModel& model,
+Result<BlurEstimate, std::string> estimate_blur(const MotionFrame& frame, const CaptureModel& model,
                                                 double min_px, double max_px, int row_step = 1);
 
 /// \brief The cross-channel residual per sample (R / samples above) at the
 /// model's own blur, over every `row_step`-th row along the motion: about 1
 /// when the frame fits a grey scene under `model`; much more when it does not
 /// (colour objects, a wrong blur, a changed crosstalk). Fails as estimate_blur does.
-Result<double, std::string> cross_channel_residual(const Image& electrons,
+Result<double, std::string> cross_channel_residual(const MotionFrame& frame,
                                                    const CaptureModel& model, int row_step = 1);
 
 }  // namespace flutterscan::imaging

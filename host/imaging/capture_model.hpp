@@ -18,6 +18,11 @@ namespace flutterscan::imaging {
 /// \brief Scene motion during the exposure: +x = toward larger column index.
 enum class Direction { kPlusX, kMinusX, kPlusY, kMinusY };
 
+/// \brief True when the scene moves along image rows (+x or -x).
+inline bool moves_along_x(Direction direction) {
+  return direction == Direction::kPlusX || direction == Direction::kMinusX;
+}
+
 /// \brief How stored pixel values relate to light.
 enum class Encoding { kLinear, kSrgb, kGamma };
 

@@ -77,39 +77,28 @@ Plane deconvolve_motion_rows(std::span<const ChannelPsf> psfs, std::span<const P
   return latent;
 }
 
-Result<DeblurResult, std::string> deblur(const Image& electrons, const CaptureModel& model,
+Result<DeblurResult, std::string> deblur(const MotionFrame& frame, const CaptureModel& model,
                                          const DeblurOptions& options) {
   using Out = Result<DeblurResult, std::string>;
   if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
-  if (auto problem = image_problem(electrons); !problem.empty()) return Out::failure(problem);
   if (auto problem = model_scale_problem(model); !problem.empty()) return Out::failure(problem);
-  if (electrons.channel_count() != model.channels)
-    return Out::failure("the frame has " + std::to_string(electrons.channel_count()) +
+  if (frame.channel_count() != model.channels)
+    return Out::failure("the frame has " + std::to_string(frame.channel_count()) +
                         " channels but the capture model " + std::to_string(model.channels));
-  const bool along_x =
-      model.direction == Direction::kPlusX || model.direction == Direction::kMinusX;
-  const int along = along_x ? electrons.width() : electrons.height();
-  if (model.blur_px >= along)
+  if (model.blur_px >= frame.along())
     return Out::failure("the blur (" + std::to_string(model.blur_px) +
                         " px) is not shorter than the image along the motion (" +
-                        std::to_string(along) + " px)");
+                        std::to_string(frame.along()) + " px)");
   if (!(options.gradient_variance > 0) || !std::isfinite(options.gradient_variance))
     return Out::failure("the prior gradient variance must be a finite number > 0");
   if (options.iterations && *options.iterations < 1)
     return Out::failure("iterations must be at least 1");
 
   DeblurResult result;
-  // +x frames are already in the motion frame: no copy of a 2-Mpx plane per channel.
-  const bool as_is = model.direction == Direction::kPlusX;
-  std::vector<Plane> moved;
-  if (!as_is)
-    for (const Plane& plane : electrons.channels)
-      moved.push_back(to_motion_frame(plane, model.direction));
-  const std::span<const Plane> rows = as_is ? std::span<const Plane>(electrons.channels) : moved;
+  const std::span<const Plane> rows(frame.image().channels);
   std::vector<ChannelPsf> psfs;
   for (int c = 0; c < model.channels; ++c) {
-    const double variance =
-        channel_noise_variance(model, noise_level_mean(rows[static_cast<std::size_t>(c)]));
+    const double variance = channel_noise_variance(model, noise_level_mean(frame.channel(c)));
     result.noise_variance.push_back(variance);
     psfs.push_back({channel_psf(model, c), variance});
   }
@@ -118,10 +107,19 @@ Result<DeblurResult, std::string> deblur(const Image& electrons, const CaptureMo
     for (double tap : p.taps) white += tap;
   if (white <= 0) return Out::failure("the capture model lights no channel: every PSF is zero");
 
-  Plane latent = deconvolve_motion_rows(psfs, rows, 1.0 / options.gradient_variance,
-                                        model.read_noise * model.read_noise, options);
-  result.latent = as_is ? std::move(latent) : from_motion_frame(latent, model.direction);
+  result.latent = deconvolve_motion_rows(psfs, rows, 1.0 / options.gradient_variance,
+                                         model.read_noise * model.read_noise, options);
   return Out::success(std::move(result));
+}
+
+Result<DeblurResult, std::string> deblur(const Image& electrons, const CaptureModel& model,
+                                         const DeblurOptions& options) {
+  using Out = Result<DeblurResult, std::string>;
+  auto frame = MotionFrame::make(electrons, model.direction);
+  if (!frame.ok()) return Out::failure(frame.error());
+  auto result = deblur(frame.value(), model, options);
+  if (result.ok()) result.value().latent = frame.value().to_camera(result.value().latent);
+  return result;
 }
 
 }  // namespace flutterscan::imaging

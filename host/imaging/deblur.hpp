@@ -12,6 +12,7 @@
 #include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
 #include "imaging/joint_wiener.hpp"
+#include "imaging/motion_frame.hpp"
 #include "imaging/total_variation.hpp"
 
 namespace flutterscan::imaging {
@@ -63,7 +64,14 @@ struct DeblurResult {
 Plane deconvolve_motion_rows(std::span<const ChannelPsf> psfs, std::span<const Plane> rows,
                              double lambda, double read_variance, const DeblurOptions& options);
 
-/// \brief Deblurs and fuses `electrons` (one plane per camera channel).
+/// \brief Deblurs and fuses `frame` (electrons, one plane per camera channel,
+/// black level removed); the latent is in the motion frame.
+Result<DeblurResult, std::string> deblur(const MotionFrame& frame, const CaptureModel& model,
+                                         const DeblurOptions& options);
+
+/// \brief deblur() of one camera frame on its own: turned into the motion frame
+/// for model.direction, deblurred, the latent turned back. The per-frame
+/// pipeline, which runs several stages on one frame, makes the MotionFrame itself.
 Result<DeblurResult, std::string> deblur(const Image& electrons, const CaptureModel& model,
                                          const DeblurOptions& options);
 

@@ -54,11 +54,6 @@ std::string model_scale_problem(const CaptureModel& model) {
   return {};
 }
 
-int extent_along_motion(const Image& image, Direction direction) {
-  const bool along_x = direction == Direction::kPlusX || direction == Direction::kMinusX;
-  return along_x ? image.width() : image.height();
-}
-
 std::string blur_fit_problem(double blur_px, int along, int margin, const std::string& what) {
   if (std::isfinite(blur_px) && blur_px >= 0 && blur_px <= kMaxBlurPx &&
       blur_px + margin < static_cast<double>(along))

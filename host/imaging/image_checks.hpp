@@ -20,9 +20,6 @@ std::string image_problem(const Image& image);
 /// PSFs' spectra, squared in float, would overflow to inf and NaN); empty if fine.
 std::string model_scale_problem(const CaptureModel& model);
 
-/// \brief The image's extent along `direction`'s motion, pixels.
-int extent_along_motion(const Image& image, Direction direction);
-
 /// \brief Why a blur of `blur_px` does not fit `along` pixels along the motion
 /// with `margin` pixels to spare (not finite, negative, beyond kMaxBlurPx, or
 /// blur + margin >= along); empty if it fits. `what` names the blur in the message.

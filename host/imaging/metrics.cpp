@@ -50,7 +50,7 @@ Plane map(const Plane& a, const Plane& b, auto op) {
 Region scored_region(int width, int height, double blur_px, Direction direction) {
   const int along = static_cast<int>(std::ceil(blur_px));
   constexpr int kAcross = 8;
-  const bool along_x = direction == Direction::kPlusX || direction == Direction::kMinusX;
+  const bool along_x = moves_along_x(direction);
   Region r;
   r.x0 = along_x ? along : kAcross;
   r.x1 = width - (along_x ? along : kAcross);

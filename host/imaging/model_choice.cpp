@@ -1,7 +1,6 @@
 #include "imaging/model_choice.hpp"
 
 #include "imaging/blur_estimate.hpp"
-#include "imaging/motion_frame.hpp"
 
 #include <algorithm>
 
@@ -13,17 +12,16 @@ std::string FrameModelChoice::describe() const {
          (blur_from_encoder ? ", blur from the encoder" : ", blur estimated from the frame");
 }
 
-FrameModelChoice choose_frame_model(const Image& electrons, const CaptureModel& model,
+FrameModelChoice choose_frame_model(const MotionFrame& frame, const CaptureModel& model,
                                     bool rolling_shutter, bool encoder_present) {
   FrameModelChoice choice;
   choice.per_row_phase = rolling_shutter;
   choice.blur_from_encoder = encoder_present;
-  if (electrons.channel_count() >= 2) {
+  if (frame.channel_count() >= 2) {
     // A statistic over the frame: about 32 rows along the motion (over 50,000
     // samples per channel pair at 1080p) measure it as well as all of them (a
     // colour label spans many rows), at a small fraction of the cost.
-    const int rows = motion_rows(electrons.channels[0], model.direction);
-    const auto residual = cross_channel_residual(electrons, model, std::max(1, rows / 32));
+    const auto residual = cross_channel_residual(frame, model, std::max(1, frame.lines() / 32));
     if (residual.ok()) {
       choice.grey_residual = residual.value();
       if (residual.value() > kColourResidual) choice.latent = LatentModel::kPerChannel;

@@ -12,7 +12,7 @@
 #include <string>
 
 #include "imaging/capture_model.hpp"
-#include "imaging/image.hpp"
+#include "imaging/motion_frame.hpp"
 
 namespace flutterscan::imaging {
 
@@ -31,10 +31,10 @@ struct FrameModelChoice {
   std::string describe() const;
 };
 
-/// \brief Chooses the model of one frame (`electrons`: black level removed; `model`
+/// \brief Chooses the model of one frame (electrons, black level removed; `model`
 /// with the blur in use). A frame with one channel, or whose channels share one
 /// code shape, keeps the grey model (the test needs different codes).
-FrameModelChoice choose_frame_model(const Image& electrons, const CaptureModel& model,
+FrameModelChoice choose_frame_model(const MotionFrame& frame, const CaptureModel& model,
                                     bool rolling_shutter, bool encoder_present);
 
 }  // namespace flutterscan::imaging

@@ -4,8 +4,6 @@
 #include <cmath>
 #include <vector>
 
-#include "imaging/motion_frame.hpp"
-
 namespace flutterscan::imaging {
 
 double saturation_ceiling_dn(const CaptureModel& model) {
@@ -24,25 +22,24 @@ double saturated_share(const Image& dn, const CaptureModel& model) {
   return total > 0 ? static_cast<double>(saturated) / static_cast<double>(total) : 0;
 }
 
-double residual_ratio(const Image& electrons, const Plane& latent, const CaptureModel& model,
+double residual_ratio(const MotionFrame& frame, const Plane& latent, const CaptureModel& model,
                       int row_step) {
   double ratio_sum = 0;
   int channels = 0;
-  std::vector<float> observed, sharp, predicted;
-  for (int c = 0; c < electrons.channel_count(); ++c) {
-    const Plane& plane = electrons.channels[static_cast<std::size_t>(c)];
+  std::vector<float> predicted;
+  if (frame.along() != latent.width || frame.lines() != latent.height) return INFINITY;
+  const int width = frame.along();
+  for (int c = 0; c < frame.channel_count(); ++c) {
+    const Plane& plane = frame.channel(c);
     const auto psf = channel_psf(model, c);
     const std::vector<float> taps(psf.begin(), psf.end());
     const int k = static_cast<int>(taps.size());
-    if (plane.width != latent.width || plane.height != latent.height) return INFINITY;
-    const int rows = motion_rows(plane, model.direction);
+    if (k >= width) return INFINITY;
     double squares = 0, signal = 0;
     std::size_t samples = 0;
-    for (int row = 0; row < rows; row += std::max(1, row_step)) {
-      motion_row(plane, model.direction, row, observed);
-      motion_row(latent, model.direction, row, sharp);
-      const int width = static_cast<int>(observed.size());
-      if (k >= width) return INFINITY;
+    for (int row = 0; row < frame.lines(); row += std::max(1, row_step)) {
+      const auto observed = plane.row(row);
+      const auto sharp = latent.row(row);
       // The blurred row, tap by tap over the whole row (vectorises).
       predicted.assign(static_cast<std::size_t>(width), 0.0f);
       for (int j = 0; j < k; ++j) {

@@ -17,6 +17,7 @@
 #include "imaging/blur_estimate.hpp"
 #include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
+#include "imaging/motion_frame.hpp"
 
 namespace flutterscan::imaging {
 
@@ -33,11 +34,12 @@ double saturation_ceiling_dn(const CaptureModel& model);
 /// \brief Share of samples of `dn` at or above saturation_ceiling_dn().
 double saturated_share(const Image& dn, const CaptureModel& model);
 
-/// \brief Mean squared residual of `electrons` against `latent` blurred through each
-/// channel's PSF, over the samples whose PSF lies inside the frame, divided by
-/// the noise variance the model predicts there. About 1 or less when the model
-/// fits. Uses every `row_step`-th row along the motion.
-double residual_ratio(const Image& electrons, const Plane& latent, const CaptureModel& model,
+/// \brief Mean squared residual of `frame` against `latent` (in the same motion
+/// frame) blurred through each channel's PSF, over the samples whose PSF lies
+/// inside the frame, divided by the noise variance the model predicts there.
+/// About 1 or less when the model fits; infinite when the sizes differ or the
+/// PSF is longer than the frame. Uses every `row_step`-th line along the motion.
+double residual_ratio(const MotionFrame& frame, const Plane& latent, const CaptureModel& model,
                       int row_step = 4);
 
 /// \brief True when `encoder_blur_px` lies outside the estimate's confidence:

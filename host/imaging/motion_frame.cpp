@@ -1,6 +1,9 @@
 #include "imaging/motion_frame.hpp"
 
+#include "imaging/image_checks.hpp"
+
 #include <algorithm>
+#include <utility>
 
 namespace flutterscan::imaging {
 namespace {
@@ -39,24 +42,6 @@ Plane to_motion_frame(const Plane& plane, Direction direction) {
   return plane;
 }
 
-int motion_rows(const Plane& plane, Direction direction) {
-  const bool along_x = direction == Direction::kPlusX || direction == Direction::kMinusX;
-  return along_x ? plane.height : plane.width;
-}
-
-void motion_row(const Plane& plane, Direction direction, int row, std::vector<float>& out) {
-  const bool along_x = direction == Direction::kPlusX || direction == Direction::kMinusX;
-  if (along_x) {
-    const auto from = plane.row(row);
-    out.assign(from.begin(), from.end());
-  } else {
-    out.resize(static_cast<std::size_t>(plane.height));
-    for (int n = 0; n < plane.height; ++n) out[static_cast<std::size_t>(n)] = plane.at(row, n);
-  }
-  if (direction == Direction::kMinusX || direction == Direction::kMinusY)
-    std::reverse(out.begin(), out.end());
-}
-
 Plane from_motion_frame(const Plane& plane, Direction direction) {
   switch (direction) {
     case Direction::kPlusX:
@@ -69,6 +54,35 @@ Plane from_motion_frame(const Plane& plane, Direction direction) {
       return transposed(rows_reversed(plane));
   }
   return plane;
+}
+
+Result<MotionFrame, std::string> MotionFrame::make(Image camera, Direction direction) {
+  using Out = Result<MotionFrame, std::string>;
+  if (auto problem = image_problem(camera); !problem.empty()) return Out::failure(problem);
+  return Out::success(MotionFrame(std::move(camera), direction));
+}
+
+MotionFrame::MotionFrame(Image camera, Direction direction) : direction_(direction) {
+  if (direction == Direction::kPlusX) {
+    image_ = std::move(camera);
+    return;
+  }
+  for (const Plane& plane : camera.channels)
+    image_.channels.push_back(to_motion_frame(plane, direction));
+}
+
+double position_along_motion(Direction direction, double x, double y, int width, int height) {
+  switch (direction) {
+    case Direction::kPlusX:
+      return x;
+    case Direction::kMinusX:
+      return width - 1 - x;
+    case Direction::kPlusY:
+      return y;
+    case Direction::kMinusY:
+      return height - 1 - y;
+  }
+  return x;
 }
 
 }  // namespace flutterscan::imaging

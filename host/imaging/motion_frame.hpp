@@ -1,11 +1,17 @@
 #pragma once
-// Every deblurring method works on rows along which the scene moved toward
-// larger index (+x). These functions turn a plane into that frame and back.
+// Every imaging stage works on rows along which the scene moved toward larger
+// index (+x): the motion frame. A camera frame is turned into it once, at the
+// entry of the per-frame pipeline (MotionFrame), every stage (blur estimate,
+// motion refinement, model choice, deblur, guards) reads that one copy, and
+// the result is turned back once (MotionFrame::to_camera). The free functions
+// below are the turning itself, for the simulator and the Bayer path, whose
+// planes start in other geometries.
 
+#include <string>
+
+#include "flutterscan/common/result.hpp"
 #include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
-
-#include <vector>
 
 namespace flutterscan::imaging {
 
@@ -13,14 +19,47 @@ namespace flutterscan::imaging {
 /// (+x: as is; -x: rows reversed; +y: transposed; -y: transposed and reversed).
 Plane to_motion_frame(const Plane& plane, Direction direction);
 
-/// \brief Rows of to_motion_frame(plane, direction): lines along the motion.
-int motion_rows(const Plane& plane, Direction direction);
-
-/// \brief Row `row` of to_motion_frame(plane, direction), into `out` (resized),
-/// without rearranging the whole plane: for checks that sample a few rows.
-void motion_row(const Plane& plane, Direction direction, int row, std::vector<float>& out);
-
 /// \brief The inverse of to_motion_frame.
 Plane from_motion_frame(const Plane& plane, Direction direction);
+
+/// \brief Pixels along the motion in a `width` x `height` camera frame.
+inline int length_along_motion(Direction direction, int width, int height) {
+  return moves_along_x(direction) ? width : height;
+}
+
+/// \brief Position along the motion of camera pixel (x, y) in a `width` x
+/// `height` frame, mirrored for -x and -y so that objects move toward larger
+/// values (the column of that pixel in the motion frame).
+double position_along_motion(Direction direction, double x, double y, int width, int height);
+
+/// \brief A camera frame's channels in the motion frame, made once per frame
+/// and checked then (image_checks.hpp: every stage may rely on planes of one
+/// size, finite values within range). +x frames are moved in without a copy.
+class MotionFrame {
+ public:
+  MotionFrame() = default;  ///< no channel (what a failed make() holds)
+  /// \brief `camera` (planes as the camera delivered them) turned for
+  /// `direction`; fails naming what is wrong with the image (image_problem).
+  static Result<MotionFrame, std::string> make(Image camera, Direction direction);
+
+  /// \brief The channels in the motion frame: row y, sample n = position n along the motion.
+  const Image& image() const { return image_; }
+  const Plane& channel(int c) const { return image_.channels[static_cast<std::size_t>(c)]; }
+  int channel_count() const { return image_.channel_count(); }
+  /// \brief Samples along the motion (the motion frame's width).
+  int along() const { return image_.width(); }
+  /// \brief Lines along the motion (the motion frame's height).
+  int lines() const { return image_.height(); }
+  Direction direction() const { return direction_; }
+
+  /// \brief `plane`, made in this motion frame, in the camera's orientation.
+  Plane to_camera(const Plane& plane) const { return from_motion_frame(plane, direction_); }
+
+ private:
+  MotionFrame(Image camera, Direction direction);
+
+  Image image_;
+  Direction direction_ = Direction::kPlusX;
+};
 
 }  // namespace flutterscan::imaging

@@ -31,33 +31,18 @@ double square(double v) {
 }
 
 /// The motion rows with the most edge energy along the motion: every
-/// `stride`-th row scored on one channel, the `count` best returned in order of
-/// energy (best first).
-std::vector<int> edgiest_rows(const Plane& plane, Direction direction, int count) {
-  const bool along_x = direction == Direction::kPlusX || direction == Direction::kMinusX;
-  const int rows = motion_rows(plane, direction);
-  const int stride = std::max(1, rows / (2 * count));
+/// `stride`-th row scored, the `count` best returned in order of energy (best
+/// first).
+std::vector<int> edgiest_rows(const Plane& plane, int count) {
+  const int stride = std::max(1, plane.height / (2 * count));
   std::vector<std::pair<double, int>> scored;
-  if (along_x) {
-    for (int r = 0; r < rows; r += stride) {
-      const float* row = plane.row(r).data();
-      const auto width = static_cast<std::size_t>(plane.width);
-      float sum = 0;
+  for (int r = 0; r < plane.height; r += stride) {
+    const float* row = plane.row(r).data();
+    const auto width = static_cast<std::size_t>(plane.width);
+    float sum = 0;
 #pragma omp simd reduction(+ : sum)
-      for (std::size_t n = 1; n < width; ++n) sum += std::abs(row[n] - row[n - 1]);
-      scored.emplace_back(sum, r);
-    }
-  } else {
-    std::vector<double> energy(static_cast<std::size_t>((rows + stride - 1) / stride), 0.0);
-    for (int y = 1; y < plane.height; ++y) {
-      const auto above = plane.row(y - 1), here = plane.row(y);
-      for (std::size_t i = 0; i < energy.size(); ++i) {
-        const std::size_t x = i * static_cast<std::size_t>(stride);
-        energy[i] += std::abs(here[x] - above[x]);
-      }
-    }
-    for (std::size_t i = 0; i < energy.size(); ++i)
-      scored.emplace_back(energy[i], static_cast<int>(i) * stride);
+    for (std::size_t n = 1; n < width; ++n) sum += std::abs(row[n] - row[n - 1]);
+    scored.emplace_back(sum, r);
   }
   const auto keep = std::min<std::size_t>(scored.size(), static_cast<std::size_t>(count));
   std::partial_sort(scored.begin(), scored.begin() + static_cast<std::ptrdiff_t>(keep),
@@ -284,11 +269,16 @@ class ResidualForms {
   std::vector<int> rows_in_block_;  ///< kBlocks + 1 entries, the last all rows
 };
 
-
-
 }  // namespace
 
-Result<MotionRefinement, std::string> refine_motion(const Image& electrons,
+bool refinement_fits(const CaptureModel& model, double tolerance, int along) {
+  const double hi = model.blur_px * (1 + tolerance);
+  if (!(hi >= 0 && hi < along)) return false;  // also: not a number
+  // Differenced rows are one shorter than the frame.
+  return 2 * static_cast<double>(pixel_model_taps(hi, model.pixel_model)) + 1 <= along;
+}
+
+Result<MotionRefinement, std::string> refine_motion(const MotionFrame& frame,
                                                     const CaptureModel& model,
                                                     const MotionRefinementOptions& options) {
   using Out = Result<MotionRefinement, std::string>;
@@ -297,7 +287,7 @@ Result<MotionRefinement, std::string> refine_motion(const Image& electrons,
     return Out::failure("the blur tolerance must be a finite fraction >= 0 and < 1 (100%)");
   if (options.rows < kBlocks)
     return Out::failure("refining the motion needs at least " + std::to_string(kBlocks) + " rows");
-  if (electrons.channel_count() < 2 || electrons.channel_count() != model.channels)
+  if (frame.channel_count() < 2 || frame.channel_count() != model.channels)
     return Out::failure("refining the motion needs two or more channels lit by different codes");
   if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
   if (!(model.blur_px > 0)) return Out::failure("refining the motion needs a blur > 0");
@@ -305,18 +295,14 @@ Result<MotionRefinement, std::string> refine_motion(const Image& electrons,
     return Out::failure(
         "every channel sees the same code, so the frame carries no motion information this way: "
         "refining the motion needs a multi-LED code such as a one-of-3 triplet");
-  const Plane& first = electrons.channels[0];
-  const int along =
-      motion_rows(first, model.direction) == first.height ? first.width : first.height;
   const double lo = model.blur_px * (1 - options.tolerance);
   const double hi = model.blur_px * (1 + options.tolerance);
-  const int taps = static_cast<int>(pixel_model_taps(hi, model.pixel_model));
-  // Differenced rows are one shorter; at least as many valid samples as taps.
-  if (2 * taps + 1 > along)
+  if (!refinement_fits(model, options.tolerance, frame.along()))
     return Out::failure("the largest blur searched (" + std::to_string(hi) +
-                        " px) does not fit the frame along the motion (" + std::to_string(along) +
-                        " px)");
-  if (motion_rows(first, model.direction) < kBlocks)
+                        " px) does not fit the frame along the motion (" +
+                        std::to_string(frame.along()) + " px)");
+  const int taps = static_cast<int>(pixel_model_taps(hi, model.pixel_model));
+  if (frame.lines() < kBlocks)
     return Out::failure("the frame has too few rows along the motion to refine the blur");
 
   // The edgiest rows of the brightest channel, differenced, every channel.
@@ -328,21 +314,20 @@ Result<MotionRefinement, std::string> refine_motion(const Image& electrons,
       if (level > best) best = level, brightest = static_cast<std::size_t>(c);
     }
   }
-  const auto chosen = edgiest_rows(electrons.channels[brightest], model.direction, options.rows);
+  const auto chosen = edgiest_rows(frame.channel(static_cast<int>(brightest)), options.rows);
   std::vector<std::vector<std::vector<float>>> rows;
-  std::vector<double> means(electrons.channels.size(), 0.0);
-  std::vector<float> line;
+  std::vector<double> means(static_cast<std::size_t>(frame.channel_count()), 0.0);
   for (int r : chosen) {
     std::vector<std::vector<float>> per_channel;
-    for (std::size_t c = 0; c < electrons.channels.size(); ++c) {
-      motion_row(electrons.channels[c], model.direction, r, line);
+    for (int c = 0; c < frame.channel_count(); ++c) {
+      const auto line = frame.channel(c).row(r);
       std::vector<float> diff(line.size() - 1);
       double sum = 0;
       for (std::size_t n = 0; n + 1 < line.size(); ++n) {
         diff[n] = line[n + 1] - line[n];
         sum += line[n];
       }
-      means[c] += sum / static_cast<double>(line.size() - 1);
+      means[static_cast<std::size_t>(c)] += sum / static_cast<double>(line.size() - 1);
       per_channel.push_back(std::move(diff));
     }
     rows.push_back(std::move(per_channel));

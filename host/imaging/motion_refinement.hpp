@@ -30,7 +30,7 @@
 
 #include "flutterscan/common/result.hpp"
 #include "imaging/capture_model.hpp"
-#include "imaging/image.hpp"
+#include "imaging/motion_frame.hpp"
 
 namespace flutterscan::imaging {
 
@@ -61,12 +61,17 @@ struct MotionRefinement {
   int rows_used = 0;
 };
 
-/// \brief Refines the motion of `electrons` (one plane per channel, black
+/// \brief Whether refine_motion() can search `model.blur_px` (1 +- tolerance)
+/// on a frame `along` pixels long along the motion: the longest PSF searched
+/// must leave at least as many valid samples as it has taps.
+bool refinement_fits(const CaptureModel& model, double tolerance, int along);
+
+/// \brief Refines the motion of `frame` (electrons, one plane per channel, black
 /// level removed) around `model` (its blur_px and speed_ratio are the start;
 /// everything else is taken as known). Fails for fewer than two channels,
 /// channels that share one code, a tolerance outside [0, 1), or a search
 /// range that does not fit the frame along the motion.
-Result<MotionRefinement, std::string> refine_motion(const Image& electrons,
+Result<MotionRefinement, std::string> refine_motion(const MotionFrame& frame,
                                                     const CaptureModel& model,
                                                     const MotionRefinementOptions& options);
 

@@ -9,7 +9,6 @@
 
 #include "imaging/exposure_timeline.hpp"
 #include "imaging/joint_wiener.hpp"
-#include "imaging/motion_frame.hpp"
 #include "imaging/row_fft.hpp"
 #include "imaging/row_pool.hpp"
 
@@ -257,25 +256,23 @@ BandBasis print_plane(const std::vector<Plane>& bands, double blur_px) {
 
 }  // namespace
 
-Result<PerChannelResult, std::string> deblur_per_channel(const Image& electrons,
+Result<PerChannelResult, std::string> deblur_per_channel(const MotionFrame& frame,
                                                          const CaptureModel& model, double lambda,
                                                          int threads, ColourPrior prior) {
   using Out = Result<PerChannelResult, std::string>;
   if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
   if (model.channels != 3 || model.leds != 3)
     return Out::failure("the per-channel model needs 3 channels and 3 LEDs");
-  if (electrons.channel_count() != 3)
-    return Out::failure("the frame has " + std::to_string(electrons.channel_count()) +
+  if (frame.channel_count() != 3)
+    return Out::failure("the frame has " + std::to_string(frame.channel_count()) +
                         " channels; the per-channel model needs 3");
   if (!(lambda > 0) || !std::isfinite(lambda))
     return Out::failure("the prior weight lambda must be a finite number > 0");
-  std::vector<Plane> rows;
-  for (const auto& plane : electrons.channels)
-    rows.push_back(to_motion_frame(plane, model.direction));
-  if (model.blur_px >= rows[0].width)
+  const std::vector<Plane>& rows = frame.image().channels;
+  if (model.blur_px >= frame.along())
     return Out::failure("the blur (" + std::to_string(model.blur_px) +
                         " px) is not shorter than the image along the motion (" +
-                        std::to_string(rows[0].width) + " px)");
+                        std::to_string(frame.along()) + " px)");
   PerChannelResult result;
   for (const auto& r : rows)
     result.noise_variance.push_back(channel_noise_variance(model, noise_level_mean(r)));
@@ -292,8 +289,7 @@ Result<PerChannelResult, std::string> deblur_per_channel(const Image& electrons,
   for (const auto& band : bands)
     for (std::size_t i = 0; i < band.pixels.size(); ++i)
       result.grey.pixels[i] += band.pixels[i] / 3.0f;
-  result.grey = from_motion_frame(result.grey, model.direction);
-  for (auto& band : bands) result.bands.push_back(from_motion_frame(band, model.direction));
+  result.bands = std::move(bands);
   return Out::success(std::move(result));
 }
 

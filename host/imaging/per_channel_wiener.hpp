@@ -21,7 +21,7 @@
 
 #include "flutterscan/common/result.hpp"
 #include "imaging/capture_model.hpp"
-#include "imaging/image.hpp"
+#include "imaging/motion_frame.hpp"
 
 namespace flutterscan::imaging {
 
@@ -40,11 +40,11 @@ struct PerChannelResult {
   std::vector<double> noise_variance;  ///< per channel, e-^2, at the frame's mean signal
 };
 
-/// \brief Deblurs `electrons` (3 channels, black level removed, linear) into
-/// one latent per LED band. Needs 3 channels and 3 LEDs; `lambda` weights the
-/// gradient prior of every band (1 / kLabelGradientVariance in deblur()).
+/// \brief Deblurs `frame` (electrons, 3 channels, black level removed, linear)
+/// into one latent per LED band, in the motion frame. Needs 3 channels and 3 LEDs; `lambda` weights
+/// the gradient prior of every band (1 / kLabelGradientVariance in deblur()).
 Result<PerChannelResult, std::string> deblur_per_channel(
-    const Image& electrons, const CaptureModel& model, double lambda, int threads = 2,
+    const MotionFrame& frame, const CaptureModel& model, double lambda, int threads = 2,
     ColourPrior prior = ColourPrior::kThreeBands);
 
 }  // namespace flutterscan::imaging

@@ -2,54 +2,52 @@
 
 #include <cmath>
 #include <map>
+#include <utility>
 
 #include "imaging/exposure_timeline.hpp"
-#include "imaging/motion_frame.hpp"
 
 namespace flutterscan::imaging {
 
-Result<Plane, std::string> deblur_row_phases(const Image& electrons, const CaptureModel& model,
+Result<Plane, std::string> deblur_row_phases(const MotionFrame& frame, const CaptureModel& model,
                                              std::span<const double> row_phase_slots,
                                              const DeblurOptions& options, double phase_step) {
   using Out = Result<Plane, std::string>;
   if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
   if (model.bayer_rggb) return Out::failure("the per-row phase model takes RGB or mono frames");
-  if (model.direction != Direction::kPlusX && model.direction != Direction::kMinusX)
+  if (!moves_along_x(frame.direction()))
     return Out::failure("the per-row phase model needs motion along x (rows of the readout)");
-  if (electrons.channel_count() != model.channels)
-    return Out::failure("the frame has " + std::to_string(electrons.channel_count()) +
+  if (frame.channel_count() != model.channels)
+    return Out::failure("the frame has " + std::to_string(frame.channel_count()) +
                         " channels but the capture model " + std::to_string(model.channels));
-  if (static_cast<int>(row_phase_slots.size()) != electrons.height())
+  if (static_cast<int>(row_phase_slots.size()) != frame.lines())
     return Out::failure(
         "one code phase per row is needed: " + std::to_string(row_phase_slots.size()) +
-        " phases for " + std::to_string(electrons.height()) + " rows");
+        " phases for " + std::to_string(frame.lines()) + " rows");
   for (double p : row_phase_slots)
     if (!std::isfinite(p)) return Out::failure("row code phases must be finite");
   if (!(phase_step > 0 && phase_step <= 1))
     return Out::failure("the phase step must be in (0, 1] slots");
-  if (model.blur_px >= electrons.width())
+  if (model.blur_px >= frame.along())
     return Out::failure("the blur (" + std::to_string(model.blur_px) +
                         " px) is not shorter than the image along the motion (" +
-                        std::to_string(electrons.width()) + " px)");
+                        std::to_string(frame.along()) + " px)");
   if (!(options.gradient_variance > 0) || !std::isfinite(options.gradient_variance))
     return Out::failure("the prior gradient variance must be a finite number > 0");
 
-  std::vector<Plane> rows;
+  const std::vector<Plane>& rows = frame.image().channels;
   std::vector<double> variance;
-  for (const auto& plane : electrons.channels) {
-    rows.push_back(to_motion_frame(plane, model.direction));
-    variance.push_back(channel_noise_variance(model, noise_level_mean(rows.back())));
-  }
-  const int width = rows[0].width;
+  for (const auto& plane : rows)
+    variance.push_back(channel_noise_variance(model, noise_level_mean(plane)));
+  const int width = frame.along();
   // Rows per quantised phase (in units of phase_step, modulo the code's cycle).
   const auto steps = static_cast<long long>(std::llround(model.code.length() / phase_step));
   std::map<long long, std::vector<int>> groups;
-  for (int y = 0; y < electrons.height(); ++y) {
+  for (int y = 0; y < frame.lines(); ++y) {
     long long q = std::llround(row_phase_slots[static_cast<std::size_t>(y)] / phase_step) % steps;
     if (q < 0) q += steps;
     groups[q].push_back(y);
   }
-  Plane latent(width, electrons.height());
+  Plane latent(width, frame.lines());
   for (const auto& [q, members] : groups) {
     const auto segments = cyclic_phase_segments(model, static_cast<double>(q) * phase_step);
     std::vector<ChannelPsf> psfs;
@@ -72,7 +70,7 @@ Result<Plane, std::string> deblur_row_phases(const Image& electrons, const Captu
       std::copy(source.begin(), source.end(), latent.row(members[i]).begin());
     }
   }
-  return Out::success(from_motion_frame(latent, model.direction));
+  return Out::success(std::move(latent));
 }
 
 }  // namespace flutterscan::imaging

@@ -17,18 +17,18 @@
 #include "flutterscan/common/result.hpp"
 #include "imaging/capture_model.hpp"
 #include "imaging/deblur.hpp"
-#include "imaging/image.hpp"
+#include "imaging/motion_frame.hpp"
 
 namespace flutterscan::imaging {
 
 /// \brief Default phase quantum: 1/8 slot (a shift of blur / (8 L) pixels, 0.125 px at 52 px).
 inline constexpr double kRowPhaseStep = 0.125;
 
-/// \brief Deblurs a rolling-shutter frame whose image row r saw the code from
-/// `row_phase_slots[r]`. Motion must be along x. Returns the grey latent
-/// (reflectance, image orientation). Errors: those of deblur(), a phase count
-/// other than the frame height, a non-finite phase, phase_step outside (0, 1].
-Result<Plane, std::string> deblur_row_phases(const Image& electrons, const CaptureModel& model,
+/// \brief Deblurs a rolling-shutter frame whose image row r (line r of the
+/// motion frame: motion along x) saw the code from `row_phase_slots[r]`.
+/// Returns the grey latent (reflectance, in the motion frame). Errors: those of deblur(), a phase
+/// count other than the frame height, a non-finite phase, phase_step outside (0, 1].
+Result<Plane, std::string> deblur_row_phases(const MotionFrame& frame, const CaptureModel& model,
                                              std::span<const double> row_phase_slots,
                                              const DeblurOptions& options,
                                              double phase_step = kRowPhaseStep);

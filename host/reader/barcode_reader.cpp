@@ -163,8 +163,7 @@ std::optional<DecodeArea> decode_area_from_name(const std::string& name) {
 
 std::vector<DecodeWindow> decode_windows(std::span<const LabelRegion> runs, int width, int height,
                                          imaging::Direction direction, int margin) {
-  const bool along_x =
-      direction == imaging::Direction::kPlusX || direction == imaging::Direction::kMinusX;
+  const bool along_x = imaging::moves_along_x(direction);
   const bool reversed =
       direction == imaging::Direction::kMinusX || direction == imaging::Direction::kMinusY;
   const int length = along_x ? width : height;

@@ -6,6 +6,7 @@
 
 #include "imaging/capture_descriptor.hpp"
 #include "imaging/limits.hpp"
+#include "imaging/motion_frame.hpp"
 
 namespace flutterscan::session {
 
@@ -20,9 +21,7 @@ std::string blur_out_of_range(const ExposureRecord& event, const OpticsConfig& o
                               const capture::FrameFormat& format) {
   imaging::Direction direction = imaging::Direction::kPlusX;
   imaging::parse_direction(optics.direction, direction);
-  const bool along_x =
-      direction == imaging::Direction::kPlusX || direction == imaging::Direction::kMinusX;
-  const int along = along_x ? format.width : format.height;
+  const int along = imaging::length_along_motion(direction, format.width, format.height);
   const double longest = std::min(static_cast<double>(along) - 1, imaging::kMaxBlurPx);
   const double blur = optics.encoder
                           ? std::abs(static_cast<double>(event.encoder_delta)) * optics.px_per_count

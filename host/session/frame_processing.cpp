@@ -16,24 +16,6 @@
 #include "session/session_clock.hpp"
 
 namespace flutterscan::session {
-namespace {
-
-/// The position along the motion, mirrored so that objects move toward larger values.
-double along_motion(double x, double y, int width, int height, imaging::Direction d) {
-  switch (d) {
-    case imaging::Direction::kPlusX:
-      return x;
-    case imaging::Direction::kMinusX:
-      return width - 1 - x;
-    case imaging::Direction::kPlusY:
-      return y;
-    case imaging::Direction::kMinusY:
-      return height - 1 - y;
-  }
-  return x;
-}
-
-}  // namespace
 
 FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
                            std::atomic<double>& last_blur_px, const imaging::FlatField* flat) {
@@ -91,17 +73,25 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
       return out;
     }
   }
-  // The simplest model that fits the frame, and the guards (model_fit.hpp); raw
-  // Bayer frames keep the grey global model on their raw planes.
-  imaging::Plane latent;
+  // The simplest model that fits the frame, and the guards (model_fit.hpp), on
+  // the frame turned once into the motion frame; raw Bayer frames keep the grey
+  // global model on their raw planes (split in the mosaic's own geometry).
+  const imaging::Direction direction = model.value().direction;
+  imaging::Plane latent;         // the camera's orientation: decoded and kept
+  imaging::Plane motion_latent;  // the motion frame: where labels are looked for
   std::string deblur_error;
   if (model.value().bayer_rggb) {
     auto r = imaging::deblur_bayer(electrons.channels[0], model.value(), options,
                                    imaging::BayerMode::kRawPlanes);
-    if (r.ok())
+    if (r.ok()) {
       latent = std::move(r.value().latent);
-    else
+      motion_latent = imaging::to_motion_frame(latent, direction);
+    } else {
       deblur_error = r.error();
+    }
+  } else if (auto frame = imaging::MotionFrame::make(std::move(electrons), direction);
+             !frame.ok()) {
+    deblur_error = frame.error();
   } else {
     ModelFitConfig fit;
     fit.encoder = config.optics.encoder;
@@ -111,11 +101,12 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
     fit.blur_check_every = config.processing.blur_check_every;
     fit.blur_tolerance = config.processing.blur_tolerance_pct / 100;
     fit.fallback_blur_px = last_blur_px.load();
-    auto r = deblur_fitting_model(converted.value().saturated_share, electrons, model.value(),
+    auto r = deblur_fitting_model(converted.value().saturated_share, frame.value(), model.value(),
                                   options, fit, job.index);
     if (r.ok()) {
       if (r.value().estimated_blur_px > 0) last_blur_px.store(r.value().estimated_blur_px);
-      latent = std::move(r.value().latent);
+      motion_latent = std::move(r.value().latent);
+      latent = frame.value().to_camera(motion_latent);
       for (const auto& flag : r.value().flags) flags.push_back(flag);
       log.update(r.value().log);
       if (r.value().log.contains("model"))
@@ -133,9 +124,7 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
   }
   // Paper along the motion: where codes are looked for (processing.decode_area) and
   // the labels judged (read, or NO-READ).
-  const imaging::Direction direction = model.value().direction;
-  const std::vector<reader::LabelRegion> paper =
-      reader::find_paper_runs(imaging::to_motion_frame(latent, direction));
+  const std::vector<reader::LabelRegion> paper = reader::find_paper_runs(motion_latent);
   const bool labels_only = config.processing.decode_area == reader::DecodeArea::kLabels;
   const std::vector<reader::DecodeWindow> windows =
       labels_only ? reader::decode_windows(paper, latent.width, latent.height, direction)
@@ -144,7 +133,7 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
   if (!labels_only || !windows.empty())
     readout = reader::read_barcodes(latent, config.processing.symbologies,
                                     config.processing.try_rotate, windows);
-  if (labels_only) log["reader::decode_windows"] = windows.size();
+  if (labels_only) log["decode_windows"] = windows.size();
   const std::vector<reader::DecodedCode>& codes = readout.codes;
   if (!readout.decoder_fault.empty()) {
     // ZXing failed an internal assertion on this image: nothing read, the session goes on.
@@ -168,8 +157,8 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
   for (const reader::LabelRegion& r : regions) {
     bool any = false;
     for (std::size_t i = 0; i < codes.size(); ++i) {
-      const double p = along_motion(codes[i].centre_x, codes[i].centre_y, latent.width,
-                                    latent.height, direction);
+      const double p = imaging::position_along_motion(
+          direction, codes[i].centre_x, codes[i].centre_y, latent.width, latent.height);
       if (p >= r.begin - 8 && p <= r.end + 8 && !used[i]) {
         used[i] = true;
         any = true;
@@ -183,9 +172,10 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
   }
   for (std::size_t i = 0; i < codes.size(); ++i)
     if (!used[i])
-      out.sightings.push_back({along_motion(codes[i].centre_x, codes[i].centre_y, latent.width,
-                                            latent.height, direction),
-                               true, codes[i].text, codes[i].format});
+      out.sightings.push_back(
+          {imaging::position_along_motion(direction, codes[i].centre_x, codes[i].centre_y,
+                                          latent.width, latent.height),
+           true, codes[i].text, codes[i].format});
   if (out.decode_failed) flags.push_back("no-read");
   log["decoded"] = decoded;
   log["labels_in_view"] = out.sightings.size();

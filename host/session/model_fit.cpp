@@ -31,11 +31,11 @@ constexpr double kUnfitResidual = 3.0;
 /// Refines the encoder's motion on the frame (ModelFitConfig::blur_tolerance):
 /// `model` takes the refined motion when the frame has edges along it and the
 /// result is neither on the tolerance's edge nor unfit (then flagged).
-void refine_encoder_motion(const imaging::Image& electrons, imaging::CaptureModel& model,
+void refine_encoder_motion(const imaging::MotionFrame& frame, imaging::CaptureModel& model,
                            double tolerance, FittedFrame& out) {
   imaging::MotionRefinementOptions options;
   options.tolerance = tolerance;
-  const auto r = imaging::refine_motion(electrons, model, options);
+  const auto r = imaging::refine_motion(frame, model, options);
   if (!r.ok()) {
     out.log["motion"] = {{"error", r.error()}};
     return;
@@ -75,7 +75,7 @@ std::pair<double, double> blur_range(double nominal, int along) {
 }  // namespace
 
 Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
-                                                      const imaging::Image& electrons,
+                                                      const imaging::MotionFrame& frame,
                                                       imaging::CaptureModel model,
                                                       const imaging::DeblurOptions& options,
                                                       const ModelFitConfig& config,
@@ -83,20 +83,16 @@ Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
   using Out = Result<FittedFrame, std::string>;
   FittedFrame out;
   imaging::GuardReport guards;
-  const bool along_x = model.direction == imaging::Direction::kPlusX ||
-                       model.direction == imaging::Direction::kMinusX;
-  const int along = along_x ? electrons.width() : electrons.height();
   auto lap = std::chrono::steady_clock::now();
   nlohmann::json& times = out.log["fit_ms"];
 
   // 1. The blur.
   const bool check_blur = config.encoder && config.blur_check_every > 0 &&
                           frame_index % static_cast<std::uint64_t>(config.blur_check_every) == 0;
-  if ((!config.encoder || check_blur) && electrons.channel_count() >= 2) {
-    const auto [lo, hi] = blur_range(model.blur_px, along);
-    const int across = along_x ? electrons.height() : electrons.width();
+  if ((!config.encoder || check_blur) && frame.channel_count() >= 2) {
+    const auto [lo, hi] = blur_range(model.blur_px, frame.along());
     const auto estimate =
-        imaging::estimate_blur(electrons, model, lo, hi, std::max(1, across / 90));
+        imaging::estimate_blur(frame, model, lo, hi, std::max(1, frame.lines() / 90));
     if (estimate.ok()) {
       out.log["blur_estimate_px"] = rounded(estimate.value().blur_px, 0.01);
       if (std::isfinite(estimate.value().standard_error_px))
@@ -121,15 +117,15 @@ Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
   times["blur_estimate"] = lap_ms(lap);
 
   // The encoder's motion refined on the frame (after the check, which judges the encoder).
-  if (config.encoder && config.blur_tolerance > 0 && electrons.channel_count() >= 2 &&
+  if (config.encoder && config.blur_tolerance > 0 && frame.channel_count() >= 2 &&
       model.code.leds() >= 2)
-    refine_encoder_motion(electrons, model, config.blur_tolerance, out);
+    refine_encoder_motion(frame, model, config.blur_tolerance, out);
   times["refine_motion"] = lap_ms(lap);
 
   // 2. The model, and the deblur under it.
   const auto choice =
       config.choose_latent
-          ? imaging::choose_frame_model(electrons, model, config.line_time_us > 0, config.encoder)
+          ? imaging::choose_frame_model(frame, model, config.line_time_us > 0, config.encoder)
           : imaging::FrameModelChoice{imaging::LatentModel::kGrey, config.line_time_us > 0,
                                       config.encoder, 0};
   times["model_choice"] = lap_ms(lap);
@@ -137,29 +133,28 @@ Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
                       {"grey_residual", rounded(choice.grey_residual, 0.01)},
                       {"blur_px", rounded(model.blur_px, 0.01)}};
   if (model.speed_ratio != 1) out.log["model"]["speed_ratio"] = rounded(model.speed_ratio, 0.001);
-  if (choice.latent == imaging::LatentModel::kPerChannel && electrons.channel_count() == 3) {
-    auto result = imaging::deblur_per_channel(electrons, model, 1.0 / options.gradient_variance,
-                                              options.threads);
+  if (choice.latent == imaging::LatentModel::kPerChannel && frame.channel_count() == 3) {
+    auto result =
+        imaging::deblur_per_channel(frame, model, 1.0 / options.gradient_variance, options.threads);
     if (!result.ok()) return Out::failure(result.error());
     out.latent = std::move(result.value().grey);
   } else if (choice.per_row_phase) {
-    std::vector<double> phases(static_cast<std::size_t>(electrons.height()));
+    std::vector<double> phases(static_cast<std::size_t>(frame.lines()));
     const double slots = model.code.length();
     for (std::size_t r = 0; r < phases.size(); ++r)
       phases[r] =
           std::fmod(static_cast<double>(r) * config.line_time_us / config.slot_time_us, slots);
-    auto result = imaging::deblur_row_phases(electrons, model, phases, options);
+    auto result = imaging::deblur_row_phases(frame, model, phases, options);
     if (!result.ok()) return Out::failure(result.error());
     out.latent = std::move(result.value());
   } else {
-    auto result = imaging::deblur(electrons, model, options);
+    auto result = imaging::deblur(frame, model, options);
     if (!result.ok()) return Out::failure(result.error());
     out.latent = std::move(result.value().latent);
     times["deblur"] = lap_ms(lap);
     // The residual check needs the grey global model the frame was deblurred with.
-    guards.residual_ratio = imaging::residual_ratio(
-        electrons, out.latent, model,
-        std::max(4, (along_x ? electrons.height() : electrons.width()) / 32));
+    guards.residual_ratio =
+        imaging::residual_ratio(frame, out.latent, model, std::max(4, frame.lines() / 32));
   }
 
   if (!times.contains("deblur")) times["deblur"] = lap_ms(lap);

@@ -32,6 +32,7 @@
 #include "imaging/capture_model.hpp"
 #include "imaging/deblur.hpp"
 #include "imaging/image.hpp"
+#include "imaging/motion_frame.hpp"
 #include "imaging/motion_refinement.hpp"
 
 namespace flutterscan::session {
@@ -50,7 +51,7 @@ struct ModelFitConfig {
 };
 
 struct FittedFrame {
-  imaging::Plane latent;           ///< grey reflectance
+  imaging::Plane latent;           ///< grey reflectance, in the motion frame
   std::vector<std::string> flags;  ///< guards that fired
   nlohmann::json log;              ///< {"model": ..., "guards": ...}
   double estimated_blur_px = 0;    ///< a confident estimate from this frame (0: none)
@@ -60,12 +61,13 @@ struct FittedFrame {
   bool refinement_used = false;
 };
 
-/// \brief Deblurs one frame (`electrons`; `saturated_share` of its samples at
-/// the ceiling, imaging::saturated_share) under the simplest model that fits.
+/// \brief Deblurs one frame (`frame`: electrons in the motion frame;
+/// `saturated_share` of its samples at the ceiling, imaging::saturated_share)
+/// under the simplest model that fits.
 /// `model.blur_px` is the nominal (encoder) blur; `frame_index` paces the blur
 /// check. Fails only when deblurring itself fails.
 Result<FittedFrame, std::string> deblur_fitting_model(
-    double saturated_share, const imaging::Image& electrons, imaging::CaptureModel model,
+    double saturated_share, const imaging::MotionFrame& frame, imaging::CaptureModel model,
     const imaging::DeblurOptions& options, const ModelFitConfig& config, std::uint64_t frame_index);
 
 }  // namespace flutterscan::session

@@ -8,6 +8,7 @@
 
 #include "capture/camera_source.hpp"
 #include "imaging/capture_descriptor.hpp"
+#include "imaging/motion_frame.hpp"
 #include "session/capture_stage.hpp"
 #include "session/light_probe.hpp"
 #include "session/line_devices.hpp"
@@ -77,8 +78,6 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
         " mixes the camera channels: the joint deblur loses accuracy (use raw Bayer or RGB)");
   imaging::Direction direction = imaging::Direction::kPlusX;
   imaging::parse_direction(config.optics.direction, direction);
-  const bool along_x =
-      direction == imaging::Direction::kPlusX || direction == imaging::Direction::kMinusX;
   plan_row_ffts(format, direction);
 
   // The outputs: the session folder, result lines (TCP, serial).
@@ -106,8 +105,8 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   Pipeline pipeline(config.processing.queue_depth);
   const std::int64_t start_ns = now_ns();
   WorkerPool workers(pipeline, config, flat_field);
-  ResultsStage results(config, along_x ? format.width : format.height, start_ns, pipeline, folder,
-                       server);
+  ResultsStage results(config, imaging::length_along_motion(direction, format.width, format.height),
+                       start_ns, pipeline, folder, server);
   std::thread results_thread([&] { results.run(hooks.progress); });
   MatchingStage matching(config.processing.match_tolerance_us, config.optics);
   const CaptureEnd capture_end =

@@ -2,6 +2,7 @@
 
 #include <utility>
 
+#include "imaging/motion_frame.hpp"
 #include "imaging/row_fft.hpp"
 #include "session/frame_processing.hpp"
 
@@ -15,9 +16,8 @@ constexpr int kLongestPlannedBlurPx = 256;
 }  // namespace
 
 void plan_row_ffts(const capture::FrameFormat& format, imaging::Direction direction) {
-  const bool along_x =
-      direction == imaging::Direction::kPlusX || direction == imaging::Direction::kMinusX;
-  imaging::measure_row_ffts(along_x ? format.width : format.height, kLongestPlannedBlurPx + 2);
+  imaging::measure_row_ffts(imaging::length_along_motion(direction, format.width, format.height),
+                            kLongestPlannedBlurPx + 2);
 }
 
 WorkerPool::WorkerPool(Pipeline& pipeline, const SessionConfig& config,

@@ -163,18 +163,47 @@ TEST(MotionFrame, EveryDirectionRoundTrips) {
   EXPECT_EQ(down.width, 3);
   EXPECT_EQ(down.at(1, 0), p.at(0, 1));
   EXPECT_EQ(to_motion_frame(p, Direction::kMinusX).at(0, 0), p.at(4, 0));
-  // One row at a time, without the whole rearrangement: the same rows.
-  std::vector<float> line;
+}
+
+TEST(MotionFrame, TurnsAFrameOnceAndBack) {
+  Image camera;
+  for (int c = 0; c < 2; ++c) {
+    Plane p(5, 3);
+    for (std::size_t i = 0; i < p.pixels.size(); ++i) p.pixels[i] = static_cast<float>(10 * c + i);
+    camera.channels.push_back(p);
+  }
   for (Direction d :
        {Direction::kPlusX, Direction::kMinusX, Direction::kPlusY, Direction::kMinusY}) {
-    const Plane moved = to_motion_frame(p, d);
-    ASSERT_EQ(motion_rows(p, d), moved.height);
-    for (int r = 0; r < moved.height; ++r) {
-      motion_row(p, d, r, line);
-      const auto want = moved.row(r);
-      EXPECT_EQ(line, std::vector<float>(want.begin(), want.end())) << "row " << r;
+    const auto frame = MotionFrame::make(camera, d);
+    ASSERT_TRUE(frame.ok()) << frame.error();
+    EXPECT_EQ(frame.value().direction(), d);
+    EXPECT_EQ(frame.value().channel_count(), 2);
+    EXPECT_EQ(frame.value().along(), length_along_motion(d, 5, 3));
+    EXPECT_EQ(frame.value().lines(), moves_along_x(d) ? 3 : 5);
+    for (int c = 0; c < 2; ++c) {
+      const Plane& plane = camera.channels[static_cast<std::size_t>(c)];
+      EXPECT_EQ(frame.value().channel(c).pixels, to_motion_frame(plane, d).pixels);
+      EXPECT_EQ(frame.value().to_camera(frame.value().channel(c)).pixels, plane.pixels);
     }
+    // Camera pixel (x, y) lies at column position_along_motion of the motion frame.
+    for (int y = 0; y < 3; ++y)
+      for (int x = 0; x < 5; ++x) {
+        const auto n = static_cast<int>(position_along_motion(d, x, y, 5, 3));
+        const int row = moves_along_x(d) ? y : x;
+        EXPECT_EQ(frame.value().channel(0).at(n, row), camera.channels[0].at(x, y))
+            << static_cast<int>(d) << " " << x << "," << y;
+      }
   }
+  // The one check at the entry: what no stage could work on is refused by name.
+  Image uneven = camera;
+  uneven.channels[1] = Plane(4, 3);
+  const auto refused = MotionFrame::make(uneven, Direction::kPlusY);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().find("channel 1"), std::string::npos) << refused.error();
+  Image wild = camera;
+  wild.channels[0].pixels[7] = NAN;
+  EXPECT_FALSE(MotionFrame::make(wild, Direction::kPlusX).ok());
+  EXPECT_FALSE(MotionFrame::make(Image{}, Direction::kPlusX).ok());
 }
 
 }  // namespace

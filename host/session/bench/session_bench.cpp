@@ -27,6 +27,7 @@
 #include "imaging/deblur.hpp"
 #include "imaging/model_choice.hpp"
 #include "imaging/model_guards.hpp"
+#include "imaging/motion_frame.hpp"
 #include "imaging/motion_refinement.hpp"
 #include "reader/barcode_reader.hpp"
 #include "session/session.hpp"
@@ -167,8 +168,11 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
       t = now;
     };
     auto converted = capture::frame_to_electrons(frame, model.value());
-    const imaging::Image& electrons = converted.value().electrons;
-    lap("convert");
+    const double saturated = converted.value().saturated_share;
+    const auto motion_frame =
+        imaging::MotionFrame::make(std::move(converted.value().electrons), model.value().direction);
+    lap("convert");  // with the turn into the motion frame and its check, as the session does
+    const imaging::MotionFrame& electrons = motion_frame.value();
     imaging::MotionRefinementOptions refinement;  // the session's default tolerance
     refinement.tolerance = session::ProcessingConfig{}.blur_tolerance_pct / 100;
     const auto refined = imaging::refine_motion(electrons, model.value(), refinement);
@@ -179,7 +183,6 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
     lap("deblur");
     const imaging::Plane& latent = deblurred.value().latent;
     const double ratio = imaging::residual_ratio(electrons, latent, model.value(), height / 32);
-    const double saturated = converted.value().saturated_share;
     lap("guards");
     const auto windows = reader::decode_windows(reader::find_paper_runs(latent), latent.width,
                                                 latent.height, imaging::Direction::kPlusX);

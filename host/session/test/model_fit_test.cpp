@@ -42,13 +42,14 @@ sim::SceneSpec code128() {
 }
 
 struct Frame {
-  imaging::Image dn, electrons;
+  imaging::Image dn;
+  imaging::MotionFrame electrons;  ///< as the session passes it: in the motion frame
 };
 
 Frame record(const imaging::Image& expected, const imaging::CaptureModel& m) {
   Frame f;
   f.dn = sim::record_frame(expected, m, 7);
-  f.electrons = imaging::dn_to_electrons(f.dn, m);
+  f.electrons = imaging::MotionFrame::make(imaging::dn_to_electrons(f.dn, m), m.direction).value();
   return f;
 }
 

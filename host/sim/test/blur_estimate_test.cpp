@@ -42,8 +42,13 @@ imaging::Plane label(SceneKind kind, const char* content) {
   return scene.value();
 }
 
-imaging::Image recorded(const imaging::Plane& scene, const CaptureModel& m, std::uint64_t seed) {
-  return imaging::dn_to_electrons(record_frame(expected_electrons(scene, m), m, seed), m);
+/// The recorded frame in electrons, turned into the motion frame as the session does.
+imaging::MotionFrame recorded(const imaging::Plane& scene, const CaptureModel& m,
+                              std::uint64_t seed) {
+  return imaging::MotionFrame::make(
+             imaging::dn_to_electrons(record_frame(expected_electrons(scene, m), m, seed), m),
+             m.direction)
+      .value();
 }
 
 TEST(BlurEstimate, FindsTheTrueBlurWithinItsConfidence) {

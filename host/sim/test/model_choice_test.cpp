@@ -6,6 +6,7 @@
 
 #include "imaging/frame_conversion.hpp"
 #include "imaging/model_choice.hpp"
+#include "imaging/motion_frame.hpp"
 #include "sim/colour_scene.hpp"
 #include "sim/forward_model.hpp"
 #include "sim/timeline_forward.hpp"
@@ -34,8 +35,11 @@ SceneSpec code128() {
   return spec;
 }
 
-imaging::Image electrons_of(const imaging::Image& expected, const imaging::CaptureModel& m) {
-  return imaging::dn_to_electrons(record_frame(expected, m, 3), m);
+/// The recorded frame in electrons, in the motion frame.
+imaging::MotionFrame electrons_of(const imaging::Image& expected, const imaging::CaptureModel& m) {
+  return imaging::MotionFrame::make(imaging::dn_to_electrons(record_frame(expected, m, 3), m),
+                                    m.direction)
+      .value();
 }
 
 TEST(ModelChoice, GreyLabelKeepsTheGreyModel) {

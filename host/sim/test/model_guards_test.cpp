@@ -39,14 +39,20 @@ imaging::Plane code128() {
 imaging::GuardReport guards(const imaging::Plane& scene, const CaptureModel& truth,
                             const CaptureModel& assumed) {
   const imaging::Image dn = record_frame(expected_electrons(scene, truth), truth, 9);
-  const imaging::Image electrons = imaging::dn_to_electrons(dn, assumed);
+  const auto electrons =
+      imaging::MotionFrame::make(imaging::dn_to_electrons(dn, assumed), assumed.direction);
+  if (!electrons.ok()) {
+    ADD_FAILURE() << electrons.error();
+    return {};
+  }
   imaging::DeblurOptions options;
   options.method = imaging::Method::kTotalVariation;
-  const auto result = imaging::deblur(electrons, assumed, options);
+  const auto result = imaging::deblur(electrons.value(), assumed, options);
   EXPECT_TRUE(result.ok());
   imaging::GuardReport report;
   report.saturated_share = imaging::saturated_share(dn, assumed);
-  report.residual_ratio = imaging::residual_ratio(electrons, result.value().latent, assumed);
+  report.residual_ratio =
+      imaging::residual_ratio(electrons.value(), result.value().latent, assumed);
   return report;
 }
 
@@ -81,9 +87,11 @@ TEST(ModelGuards, BlurDisagreementFiresOutsideTheConfidence) {
   EXPECT_FALSE(imaging::blur_disagrees(80.0, estimate));
   // On a real frame: the estimate from the frame against a wrong encoder reading.
   const CaptureModel m = label_capture();
-  const auto electrons =
-      imaging::dn_to_electrons(record_frame(expected_electrons(code128(), m), m, 4), m);
-  const auto measured = imaging::estimate_blur(electrons, m, 30, 80);
+  const auto electrons = imaging::MotionFrame::make(
+      imaging::dn_to_electrons(record_frame(expected_electrons(code128(), m), m, 4), m),
+      m.direction);
+  ASSERT_TRUE(electrons.ok()) << electrons.error();
+  const auto measured = imaging::estimate_blur(electrons.value(), m, 30, 80);
   ASSERT_TRUE(measured.ok()) << measured.error();
   EXPECT_FALSE(imaging::blur_disagrees(52.0, measured.value()));
   EXPECT_TRUE(imaging::blur_disagrees(57.2, measured.value()));

@@ -11,6 +11,7 @@
 #include "imaging/deblur.hpp"
 #include "imaging/frame_conversion.hpp"
 #include "imaging/metrics.hpp"
+#include "imaging/motion_frame.hpp"
 #include "imaging/per_channel_wiener.hpp"
 #include "imaging/row_phase_deblur.hpp"
 #include "reader/barcode_reader.hpp"
@@ -53,6 +54,11 @@ bool decodes(const Plane& image) {
   return std::find(found.begin(), found.end(), "FS-0042") != found.end();
 }
 
+/// A recorded frame (DN) in electrons, turned into the motion frame.
+imaging::MotionFrame motion_frame(const imaging::Image& dn, const CaptureModel& m) {
+  return imaging::MotionFrame::make(imaging::dn_to_electrons(dn, m), m.direction).value();
+}
+
 double score(const Plane& truth, const Plane& estimate) {
   return imaging::psnr(
       truth, estimate,
@@ -66,7 +72,7 @@ TEST(PerChannelModel, RecoversARedOnWhiteLabelBetterThanTheGreyModel) {
   const Plane truth = fuse_bands(bands.value());
   const auto expected = expected_colour_electrons(bands.value(), m);
   ASSERT_TRUE(expected.ok()) << expected.error();
-  const auto frame = imaging::dn_to_electrons(record_frame(expected.value(), m, 11), m);
+  const auto frame = motion_frame(record_frame(expected.value(), m, 11), m);
 
   const auto grey = imaging::deblur(frame, m, imaging::DeblurOptions{});
   ASSERT_TRUE(grey.ok()) << grey.error();
@@ -102,7 +108,7 @@ TEST(PerChannelModel, RecoversARedOnWhiteLabelBetterThanTheGreyModel) {
 TEST(PerChannelModel, AGreyObjectComesOutAsTheGreyModelDoes) {
   const CaptureModel m = camera("raskar-white", 3000);
   const auto scene = render_scene(label_spec()).value();
-  const auto frame = imaging::dn_to_electrons(record_frame(expected_electrons(scene, m), m, 3), m);
+  const auto frame = motion_frame(record_frame(expected_electrons(scene, m), m, 3), m);
   const auto grey = imaging::deblur(frame, m, imaging::DeblurOptions{});
   const auto colour = imaging::deblur_per_channel(frame, m, 1.0 / imaging::kLabelGradientVariance);
   ASSERT_TRUE(grey.ok() && colour.ok());
@@ -122,9 +128,9 @@ TEST(RowPhaseModel, RecoversARollingShutterFrameTheGlobalModelCannot) {
   const double line_time_us = 30;
   const auto expected = expected_rolling_shutter_electrons(scene, m, line_time_us, kSlotTimeUs);
   ASSERT_TRUE(expected.ok()) << expected.error();
-  const auto frame = imaging::dn_to_electrons(record_frame(expected.value(), m, 5), m);
+  const auto frame = motion_frame(record_frame(expected.value(), m, 5), m);
   std::vector<double> phases;
-  for (int y = 0; y < frame.height(); ++y)
+  for (int y = 0; y < frame.lines(); ++y)
     phases.push_back(rolling_shutter_phase(y, line_time_us, kSlotTimeUs, 52));
 
   for (const auto method : {imaging::Method::kJointWiener, imaging::Method::kTotalVariation}) {
@@ -147,8 +153,8 @@ TEST(RowPhaseModel, RecoversARollingShutterFrameTheGlobalModelCannot) {
 TEST(RowPhaseModel, PhaseZeroEverywhereIsTheGlobalModelAndBadPhasesAreRefused) {
   const CaptureModel m = camera("found-mse", 3000);
   const auto scene = render_scene(label_spec()).value();
-  const auto frame = imaging::dn_to_electrons(record_frame(expected_electrons(scene, m), m, 2), m);
-  const std::vector<double> zero(static_cast<std::size_t>(frame.height()), 0.0);
+  const auto frame = motion_frame(record_frame(expected_electrons(scene, m), m, 2), m);
+  const std::vector<double> zero(static_cast<std::size_t>(frame.lines()), 0.0);
   const auto global = imaging::deblur(frame, m, imaging::DeblurOptions{});
   const auto per_row = imaging::deblur_row_phases(frame, m, zero, imaging::DeblurOptions{});
   ASSERT_TRUE(global.ok() && per_row.ok());

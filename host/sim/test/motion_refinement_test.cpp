@@ -46,9 +46,14 @@ imaging::Plane fine_label(SceneKind kind, const char* content, double module_px 
   return scene.value();
 }
 
-imaging::Image recorded(const imaging::Plane& fine, const CaptureModel& m, std::uint64_t seed) {
-  return imaging::dn_to_electrons(
-      record_frame(expected_electrons(fine, m, kSimSupersample), m, seed), m);
+/// The recorded frame in electrons, turned into the motion frame as the session does.
+imaging::MotionFrame recorded(const imaging::Plane& fine, const CaptureModel& m,
+                              std::uint64_t seed) {
+  return imaging::MotionFrame::make(
+             imaging::dn_to_electrons(
+                 record_frame(expected_electrons(fine, m, kSimSupersample), m, seed), m),
+             m.direction)
+      .value();
 }
 
 TEST(MotionRefinement, FindsTheTrueBlurFromOneTenPercentOff) {
