@@ -26,6 +26,15 @@ std::string image_problem(const Image& image) {
              " pixels, not width x height";
     // Non-finite or absurd values (a black level of 1e85 in a descriptor) would turn
     // the whole deconvolution into inf and NaN.
+    // A branch-free pass first (it vectorises: every frame goes through it), the
+    // position only when it finds something.
+    const float* pixels = plane.pixels.data();
+    const auto count = plane.pixels.size();
+    int out_of_range = 0;
+#pragma omp simd reduction(| : out_of_range)
+    for (std::size_t i = 0; i < count; ++i)
+      out_of_range |= !(std::abs(pixels[i]) <= kMaxPixelValue);
+    if (out_of_range == 0) continue;
     for (std::size_t i = 0; i < plane.pixels.size(); ++i)
       if (!(std::abs(plane.pixels[i]) <= kMaxPixelValue))
         return "channel " + std::to_string(c) + " has the value " +
