@@ -375,7 +375,7 @@ void add_deblur(CLI::App& app) {
                       "field of view before deblurring");
   command->add_option("--truth", f->truth,
                       "ground truth to score against (16-bit grey PNG of reflectance, as "
-                      "`simulate` writes): prints PSNR and SSIM over design.md's region");
+                      "`simulate` writes): prints PSNR and SSIM over the scoring region of docs/conventions.md");
   command->add_flag("--json", f->json, "print one JSON object (method, timings, decoded values)");
   command->callback([f] { run(*f); });
 }

@@ -141,7 +141,7 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& error) {
-    return app.exit(error) == 0 ? 0 : 2;  // --help: 0; bad usage: 2 (design.md)
+    return app.exit(error) == 0 ? 0 : 2;  // --help: 0; bad usage: 2, as every command
   }
   std::vector<imaging::Method> methods;
   std::vector<std::string> used_names;

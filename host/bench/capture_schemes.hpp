@@ -1,6 +1,6 @@
 #pragma once
 // The capture schemes the accuracy benchmarks compare at one light budget
-// (design.md, "Light level"): every LED may emit at most E per exposure and
+// (docs/conventions.md, "Light level E and the cap c"): every LED may emit at most E per exposure and
 // at most c E / L in a slot. A scheme is an LED pattern over L = 52 slots;
 // the light each LED gets follows from the budget.
 

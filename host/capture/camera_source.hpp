@@ -8,7 +8,7 @@
 // error text naming the setting or the device (empty = success), in the
 // style of imaging::capture_model_problem.
 //
-// The linear model (design.md, "Physics") needs pixel values proportional to
+// The linear model (docs/conventions.md, "The forward model") needs pixel values proportional to
 // light: every backend turns off auto exposure, auto gain, auto white balance
 // and gamma/tone curves. A backend that cannot turn one off refuses to start
 // naming the setting; a backend that cannot even read it back adds a warning

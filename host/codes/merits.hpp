@@ -39,7 +39,7 @@ struct Crosstalk {
   std::vector<double> gain;
 };
 
-/// \brief Light budget and camera noise for the joint and mse merits (design.md).
+/// \brief Light budget and camera noise for the joint and mse merits (docs/conventions.md).
 struct LightModel {
   double electrons = 3000;  ///< E: e- per channel of a white object under rect-white
   double cap = 3;           ///< c: an LED may run at most c * E / L per slot

@@ -1,6 +1,6 @@
 #pragma once
 // What went wrong talking to a controller, and the result type the device
-// library returns (design.md: no exceptions below the CLI edge).
+// library returns (no exceptions below the CLI edge).
 
 #include <string>
 #include <utility>

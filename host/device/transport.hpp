@@ -1,5 +1,5 @@
 #pragma once
-// The Transport seam (design.md): how the controller client reaches a
+// The Transport seam (docs/devices.md): how the controller client reaches a
 // controller. Reports are the protocol's 64-byte HID reports: requests go out,
 // replies and exposure events come back on one IN stream. Backends: hidapi
 // (hidapi_transport.hpp) and in-process to a VirtualController

@@ -34,7 +34,7 @@
 // - The half-resolution latent is upsampled along the motion by linear
 //   interpolation between the pair centres, so full-resolution pixel (x, y) of
 //   the output is the latent at the object's position at the start of slot 0
-//   (design.md), like deblur()'s. A mosaic with an odd length along the
+//   (docs/conventions.md), like deblur()'s. A mosaic with an odd length along the
 //   motion is solved without its last column (row) and that pixel repeats its
 //   neighbour.
 //

@@ -1,5 +1,5 @@
 #pragma once
-// The capture model of one frame (design.md, "Physics"): which code lit it,
+// The capture model of one frame (docs/conventions.md, "The forward model"): which code lit it,
 // how far the scene moved, how LED light reaches the camera channels, and the
 // camera's EMVA 1288 noise parameters. From it come each channel's effective
 // motion PSF and noise variance; the simulator and every deblurring method use
@@ -60,7 +60,7 @@ struct CaptureModel {
 std::string capture_model_problem(const CaptureModel& model);
 
 /// \brief Electrons per slot of each code bit under the light budget of
-/// design.md: I = min(E / n, cap * E / L), n the bit's on-slots.
+/// docs/conventions.md: I = min(E / n, cap * E / L), n the bit's on-slots.
 std::vector<double> budgeted_led_electrons(const LedCode& code, double electrons, double cap);
 
 /// \brief Object displacement (pixels) at the L + 1 slot edges: blur_px in all,

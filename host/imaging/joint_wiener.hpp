@@ -1,5 +1,5 @@
 #pragma once
-// Joint Wiener deconvolution along rows (design.md):
+// Joint Wiener deconvolution along rows (docs/algorithms.md):
 //   X = sum_c conj(G_c) Y_c / v_c / (sum_c |G_c|^2 / v_c + lambda P(w)),
 // G_c channel c's PSF spectrum, v_c its noise variance, P(w) = label_prior_power(w):
 // the power of the gradient along the row (a smoothness prior) over the pixel

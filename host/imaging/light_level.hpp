@@ -1,7 +1,7 @@
 #pragma once
-// The light level E (design.md, "Light level": the electrons per channel a
-// white object collects in one exposure with every LED on continuously),
-// measured from frames of the belt lit by a known probe pattern.
+// The light level E (docs/conventions.md, "Light level E and the cap c": the electrons per channel
+// a white object collects in one exposure with every LED on continuously), measured from frames of
+// the belt lit by a known probe pattern.
 //
 // The capture model is linear in E: under the probe, a white object gives
 // channel c the electrons sum_k M[c][k] n_k I_k, with I_k = min(E / n_k,

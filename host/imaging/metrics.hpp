@@ -1,5 +1,5 @@
 #pragma once
-// Accuracy metrics with design.md's conventions: latent reflectance with
+// Accuracy metrics with docs/conventions.md's conventions: latent reflectance with
 // white = 1, the estimate clipped to [0, 1], scored over the frame minus a
 // border of one blur length along the motion and 8 px across it.
 
@@ -13,7 +13,7 @@ struct Region {
   int x0 = 0, y0 = 0, x1 = 0, y1 = 0;  ///< half-open
 };
 
-/// \brief The frame minus the design.md border for this blur and direction.
+/// \brief The frame minus the scoring border (docs/conventions.md) for this blur and direction.
 Region scored_region(int width, int height, double blur_px, Direction direction);
 
 /// \brief PSNR in dB of `estimate` (clipped to [0, 1]) against `truth` over `region`.

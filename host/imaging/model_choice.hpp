@@ -1,5 +1,5 @@
 #pragma once
-// Model no more than the scene needs (design.md): per frame, the simplest
+// Model no more than the scene needs (docs/algorithms.md): per frame, the simplest
 // model that fits, and a record of which was chosen.
 // - latent: one grey latent image, unless the frame does not fit a grey scene
 //   (colour print): then one latent per LED band (per-channel unmixing). The

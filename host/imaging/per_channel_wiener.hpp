@@ -1,6 +1,6 @@
 #pragma once
-// The per-channel model for colour objects (design.md: "only colour objects
-// need per-channel unmixing"). A colour object has one reflectance per LED
+// The per-channel model for colour objects (only colour objects
+// need per-channel unmixing). A colour object has one reflectance per LED
 // band, r_k, and channel c records
 //   y_c = sum_k M[c][k] (h_k * r_k) + a_c (rect * r_c) + noise,
 // so a grey model (one latent seen by every channel) misreads a red print

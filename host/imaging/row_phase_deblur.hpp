@@ -1,6 +1,6 @@
 #pragma once
-// The per-row code phase model for rolling-shutter cameras (design.md: "only
-// rolling-shutter cameras need a per-row code phase"). The controller repeats
+// The per-row code phase model for rolling-shutter cameras (only rolling-shutter
+// cameras need a per-row code phase). The controller repeats
 // the pattern cyclically over the frame, so image row r saw the code from its
 // own phase (sim::rolling_shutter_phase: r * line_time / slot_time modulo L).
 // Rows are grouped by their phase quantised to `phase_step` slots; each group

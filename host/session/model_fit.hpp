@@ -1,6 +1,6 @@
 #pragma once
-// One frame through the simplest model that fits it (design.md, "Model no
-// more than a scene needs"; issue 7), and the guards that say when no model
+// One frame through the simplest model that fits it (model no more
+// than a scene needs; docs/algorithms.md), and the guards that say when no model
 // fits: the session's worker calls this instead of deblurring directly.
 //
 // Per frame:

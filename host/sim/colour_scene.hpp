@@ -1,6 +1,6 @@
 #pragma once
 // Colour objects for the simulator: a label printed in a coloured ink on
-// white paper, as one reflectance plane per LED band (design.md: LED 0 red,
+// white paper, as one reflectance plane per LED band (docs/conventions.md: LED 0 red,
 // 1 green, 2 blue). Paper and belt are grey (the same in every band); only
 // the ink differs. The ink colours are typical magnitudes for process inks
 // under narrow-band LEDs, not measurements: a red ink reflects most red light

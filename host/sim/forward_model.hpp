@@ -1,5 +1,5 @@
 #pragma once
-// The forward model of design.md: a grey scene (reflectance) moving under
+// The forward model of docs/conventions.md: a grey scene (reflectance) moving under
 // coded LED light, seen through the camera's channels with crosstalk and
 // ambient light, and recorded with EMVA 1288 noise.
 

@@ -1,6 +1,6 @@
 #pragma once
 // Scenes for the simulator: the latent reflectance image of what passes under
-// the camera (design.md: white = 1, black print about 0.05).
+// the camera (docs/conventions.md: white = 1, black print about 0.05).
 //
 // A barcode or text scene is a white label (paper reflectance) centred on a
 // belt of another grey; the print on it has the ink reflectance. Barcodes come

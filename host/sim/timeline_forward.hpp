@@ -1,5 +1,5 @@
 #pragma once
-// Forward models beyond sim::expected_electrons (design.md, "Physics"):
+// Forward models beyond sim::expected_electrons (docs/conventions.md, "The forward model"):
 // - an explicit exposure timeline (imaging/exposure_timeline.hpp), e.g. a belt
 //   speed that varies within the exposure (sim/speed_profile.hpp);
 // - colour objects: one reflectance plane per LED band; channel c records

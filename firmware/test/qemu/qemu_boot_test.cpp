@@ -38,7 +38,7 @@ namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
 
 constexpr int kSkip = 77;
-/// The seed's max-min triplet (design.md), the default code.
+/// The seed's max-min triplet (docs/codes.md), the default code.
 constexpr const char* kDefaultCode = "2212441414112412441224111241244244242212442211444144";
 
 struct Options {

@@ -40,7 +40,7 @@ TEST(Spectrum, FftAgreesWithDirectDtft) {
 }
 
 TEST(Spectrum, DenseGridRevealsDeeperMinimumThanSeedGrid) {
-  // design.md: Raskar's code is -25.44 dB on the 64-point grid and -27.7 dB on a dense grid.
+  // docs/codes.md: Raskar's code is -25.44 dB on the 64-point grid and -27.7 dB on a dense grid.
   const auto sequence = raskar();
   EXPECT_NEAR(min_of(seed_grid_spectrum(sequence)), -25.4359, 5e-5);
   const Minimum dense = dense_minimum_db(sequence);

@@ -1,6 +1,6 @@
 #pragma once
 // LED-pattern codes: for each time slot of an exposure, the bit mask of the
-// LEDs that are on. Notation (design.md): one hex digit per slot, digit i is
+// LEDs that are on. Notation (docs/conventions.md): one hex digit per slot, digit i is
 // slot i (slot 0 first in time), bit k of the digit is LED k (1 = red,
 // 2 = green, 4 = blue). A single flutter-shutter code is a one-LED code, so
 // its digit string is the plain bit string ("1010...").

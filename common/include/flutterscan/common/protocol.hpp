@@ -1,6 +1,6 @@
 #pragma once
 // The USB protocol between the host and the LED controller: one header compiled
-// by both sides (design.md), never a hand copy. docs/protocol.md describes every
+// by both sides, never a hand copy. docs/protocol.md describes every
 // message byte by byte.
 //
 // Transport: HID reports of 64 bytes (interrupt OUT for requests, interrupt IN
