@@ -1,9 +1,9 @@
 #include "imaging/motion_frame.hpp"
 
-#include "imaging/image_checks.hpp"
-
 #include <algorithm>
 #include <utility>
+
+#include "imaging/image_checks.hpp"
 
 namespace flutterscan::imaging {
 namespace {
