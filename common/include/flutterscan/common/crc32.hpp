@@ -39,7 +39,8 @@ inline constexpr std::array<std::uint32_t, 256> kTable = make_table();
 /// Never inlined at run time: one copy in flash, and the fuzz build's
 /// coverage ignorelist (firmware/fuzz/coverage_ignorelist.txt) can leave
 /// this byte loop uninstrumented only while it stays a function of its own.
-[[gnu::noinline]] constexpr std::uint32_t crc32_extend(std::uint32_t crc, std::span<const std::uint8_t> data) {
+[[gnu::noinline]] constexpr std::uint32_t crc32_extend(std::uint32_t crc,
+                                                       std::span<const std::uint8_t> data) {
   std::uint32_t reg = ~crc;
   const std::uint32_t* const table = crc32_detail::kTable.data();
   const std::uint8_t* p = data.data();
