@@ -184,7 +184,11 @@ TEST_F(BootloaderEmu, ResetRunsTheBootloaderThenTheApplicationsStartUpWithClocks
   EXPECT_EQ(chip.io(kFlashIfBase) & 0xFu, 5u);
   // LEDs: the board config's three, PC0..PC2, outputs driven low; no slot
   // table running or pre-armed.
-  EXPECT_EQ(chip.io(kGpioCBase + kGpioModer) & 0x3Fu, 0x15u);
+  // The fourth channel (docs/hardware.md): PC3 (enable) and PC9 (set point) stay
+  // inputs; PC6..PC8 alternate function (TIM3 CH1..CH3).
+  const std::uint32_t moder = chip.io(kGpioCBase + kGpioModer);
+  EXPECT_EQ(moder & 0xFFu, 0x15u);
+  EXPECT_EQ((moder >> 12) & 0xFFu, 0x2Au);
   EXPECT_EQ(chip.io(kGpioCBase + 0x14) & 0x7u, 0u);
   const auto bsrr = chip.writes_to(kGpioCBase + 0x18);
   ASSERT_FALSE(bsrr.empty());

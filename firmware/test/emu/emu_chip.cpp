@@ -494,8 +494,8 @@ std::uint32_t Chip::observe(std::uint32_t address) {
     v = (v & ~0xCu) | ((v & 0x3u) << 2);
   } else if (address == kGpioBBase + kGpioIdr) {  // PB2: the recovery jumper, else pulled down
     v = recovery_pin_high ? (1u << 2) : 0u;
-  } else if (address == kGpioABase + kGpioIdr) {  // PA0: the strobe input
-    v = strobe_level_ ? 1u : 0u;
+  } else if (address == kGpioABase + kGpioIdr) {  // PA5: the strobe input (TIM2_CH1)
+    v = strobe_level_ ? 1u << 5 : 0u;
   } else if (address == kGpioCBase + kGpioIdr) {
     v = 0;
   } else if (address == kTim2Base + kTimCnt) {

@@ -111,7 +111,8 @@ class Chip {
   /// interrupts enabled in the NVIC are taken as they pend (lowest number
   /// first: equal priorities). "idle" or the error.
   std::string idle_for(std::uint64_t cycles);
-  /// The strobe input (PA0, TIM2_CH1 = TI1) goes to `level`.
+  /// The strobe input (PA5, TIM2_CH1 = TI1) goes to `level`; the input
+  /// filter's delay is not modelled (the capture is at the edge's cycle).
   void strobe_pin(bool level);
 
   std::uint64_t cycles() const { return cycles_; }
