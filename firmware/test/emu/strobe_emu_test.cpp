@@ -133,7 +133,19 @@ class StrobeEmu : public ::testing::Test {
     return chip_.io(kTim1Base + kTimSmcr) == 0x16u;  // TS = ITR1 (TIM2), SMS = trigger
   }
 
-  void configure_and_arm() {
+  /// Uploads `masks` as code `id` (one chunk: at most 52 slots).
+  proto::Status upload(std::uint8_t id, const std::vector<std::uint8_t>& masks) {
+    proto::SetCodeRequest code{};
+    code.code_id = id;
+    code.led_count = 3;
+    code.total_slots = static_cast<std::uint16_t>(masks.size());
+    code.first_slot = 0;
+    code.slot_count = static_cast<std::uint8_t>(masks.size());
+    for (std::size_t i = 0; i < masks.size(); ++i) code.masks[i] = masks[i];
+    return send(proto::Command::kSetCode, code);
+  }
+
+  void configure_and_arm(std::uint32_t max_on_us = 1000, std::uint16_t duty = kDutyPermille) {
     ASSERT_EQ(send(proto::Command::kSetTiming,
                    proto::SetTimingRequest{
                        kSlotUs, 0, static_cast<std::uint8_t>(proto::SlotTimeSource::kFixed), {}}),
@@ -143,17 +155,11 @@ class StrobeEmu : public ::testing::Test {
              proto::SetModeRequest{static_cast<std::uint8_t>(proto::SyncMode::kSlave), 0, {}}),
         proto::Status::kOk);
     proto::SetGuardRequest guard{};
-    guard.max_on_time_us.fill(1000);
-    guard.max_duty_permille.fill(kDutyPermille);
+    guard.max_on_time_us.fill(max_on_us);
+    guard.max_duty_permille.fill(duty);
     ASSERT_EQ(send(proto::Command::kSetGuard, guard), proto::Status::kOk);
-    proto::SetCodeRequest code{};
-    code.code_id = 0;
-    code.led_count = 3;
-    code.total_slots = kMasks.size();
-    code.first_slot = 0;
-    code.slot_count = kMasks.size();
-    for (std::size_t i = 0; i < kMasks.size(); ++i) code.masks[i] = kMasks[i];
-    ASSERT_EQ(send(proto::Command::kSetCode, code), proto::Status::kOk);
+    ASSERT_EQ(upload(0, std::vector<std::uint8_t>(kMasks.begin(), kMasks.end())),
+              proto::Status::kOk);
     ASSERT_EQ(send(proto::Command::kSelectCode, proto::SelectCodeRequest{0, {}}),
               proto::Status::kOk);
     ASSERT_EQ(send(proto::Command::kArm), proto::Status::kOk);
@@ -163,12 +169,16 @@ class StrobeEmu : public ::testing::Test {
   /// `edge`: DMA writes only, the code's BSRR words in order one slot apart,
   /// the first one TIM1 tick after the edge, then all-off.
   void expect_one_exposure(const std::vector<Chip::PinWrite>& writes, std::uint64_t edge) {
-    ASSERT_EQ(writes.size(), kMasks.size() + 1);
+    expect_one_exposure(writes, edge, std::vector<std::uint8_t>(kMasks.begin(), kMasks.end()));
+  }
+  void expect_one_exposure(const std::vector<Chip::PinWrite>& writes, std::uint64_t edge,
+                           const std::vector<std::uint8_t>& masks) {
+    ASSERT_EQ(writes.size(), masks.size() + 1);
     const std::uint32_t psc = chip_.io(kTim1Base + 0x28);
     const std::uint32_t arr = chip_.io(kTim1Base + 0x2C);
     EXPECT_EQ((psc + 1ull) * (arr + 1ull), kSlotUs * kUs);  // TIM1 period = one slot
     for (std::size_t i = 0; i < writes.size(); ++i) {
-      const std::uint32_t mask = i < kMasks.size() ? kMasks[i] : 0u;
+      const std::uint32_t mask = i < masks.size() ? masks[i] : 0u;
       const std::uint32_t word = mask | ((~mask & 0x7u) << 16);
       EXPECT_TRUE(writes[i].by_dma) << i;
       EXPECT_EQ(writes[i].bsrr, word) << i;
@@ -228,6 +238,46 @@ TEST_F(StrobeEmu, TheGuardRefusesAnEdgeTooSoonBeforeAnyLedLights) {
   const std::uint64_t edge = chip_.cycles();
   strobe_pulse(1000);
   expect_one_exposure(writes_since(third), edge);
+}
+
+// Issue 15 finding 4 on the product image: SelectCode of a second and then a
+// third code (longer, all LEDs on at the end) while DMA2 stream 5 plays the
+// first one builds them into tables the DMA is not reading: the exposure
+// plays the first code's words to its all-off end, untouched.
+TEST_F(StrobeEmu, SelectingOtherCodesWhileTheDmaPlaysLeavesItsTableAlone) {
+  std::vector<std::uint8_t> longer(12, 0b111);
+  ASSERT_EQ(upload(1, longer), proto::Status::kOk);
+  longer.assign(16, 0b101);
+  ASSERT_EQ(upload(2, longer), proto::Status::kOk);
+  configure_and_arm(5000, 1000);  // codes 1 and 2 within the guard: SelectCode accepts them
+  main_loop_pass();
+  ASSERT_TRUE(slot_table_prearmed());
+  const std::size_t before = chip_.gpioc_writes().size();
+  const std::uint64_t edge = chip_.cycles();
+  chip_.strobe_pin(true);
+  ASSERT_EQ(chip_.idle_for(150 * kUs), "idle");  // the TIM2 interrupt ran; slot 1 playing
+  ASSERT_EQ(send(proto::Command::kSelectCode, proto::SelectCodeRequest{1, {}}), proto::Status::kOk);
+  ASSERT_EQ(chip_.idle_for(50 * kUs), "idle");
+  ASSERT_EQ(send(proto::Command::kSelectCode, proto::SelectCodeRequest{2, {}}), proto::Status::kOk);
+  main_loop_pass();
+  ASSERT_LT(chip_.cycles() - edge, kMasks.size() * kSlotUs * kUs);  // still inside the exposure
+  chip_.strobe_pin(false);
+  ASSERT_EQ(chip_.idle_for(1000 * kUs), "idle");
+  expect_one_exposure(writes_since(before), edge);
+  // The code selected last plays on the next edge, pre-armed by the main loop
+  // once its 1600 us of LED 0 fit the duty cap (100 %) since this edge.
+  main_loop_pass();
+  EXPECT_FALSE(slot_table_prearmed());  // 1200 us since this exposure began
+  ASSERT_EQ(chip_.idle_for(500 * kUs), "idle");
+  main_loop_pass();
+  ASSERT_TRUE(slot_table_prearmed());
+  const std::size_t next = chip_.gpioc_writes().size();
+  const std::uint64_t next_edge = chip_.cycles();
+  chip_.strobe_pin(true);
+  ASSERT_EQ(chip_.idle_for(20 * kUs), "idle");
+  chip_.strobe_pin(false);
+  ASSERT_EQ(chip_.idle_for(2000 * kUs), "idle");
+  expect_one_exposure(writes_since(next), next_edge, longer);
 }
 
 }  // namespace
