@@ -399,8 +399,14 @@ class Harness {
       }
       case Op::kReboot: {
         const auto cause = static_cast<fw::ResetCause>(in.u8() % 3);
+        const OnLimits before = guard_limits();
         port_.set_reset_cause(cause);
         boot();
+        // Controller::start turns every LED off before it loads the stored
+        // config, whose guard may be stricter: a run that this all-off write
+        // ends was on under the guard in force before (crashes/reboot-ends-run-
+        // under-the-old-guard). LEDs lit after the boot: under both, as for any op.
+        observe(before);
         if (cause == fw::ResetCause::kPowerOn) duty_.have_start = false;
         FUZZ_CHECK(port_.led_mask() == 0);
         break;
