@@ -320,8 +320,9 @@ class Harness {
     port_.set_listener(&interposer_);
     handler_.emplace(*controller_);
     controller_->start();
-    event_sequence_ = 0;
-    last_usb_event_sequence_ = 0;
+    event_top_ = -1;
+    next_direct_event_ = 0;
+    next_usb_event_ = 0;
     events_seen_.reset();
     usb_.emplace();
     app_usb_.emplace(*usb_, *controller_, *handler_, kAppDevice, kUniqueId);
@@ -399,8 +400,14 @@ class Harness {
       }
       case Op::kReboot: {
         const auto cause = static_cast<fw::ResetCause>(in.u8() % 3);
+        const OnLimits before = guard_limits();
         port_.set_reset_cause(cause);
         boot();
+        // Controller::start turns every LED off before it loads the stored
+        // config, whose guard may be stricter: a run that this all-off write
+        // ends was on under the guard in force before (crashes/reboot-ends-run-
+        // under-the-old-guard). LEDs lit after the boot: under both, as for any op.
+        observe(before);
         if (cause == fw::ResetCause::kPowerOn) duty_.have_start = false;
         FUZZ_CHECK(port_.led_mask() == 0);
         break;
@@ -880,9 +887,19 @@ class Harness {
                    via_usb ? "HID IN endpoint" : "direct");
     // Two readers (read_events and the HID interface) take events from one
     // queue: each sees its sequences ascend, and no sequence comes twice.
-    std::uint8_t& last = via_usb ? last_usb_event_sequence_ : event_sequence_;
-    FUZZ_CHECK(static_cast<std::uint8_t>(h.sequence - last) < 128);
-    last = static_cast<std::uint8_t>(h.sequence + 1);
+    // The 8-bit sequence is numbered as reports are built, so a new one is
+    // near the newest built so far (+1; the HID IN endpoint may deliver one
+    // built a little earlier): unwrapped against that, a reader's sequences
+    // ascend even when the other reader took 128 or more in between
+    // (crashes/event-sequence-gap-over-128).
+    const auto delta = static_cast<std::int8_t>(
+        static_cast<std::uint8_t>(h.sequence - static_cast<std::uint8_t>(event_top_)));
+    const std::int64_t sequence = event_top_ + delta;
+    FUZZ_CHECK(sequence >= 0);
+    std::int64_t& next = via_usb ? next_usb_event_ : next_direct_event_;
+    FUZZ_CHECK(sequence >= next);
+    next = sequence + 1;
+    event_top_ = std::max(event_top_, sequence);
     FUZZ_CHECK(!events_seen_[h.sequence]);
     events_seen_.set(h.sequence);
     events_seen_.reset(static_cast<std::uint8_t>(h.sequence + 128));
@@ -1111,8 +1128,11 @@ class Harness {
   std::unique_ptr<DfuDevice> dfu_;
   Interposer interposer_;
   std::uint8_t sequence_ = 0;
-  std::uint8_t event_sequence_ = 0;  ///< the next event sequence read_events expects at least
-  std::uint8_t last_usb_event_sequence_ = 0;  ///< ... the HID IN endpoint
+  /// Event sequences unwrapped: the newest seen (-1: none since boot), and the
+  /// next that read_events / the HID IN endpoint expects at least.
+  std::int64_t event_top_ = -1;
+  std::int64_t next_direct_event_ = 0;
+  std::int64_t next_usb_event_ = 0;
   std::bitset<256> events_seen_;              ///< event sequences seen in the last 128
   int strobe_pulses_ = 0;
   std::size_t seen_writes_ = 0;

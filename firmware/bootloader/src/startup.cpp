@@ -19,6 +19,7 @@
 #include "flutterscan/firmware/cortex_m/c_runtime.hpp"
 #include "flutterscan/firmware/stm32f4/registers.hpp"
 #include "flutterscan/firmware/stm32f4/stm32f4_board.hpp"
+#include "sector0_protection.hpp"
 
 extern "C" {
 extern std::uint32_t __stack_top__;
@@ -116,6 +117,10 @@ void Reset_Handler() {
   in.dfu_requested = request == stm::kBootRequestMagic;
   request = 0;  // once: the next reset runs the application again
   in.boot_pin_held = recovery_pin_held();
+  // Sector 0 write-protected in the option bytes (the first boot sets it; a
+  // read of FLASH_OPTCR on every later one). A failure changes nothing here:
+  // the firmware never erases or programs sector 0 either way.
+  (void)protect_bootloader_sector();
   fw::BootRecord record;
   std::memcpy(&record, reinterpret_cast<const void*>(stm::kBootRecordAddress), sizeof record);
   in.unconfirmed_starts = fw::unconfirmed_starts(record);

@@ -181,8 +181,21 @@ inline constexpr std::uintptr_t kAcr = kBase + 0x00;
 inline constexpr std::uintptr_t kKeyr = kBase + 0x04;
 inline constexpr std::uintptr_t kSr = kBase + 0x0C;
 inline constexpr std::uintptr_t kCr = kBase + 0x10;
+inline constexpr std::uintptr_t kOptKeyr = kBase + 0x08;
+inline constexpr std::uintptr_t kOptcr = kBase + 0x14;
 inline constexpr std::uint32_t kKey1 = 0x45670123;
 inline constexpr std::uint32_t kKey2 = 0xCDEF89AB;
+// FLASH_OPTKEYR unlock sequence (RM0090 3.6.2), FLASH_OPTCR (3.9.7): OPTLOCK 0,
+// OPTSTRT 1, BOR_LEV 3:2, USER 7:5, RDP 15:8, nWRP 27:16 (bit 16 + n: sector n,
+// 0 = write-protected). Reset value with the factory option bytes: 0x0FFFAAED.
+inline constexpr std::uint32_t kOptKey1 = 0x08192A3B;
+inline constexpr std::uint32_t kOptKey2 = 0x4C5D6E7F;
+inline constexpr std::uint32_t kOptcrOptLock = 1u << 0;
+inline constexpr std::uint32_t kOptcrOptStrt = 1u << 1;
+inline constexpr int kOptcrNwrpShift = 16;
+constexpr std::uint32_t optcr_nwrp(int sector) {
+  return 1u << (kOptcrNwrpShift + sector);
+}
 // FLASH_ACR: LATENCY 2:0, PRFTEN 8, ICEN 9, DCEN 10, ICRST 11, DCRST 12.
 inline constexpr std::uint32_t kAcrLatencyMask = 0b111u;
 inline constexpr std::uint32_t kAcrPrftEn = 1u << 8;
