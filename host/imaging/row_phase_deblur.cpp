@@ -4,6 +4,7 @@
 #include <map>
 
 #include "imaging/exposure_timeline.hpp"
+#include "imaging/image_checks.hpp"
 #include "imaging/motion_frame.hpp"
 
 namespace flutterscan::imaging {
@@ -13,6 +14,8 @@ Result<Plane, std::string> deblur_row_phases(const Image& electrons, const Captu
                                              const DeblurOptions& options, double phase_step) {
   using Out = Result<Plane, std::string>;
   if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
+  if (auto problem = image_problem(electrons); !problem.empty()) return Out::failure(problem);
+  if (auto problem = model_scale_problem(model); !problem.empty()) return Out::failure(problem);
   if (model.bayer_rggb) return Out::failure("the per-row phase model takes RGB or mono frames");
   if (model.direction != Direction::kPlusX && model.direction != Direction::kMinusX)
     return Out::failure("the per-row phase model needs motion along x (rows of the readout)");
@@ -25,12 +28,12 @@ Result<Plane, std::string> deblur_row_phases(const Image& electrons, const Captu
         " phases for " + std::to_string(electrons.height()) + " rows");
   for (double p : row_phase_slots)
     if (!std::isfinite(p)) return Out::failure("row code phases must be finite");
-  if (!(phase_step > 0 && phase_step <= 1))
-    return Out::failure("the phase step must be in (0, 1] slots");
-  if (model.blur_px >= electrons.width())
-    return Out::failure("the blur (" + std::to_string(model.blur_px) +
-                        " px) is not shorter than the image along the motion (" +
-                        std::to_string(electrons.width()) + " px)");
+  if (!(phase_step >= kMinRowPhaseStep && phase_step <= 1))
+    return Out::failure("the phase step must be in [" + std::to_string(kMinRowPhaseStep) +
+                        ", 1] slots");
+  if (auto problem = blur_fit_problem(model.blur_px, electrons.width(), 0, "the blur");
+      !problem.empty())
+    return Out::failure(problem);
   if (!(options.gradient_variance > 0) || !std::isfinite(options.gradient_variance))
     return Out::failure("the prior gradient variance must be a finite number > 0");
 
@@ -42,10 +45,15 @@ Result<Plane, std::string> deblur_row_phases(const Image& electrons, const Captu
   }
   const int width = rows[0].width;
   // Rows per quantised phase (in units of phase_step, modulo the code's cycle).
-  const auto steps = static_cast<long long>(std::llround(model.code.length() / phase_step));
+  // The phase is reduced to one cycle first (fmod is exact): a finite phase of any size
+  // then quantises to at most L / kMinRowPhaseStep steps, well inside long long.
+  const double cycle = model.code.length();
+  const auto steps = std::llround(cycle / phase_step);
   std::map<long long, std::vector<int>> groups;
   for (int y = 0; y < electrons.height(); ++y) {
-    long long q = std::llround(row_phase_slots[static_cast<std::size_t>(y)] / phase_step) % steps;
+    double phase = std::fmod(row_phase_slots[static_cast<std::size_t>(y)], cycle);
+    if (phase < 0) phase += cycle;
+    long long q = std::llround(phase / phase_step) % steps;
     if (q < 0) q += steps;
     groups[q].push_back(y);
   }
