@@ -89,7 +89,8 @@ Result<std::pair<int, int>, std::string> jpeg_declared_size(std::span<const std:
     return Size::failure("not JPEG data (no start-of-image marker)");
   std::size_t at = 2;
   while (at + 4 <= data.size()) {
-    if (data[at] != 0xFF) return Size::failure("a JPEG marker is broken at byte " + std::to_string(at));
+    if (data[at] != 0xFF)
+      return Size::failure("a JPEG marker is broken at byte " + std::to_string(at));
     const std::uint8_t marker = data[at + 1];
     if (marker == 0xFF) {  // fill byte
       ++at;
@@ -103,8 +104,8 @@ Result<std::pair<int, int>, std::string> jpeg_declared_size(std::span<const std:
     const std::size_t length = static_cast<std::size_t>(data[at + 2]) << 8 | data[at + 3];
     if (length < 2 || at + 2 + length > data.size())
       return Size::failure("a JPEG segment at byte " + std::to_string(at) + " runs past the data");
-    const bool frame_header = marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 &&
-                              marker != 0xC8 && marker != 0xCC;
+    const bool frame_header =
+        marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
     if (frame_header) {
       if (length < 7) return Size::failure("the JPEG frame header is short");
       const int height = data[at + 5] << 8 | data[at + 6];

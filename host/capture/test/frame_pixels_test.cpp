@@ -127,10 +127,10 @@ TEST(FrameToDn, MjpegDeclaringAHugeFrameIsRefusedBeforeDecoding) {
   // A header declaring 30000 x 30000 px (2.7 GB decoded) and no image data: refused
   // from the header, before the decoder sizes its output by it.
   const std::vector<std::uint8_t> bomb = {
-      0xFF, 0xD8,                                            // start of image
-      0xFF, 0xC0, 0x00, 0x11, 0x08, 0x75, 0x30, 0x75, 0x30,  // SOF0: 8 bit, 30000 x 30000
+      0xFF, 0xD8,                                                  // start of image
+      0xFF, 0xC0, 0x00, 0x11, 0x08, 0x75, 0x30, 0x75, 0x30,        // SOF0: 8 bit, 30000 x 30000
       0x03, 0x01, 0x22, 0x00, 0x02, 0x11, 0x01, 0x03, 0x11, 0x01,  // three components
-      0xFF, 0xD9};                                           // end of image
+      0xFF, 0xD9};                                                 // end of image
   const auto result = frame_to_dn(mjpeg_frame(bomb, 48, 24));
   ASSERT_FALSE(result.ok());
   EXPECT_NE(result.error().find("declares 30000x30000 px"), std::string::npos) << result.error();

@@ -208,8 +208,7 @@ TEST(RowPhaseModel, RefusesWhatItCannotProcessInsteadOfReadingPastIt) {
 
   auto bright = m;
   bright.crosstalk[1] = 1e6;
-  EXPECT_NE(refusal(frame, bright).find("crosstalk"), std::string::npos)
-      << refusal(frame, bright);
+  EXPECT_NE(refusal(frame, bright).find("crosstalk"), std::string::npos) << refusal(frame, bright);
 
   auto long_blur = m;
   long_blur.blur_px = frame.width();
