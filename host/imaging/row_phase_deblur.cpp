@@ -1,10 +1,12 @@
 #include "imaging/row_phase_deblur.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 
 #include "imaging/exposure_timeline.hpp"
 #include "imaging/image_checks.hpp"
+#include "imaging/limits.hpp"
 #include "imaging/motion_frame.hpp"
 
 namespace flutterscan::imaging {
@@ -34,6 +36,18 @@ Result<Plane, std::string> deblur_row_phases(const Image& electrons, const Captu
   if (auto problem = blur_fit_problem(model.blur_px, electrons.width(), 0, "the blur");
       !problem.empty())
     return Out::failure(problem);
+  // As deblur: a model whose every channel gets less than kMinLitElectrons (a crosstalk of
+  // 1e-47 from the one lit LED) deconvolves 0 / 0 (a fuzz finding, pipeline/corpus/
+  // finding-not-finite-6).
+  double brightest = 0;
+  for (int c = 0; c < model.channels; ++c) {
+    double gain = 0;
+    for (double tap : channel_psf(model, c)) gain += tap;
+    brightest = std::max(brightest, gain);
+  }
+  if (!(brightest >= kMinLitElectrons))
+    return Out::failure("the capture model lights no channel: every PSF is zero (or below " +
+                        std::to_string(kMinLitElectrons) + " e-)");
   if (!(options.gradient_variance > 0) || !std::isfinite(options.gradient_variance))
     return Out::failure("the prior gradient variance must be a finite number > 0");
 
