@@ -3,12 +3,15 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "imaging/frame_conversion.hpp"
+#include "imaging/limits.hpp"
 #include "imaging/model_guards.hpp"
 
 #include <algorithm>
 #include <bit>
 #include <cstring>
 #include <limits>
+#include <span>
+#include <utility>
 #include <vector>
 
 namespace flutterscan::capture {
@@ -77,6 +80,43 @@ std::size_t row_to_electrons(const Sample* __restrict in, int width, float black
   return saturated;
 }
 
+/// The frame size a JPEG's header declares (its SOFn segment), or what is wrong with the
+/// header: read before decoding, so that a buffer declaring 30000 x 30000 px is refused
+/// for the frame's format instead of sizing the decoder's allocation (gigabytes).
+Result<std::pair<int, int>, std::string> jpeg_declared_size(std::span<const std::uint8_t> data) {
+  using Size = Result<std::pair<int, int>, std::string>;
+  if (data.size() < 4 || data[0] != 0xFF || data[1] != 0xD8)
+    return Size::failure("not JPEG data (no start-of-image marker)");
+  std::size_t at = 2;
+  while (at + 4 <= data.size()) {
+    if (data[at] != 0xFF)
+      return Size::failure("a JPEG marker is broken at byte " + std::to_string(at));
+    const std::uint8_t marker = data[at + 1];
+    if (marker == 0xFF) {  // fill byte
+      ++at;
+      continue;
+    }
+    if (marker == 0x01 || (marker >= 0xD0 && marker <= 0xD7)) {  // no length
+      at += 2;
+      continue;
+    }
+    if (marker == 0xD9 || marker == 0xDA) break;  // end of image or scan data: no frame header
+    const std::size_t length = static_cast<std::size_t>(data[at + 2]) << 8 | data[at + 3];
+    if (length < 2 || at + 2 + length > data.size())
+      return Size::failure("a JPEG segment at byte " + std::to_string(at) + " runs past the data");
+    const bool frame_header =
+        marker >= 0xC0 && marker <= 0xCF && marker != 0xC4 && marker != 0xC8 && marker != 0xCC;
+    if (frame_header) {
+      if (length < 7) return Size::failure("the JPEG frame header is short");
+      const int height = data[at + 5] << 8 | data[at + 6];
+      const int width = data[at + 7] << 8 | data[at + 8];
+      return Size::success({width, height});
+    }
+    at += 2 + length;
+  }
+  return Size::failure("the JPEG data has no frame header");
+}
+
 float clamp8(float v) {
   return std::clamp(v, 0.0f, 255.0f);
 }
@@ -87,12 +127,25 @@ Result<imaging::Image, std::string> frame_to_dn(const Frame& frame) {
   const FrameFormat& f = frame.format;
   const std::string where = "frame " + std::to_string(frame.sequence);
   if (f.width <= 0 || f.height <= 0) return Out::failure(where + ": empty size");
+  if (f.width > imaging::kMaxFrameSidePx || f.height > imaging::kMaxFrameSidePx ||
+      static_cast<long long>(f.width) * f.height > imaging::kMaxFramePixels)
+    return Out::failure(where + ": " + std::to_string(f.width) + "x" + std::to_string(f.height) +
+                        " px is beyond the largest frame (" +
+                        std::to_string(imaging::kMaxFrameSidePx) + " px a side, " +
+                        std::to_string(imaging::kMaxFramePixels) + " px)");
   if (f.pixel_format == PixelFormat::kMjpeg) {
     // An empty or broken buffer (a camera can deliver one) is an error, never an exception.
     if (frame.data.empty() ||
         frame.data.size() > static_cast<std::size_t>(std::numeric_limits<int>::max()))
       return Out::failure(where + ": MJPEG frame of " + std::to_string(frame.data.size()) +
                           " bytes");
+    const auto declared = jpeg_declared_size(frame.data);
+    if (!declared.ok()) return Out::failure(where + ": MJPEG frame: " + declared.error());
+    const auto [jpeg_width, jpeg_height] = declared.value();
+    if (jpeg_width != f.width || jpeg_height != f.height)
+      return Out::failure(where + ": MJPEG data declares " + std::to_string(jpeg_width) + "x" +
+                          std::to_string(jpeg_height) + " px, the frame format " +
+                          std::to_string(f.width) + "x" + std::to_string(f.height));
     cv::Mat bytes(1, static_cast<int>(frame.data.size()), CV_8U,
                   const_cast<std::uint8_t*>(frame.data.data()));
     cv::Mat bgr;

@@ -17,8 +17,9 @@ std::span<const std::uint8_t> bytes_of(const T& value) {
   return {reinterpret_cast<const std::uint8_t*>(&value), sizeof(T)};
 }
 
-std::string milliseconds_text(std::chrono::milliseconds ms) {
-  return std::to_string(ms.count()) + " ms";
+std::string milliseconds_text(std::chrono::microseconds us) {
+  if (us.count() % 1000 == 0) return std::to_string(us.count() / 1000) + " ms";
+  return std::to_string(us.count()) + " us";
 }
 
 }  // namespace
@@ -168,10 +169,11 @@ Expected<std::optional<Report>> ControllerClient::attempt_direct(Transport& tran
   if (!written.ok()) return fail<std::optional<Report>>(written.error());
   const auto deadline = std::chrono::steady_clock::now() + options_.reply_timeout;
   for (;;) {
-    const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(
+    const auto left = std::chrono::duration_cast<std::chrono::microseconds>(
         deadline - std::chrono::steady_clock::now());
     if (left.count() <= 0) return Out::success(std::nullopt);
-    auto read = transport.read_report(left);
+    // Transports wait in whole milliseconds: round up, so that a wait under 1 ms still reads.
+    auto read = transport.read_report(std::chrono::ceil<std::chrono::milliseconds>(left));
     if (!read.ok()) return fail<std::optional<Report>>(read.error());
     if (!read.value()) continue;
     const Report& report = *read.value();

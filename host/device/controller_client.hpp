@@ -31,8 +31,9 @@ namespace flutterscan::device {
 
 /// \brief Timeouts and retries of a client.
 struct ClientOptions {
-  /// Wait for one reply.
-  std::chrono::milliseconds reply_timeout{500};
+  /// Wait for one reply (microseconds so that a test or fuzz harness can wait less than a
+  /// millisecond; a `std::chrono::milliseconds` assigns as usual).
+  std::chrono::microseconds reply_timeout{std::chrono::milliseconds(500)};
   /// Extra attempts after a timeout (so 1 + retries in all).
   int retries = 2;
   /// After an unplug: how long a command waits for the controller to come back.

@@ -30,9 +30,12 @@ namespace flutterscan::fuzz {
 
 /// \brief With FUZZ_TRACE=1 in the environment: one line per outcome (to check
 /// that seeds get where they should).
-inline void trace(const std::string& text) {
+inline bool tracing() {
   static const bool on = std::getenv("FUZZ_TRACE") != nullptr;
-  if (on) std::fprintf(stderr, "  %s\n", text.c_str());
+  return on;
+}
+inline void trace(const std::string& text) {
+  if (tracing()) std::fprintf(stderr, "  %s\n", text.c_str());
 }
 
 /// \brief Typed values from the input, front to back; zeros after the end.

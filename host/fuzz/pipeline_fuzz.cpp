@@ -106,11 +106,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     FUZZ_CHECK(!model.error().empty(), "a model refused without a message");
     return 0;
   }
-  fuzz::trace("model " + imaging::to_descriptor(model.value()).dump() + ", method " +
-              imaging::method_name(options_method(config)) + ", choose " +
-              std::to_string(config.processing.choose_model) + ", line time " +
-              std::to_string(o.line_time_us) + ", " + std::to_string(frame.format.width) + "x" +
-              std::to_string(frame.format.height));
+  // (Built only when tracing: the descriptor's JSON dump cost every execution.)
+  if (fuzz::tracing())
+    fuzz::trace("model " + imaging::to_descriptor(model.value()).dump() + ", method " +
+                imaging::method_name(options_method(config)) + ", choose " +
+                std::to_string(config.processing.choose_model) + ", line time " +
+                std::to_string(o.line_time_us) + ", " + std::to_string(frame.format.width) + "x" +
+                std::to_string(frame.format.height));
   auto electrons = capture::frame_to_electrons(frame, model.value());
   if (!electrons.ok()) {
     fuzz::trace("conversion refused: " + electrons.error());

@@ -1,9 +1,11 @@
 #include "imaging/deblur.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 #include "imaging/image_checks.hpp"
 #include "imaging/joint_wiener.hpp"
+#include "imaging/limits.hpp"
 #include "imaging/motion_frame.hpp"
 #include "imaging/richardson_lucy.hpp"
 
@@ -44,12 +46,20 @@ Plane deconvolve_motion_rows(std::span<const ChannelPsf> psfs, std::span<const P
       for (std::size_t c = 0; c < psfs.size(); ++c) {
         double gain = 0;
         for (double tap : psfs[c].taps) gain += tap;
-        if (gain <= 0) continue;  // a channel no LED reaches carries no image
+        // A channel no LED reaches carries no image; nor does one that gets less than
+        // kMinLitElectrons in all (a crosstalk of 1e-125 from the one lit LED): alone, its
+        // Wiener filter is 1 / gain at the DC bin, which the prior leaves alone, and in float
+        // that was inf (a fuzz finding, host/fuzz/pipeline/corpus/finding-not-finite-5).
+        if (!(gain >= kMinLitElectrons)) continue;
         const Plane one = JointWiener({&psfs[c], 1}, width, lambda, options.plan_effort)
                               .deconvolve({&rows[c], 1}, options.threads);
         if (latent.empty()) latent = Plane(one.width, one.height);
         for (std::size_t i = 0; i < one.pixels.size(); ++i) latent.pixels[i] += one.pixels[i];
         ++used;
+      }
+      if (used == 0) {  // the entries refuse such a model; never 0 / 0
+        latent = Plane(width, rows[0].height);
+        break;
       }
       for (float& v : latent.pixels) v /= static_cast<float>(used);
       break;
@@ -102,10 +112,15 @@ Result<DeblurResult, std::string> deblur(const MotionFrame& frame, const Capture
     result.noise_variance.push_back(variance);
     psfs.push_back({channel_psf(model, c), variance});
   }
-  double white = 0;
-  for (const auto& p : psfs)
-    for (double tap : p.taps) white += tap;
-  if (white <= 0) return Out::failure("the capture model lights no channel: every PSF is zero");
+  double brightest = 0;  // the most light one channel gets, e-
+  for (const auto& p : psfs) {
+    double gain = 0;
+    for (double tap : p.taps) gain += tap;
+    brightest = std::max(brightest, gain);
+  }
+  if (!(brightest >= kMinLitElectrons))
+    return Out::failure("the capture model lights no channel: every PSF is zero (or below " +
+                        std::to_string(kMinLitElectrons) + " e-)");
 
   result.latent = deconvolve_motion_rows(psfs, rows, 1.0 / options.gradient_variance,
                                          model.read_noise * model.read_noise, options);

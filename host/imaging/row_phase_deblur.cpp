@@ -1,10 +1,13 @@
 #include "imaging/row_phase_deblur.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <utility>
 
 #include "imaging/exposure_timeline.hpp"
+#include "imaging/image_checks.hpp"
+#include "imaging/limits.hpp"
 
 namespace flutterscan::imaging {
 
@@ -13,6 +16,7 @@ Result<Plane, std::string> deblur_row_phases(const MotionFrame& frame, const Cap
                                              const DeblurOptions& options, double phase_step) {
   using Out = Result<Plane, std::string>;
   if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
+  if (auto problem = model_scale_problem(model); !problem.empty()) return Out::failure(problem);
   if (model.bayer_rggb) return Out::failure("the per-row phase model takes RGB or mono frames");
   if (!moves_along_x(frame.direction()))
     return Out::failure("the per-row phase model needs motion along x (rows of the readout)");
@@ -25,12 +29,24 @@ Result<Plane, std::string> deblur_row_phases(const MotionFrame& frame, const Cap
         " phases for " + std::to_string(frame.lines()) + " rows");
   for (double p : row_phase_slots)
     if (!std::isfinite(p)) return Out::failure("row code phases must be finite");
-  if (!(phase_step > 0 && phase_step <= 1))
-    return Out::failure("the phase step must be in (0, 1] slots");
-  if (model.blur_px >= frame.along())
-    return Out::failure("the blur (" + std::to_string(model.blur_px) +
-                        " px) is not shorter than the image along the motion (" +
-                        std::to_string(frame.along()) + " px)");
+  if (!(phase_step >= kMinRowPhaseStep && phase_step <= 1))
+    return Out::failure("the phase step must be in [" + std::to_string(kMinRowPhaseStep) +
+                        ", 1] slots");
+  if (auto problem = blur_fit_problem(model.blur_px, frame.along(), 0, "the blur");
+      !problem.empty())
+    return Out::failure(problem);
+  // As deblur: a model whose every channel gets less than kMinLitElectrons (a crosstalk of
+  // 1e-47 from the one lit LED) deconvolves 0 / 0 (a fuzz finding, pipeline/corpus/
+  // finding-not-finite-6).
+  double brightest = 0;
+  for (int c = 0; c < model.channels; ++c) {
+    double gain = 0;
+    for (double tap : channel_psf(model, c)) gain += tap;
+    brightest = std::max(brightest, gain);
+  }
+  if (!(brightest >= kMinLitElectrons))
+    return Out::failure("the capture model lights no channel: every PSF is zero (or below " +
+                        std::to_string(kMinLitElectrons) + " e-)");
   if (!(options.gradient_variance > 0) || !std::isfinite(options.gradient_variance))
     return Out::failure("the prior gradient variance must be a finite number > 0");
 
@@ -40,10 +56,15 @@ Result<Plane, std::string> deblur_row_phases(const MotionFrame& frame, const Cap
     variance.push_back(channel_noise_variance(model, noise_level_mean(plane)));
   const int width = frame.along();
   // Rows per quantised phase (in units of phase_step, modulo the code's cycle).
-  const auto steps = static_cast<long long>(std::llround(model.code.length() / phase_step));
+  // The phase is reduced to one cycle first (fmod is exact): a finite phase of any size
+  // then quantises to at most L / kMinRowPhaseStep steps, well inside long long.
+  const double cycle = model.code.length();
+  const auto steps = std::llround(cycle / phase_step);
   std::map<long long, std::vector<int>> groups;
   for (int y = 0; y < frame.lines(); ++y) {
-    long long q = std::llround(row_phase_slots[static_cast<std::size_t>(y)] / phase_step) % steps;
+    double phase = std::fmod(row_phase_slots[static_cast<std::size_t>(y)], cycle);
+    if (phase < 0) phase += cycle;
+    long long q = std::llround(phase / phase_step) % steps;
     if (q < 0) q += steps;
     groups[q].push_back(y);
   }

@@ -24,10 +24,16 @@ namespace flutterscan::imaging {
 /// \brief Default phase quantum: 1/8 slot (a shift of blur / (8 L) pixels, 0.125 px at 52 px).
 inline constexpr double kRowPhaseStep = 0.125;
 
+/// \brief The finest phase quantum deblur_row_phases takes, slots.
+inline constexpr double kMinRowPhaseStep = 1e-6;
+
 /// \brief Deblurs a rolling-shutter frame whose image row r (line r of the
-/// motion frame: motion along x) saw the code from `row_phase_slots[r]`.
-/// Returns the grey latent (reflectance, in the motion frame). Errors: those of deblur(), a phase
-/// count other than the frame height, a non-finite phase, phase_step outside (0, 1].
+/// motion frame: motion along x) saw the code from `row_phase_slots[r]` (taken
+/// modulo the code's length). Returns the grey latent (reflectance, in the
+/// motion frame). Errors: those of deblur() (the model's own checks,
+/// image_checks.hpp, and a blur that does not fit the row), a phase count other
+/// than the frame's lines, a non-finite phase, phase_step outside
+/// [kMinRowPhaseStep, 1].
 Result<Plane, std::string> deblur_row_phases(const MotionFrame& frame, const CaptureModel& model,
                                              std::span<const double> row_phase_slots,
                                              const DeblurOptions& options,

@@ -12,15 +12,16 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cctype>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
-#include <regex>
 #include <sstream>
 #include <string>
+#include <string_view>
 #include <vector>
 
 namespace {
@@ -79,19 +80,48 @@ std::vector<std::string> example_lines() {
   return lines;
 }
 
+/// `[table]` at the start of `line` (lower case, `_` and `.`): the table's name, else "".
+std::string table_name(const std::string& line) {
+  if (line.size() < 3 || line[0] != '[') return {};
+  const std::size_t end = line.find(']');
+  if (end == std::string::npos || end == 1) return {};
+  for (std::size_t i = 1; i < end; ++i)
+    if (!(std::islower(static_cast<unsigned char>(line[i])) || line[i] == '_' || line[i] == '.'))
+      return {};
+  return line.substr(1, end - 1);
+}
+
+/// `key = number` at the start of `line` (a plain name, a number that starts with an
+/// optional '-' and a digit, then a space or the end): the key, else "".
+/// (Plain code, not <regex>: GCC 12's regex headers fail -Werror under the ASan build.)
+std::string number_key_name(const std::string& line) {
+  std::size_t i = 0;
+  while (i < line.size() && (std::islower(static_cast<unsigned char>(line[i])) || line[i] == '_'))
+    ++i;
+  if (i == 0) return {};
+  const std::string name = line.substr(0, i);
+  while (i < line.size() && line[i] == ' ') ++i;
+  if (i >= line.size() || line[i] != '=') return {};
+  ++i;
+  while (i < line.size() && line[i] == ' ') ++i;
+  if (i < line.size() && line[i] == '-') ++i;
+  if (i >= line.size() || !std::isdigit(static_cast<unsigned char>(line[i]))) return {};
+  while (i < line.size() && (std::isdigit(static_cast<unsigned char>(line[i])) ||
+                             std::string_view("_.eE+-").find(line[i]) != std::string_view::npos))
+    ++i;
+  return i == line.size() || line[i] == ' ' ? name : std::string();
+}
+
 /// Every `key = number` line of the example (commented lines are not keys).
 std::vector<Key> numeric_keys() {
-  const std::regex table(R"(^\[([a-z_.]+)\])");
-  const std::regex number_key(R"(^([a-z_]+) *= *-?[0-9][0-9_.eE+-]*( |$))");
   std::vector<Key> keys;
   std::string current;
   const auto lines = example_lines();
   for (std::size_t i = 0; i < lines.size(); ++i) {
-    std::smatch m;
-    if (std::regex_search(lines[i], m, table))
-      current = m[1];
-    else if (std::regex_search(lines[i], m, number_key))
-      keys.push_back({current, m[1], i + 1});
+    if (const std::string table = table_name(lines[i]); !table.empty())
+      current = table;
+    else if (const std::string name = number_key_name(lines[i]); !name.empty())
+      keys.push_back({current, name, i + 1});
   }
   // The camera keys the example shows commented out.
   for (const char* name : {"width", "height", "exposure_us", "gain_db", "frame_rate_hz"})

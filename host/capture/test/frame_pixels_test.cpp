@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <random>
 
 #include "imaging/frame_conversion.hpp"
@@ -92,6 +94,59 @@ TEST(FrameToElectrons, ShortDataIsRefusedNamingTheFrame) {
   ASSERT_FALSE(fast.ok());
   EXPECT_NE(fast.error().find("frame 9"), std::string::npos) << fast.error();
   EXPECT_NE(fast.error().find("needs more"), std::string::npos) << fast.error();
+}
+
+/// An MJPEG frame of `width` x `height` px declared by the format (the data as given).
+Frame mjpeg_frame(std::vector<std::uint8_t> data, int width, int height) {
+  Frame frame;
+  frame.sequence = 4;
+  frame.format = {width, height, PixelFormat::kMjpeg, 8, 0};
+  frame.data = std::move(data);
+  return frame;
+}
+
+TEST(FrameToDn, MjpegDecodesWhenItsHeaderDeclaresTheFormatsSize) {
+  cv::Mat bgr(24, 48, CV_8UC3, cv::Scalar(30, 120, 210));
+  std::vector<std::uint8_t> jpeg;
+  ASSERT_TRUE(cv::imencode(".jpg", bgr, jpeg));
+  const auto decoded = frame_to_dn(mjpeg_frame(jpeg, 48, 24));
+  ASSERT_TRUE(decoded.ok()) << decoded.error();
+  EXPECT_EQ(decoded.value().channels.size(), 3u);
+  EXPECT_NEAR(decoded.value().channels[0].at(10, 10), 210, 4);  // red
+  EXPECT_NEAR(decoded.value().channels[2].at(10, 10), 30, 4);   // blue
+
+  // Another size than the format's is refused from the header, naming both.
+  const auto other = frame_to_dn(mjpeg_frame(jpeg, 40, 24));
+  ASSERT_FALSE(other.ok());
+  EXPECT_NE(other.error().find("frame 4: MJPEG data declares 48x24 px, the frame format 40x24"),
+            std::string::npos)
+      << other.error();
+}
+
+TEST(FrameToDn, MjpegDeclaringAHugeFrameIsRefusedBeforeDecoding) {
+  // A header declaring 30000 x 30000 px (2.7 GB decoded) and no image data: refused
+  // from the header, before the decoder sizes its output by it.
+  const std::vector<std::uint8_t> bomb = {
+      0xFF, 0xD8,                                                  // start of image
+      0xFF, 0xC0, 0x00, 0x11, 0x08, 0x75, 0x30, 0x75, 0x30,        // SOF0: 8 bit, 30000 x 30000
+      0x03, 0x01, 0x22, 0x00, 0x02, 0x11, 0x01, 0x03, 0x11, 0x01,  // three components
+      0xFF, 0xD9};                                                 // end of image
+  const auto result = frame_to_dn(mjpeg_frame(bomb, 48, 24));
+  ASSERT_FALSE(result.ok());
+  EXPECT_NE(result.error().find("declares 30000x30000 px"), std::string::npos) << result.error();
+  // Nor does a format that large get as far as the header.
+  const auto huge = frame_to_dn(mjpeg_frame(bomb, 30000, 30000));
+  ASSERT_FALSE(huge.ok());
+  EXPECT_NE(huge.error().find("30000x30000 px is beyond the largest frame"), std::string::npos)
+      << huge.error();
+
+  // Not JPEG (a PNG's signature) and a header segment running past the data: refused.
+  const auto png = frame_to_dn(mjpeg_frame({0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A}, 48, 24));
+  ASSERT_FALSE(png.ok());
+  EXPECT_NE(png.error().find("not JPEG data"), std::string::npos) << png.error();
+  const auto cut = frame_to_dn(mjpeg_frame({0xFF, 0xD8, 0xFF, 0xC0, 0x00, 0x11, 0x08}, 48, 24));
+  ASSERT_FALSE(cut.ok());
+  EXPECT_NE(cut.error().find("runs past the data"), std::string::npos) << cut.error();
 }
 
 }  // namespace

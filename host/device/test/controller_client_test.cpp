@@ -306,6 +306,24 @@ TEST_F(ClientTest, UnresponsiveControllerTimesOutWithinTheBound) {
   EXPECT_TRUE(client->status().ok());
 }
 
+TEST_F(ClientTest, ReplyTimeoutBelowOneMillisecondIsWaitedAndNamed) {
+  // A sub-millisecond timeout (the device_client fuzz target uses one) still waits for
+  // the reply, and the message gives it in microseconds rather than as "0 ms".
+  ClientOptions options = fast_options();
+  options.reply_timeout = std::chrono::microseconds(500);
+  connect_client(options);
+  vc->set_responsive(false);
+  const auto start = std::chrono::steady_clock::now();
+  const auto result = client->status();
+  const auto took = std::chrono::steady_clock::now() - start;
+  ASSERT_FALSE(result.ok());
+  EXPECT_EQ(result.error().kind, ErrorKind::kTimeout);
+  EXPECT_NE(result.error().message.find("GetStatus within 500 us (2 attempts)"), std::string::npos)
+      << result.error().message;
+  EXPECT_GE(took, std::chrono::microseconds(1000));
+  vc->set_responsive(true);
+}
+
 TEST_F(ClientTest, LateRepliesAreDiscardedAndCounted) {
   vc->hold_replies(true);
   const auto result = client->status();

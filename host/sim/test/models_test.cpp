@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 
 #include "codes/library.hpp"
 #include "imaging/deblur.hpp"
@@ -170,6 +171,61 @@ TEST(RowPhaseModel, PhaseZeroEverywhereIsTheGlobalModelAndBadPhasesAreRefused) {
   bad[4] = std::nan("");
   EXPECT_FALSE(imaging::deblur_row_phases(frame, m, bad, imaging::DeblurOptions{}).ok());
   EXPECT_FALSE(imaging::deblur_row_phases(frame, m, zero, imaging::DeblurOptions{}, 0.0).ok());
+}
+
+TEST(RowPhaseModel, APhaseWholeCyclesAwayIsTheSamePhase) {
+  // Phases are cyclic: L * 2^60 slots is phase 0 (exactly, in double). It used to be
+  // divided by the phase step and rounded to long long first, which overflowed (so the
+  // rows were deblurred with some other phase's PSFs).
+  const CaptureModel m = camera("found-mse", 3000);
+  const auto scene = render_scene(label_spec()).value();
+  const auto frame = motion_frame(record_frame(expected_electrons(scene, m), m, 2), m);
+  const std::vector<double> zero(static_cast<std::size_t>(frame.lines()), 0.0);
+  const std::vector<double> far(zero.size(), std::ldexp(static_cast<double>(m.code.length()), 60));
+  const auto near_result = imaging::deblur_row_phases(frame, m, zero, imaging::DeblurOptions{});
+  const auto far_result = imaging::deblur_row_phases(frame, m, far, imaging::DeblurOptions{});
+  ASSERT_TRUE(near_result.ok() && far_result.ok());
+  EXPECT_EQ(near_result.value().pixels, far_result.value().pixels);
+}
+
+TEST(RowPhaseModel, RefusesWhatItCannotProcessInsteadOfReadingPastIt) {
+  // deblur_row_phases checks its own preconditions like deblur (issue 20): a frame
+  // whose planes differ in size (the rows of the wider one were copied past the end of
+  // the narrower stacked rows), a pixel that is not finite, a model whose light scale
+  // overflows, a blur that does not fit the row, a phase step too fine to count.
+  const CaptureModel m = camera("found-mse", 3000);
+  const auto scene = render_scene(label_spec()).value();
+  const auto frame = imaging::dn_to_electrons(record_frame(expected_electrons(scene, m), m, 2), m);
+  const std::vector<double> zero(static_cast<std::size_t>(frame.height()), 0.0);
+  // The frame's own checks are made where it enters the motion frame (MotionFrame::make).
+  const auto refusal = [&](const imaging::Image& image, const CaptureModel& model,
+                           double step = imaging::kRowPhaseStep) {
+    const auto moving = imaging::MotionFrame::make(image, model.direction);
+    if (!moving.ok()) return moving.error();
+    const auto result =
+        imaging::deblur_row_phases(moving.value(), model, zero, imaging::DeblurOptions{}, step);
+    return result.ok() ? std::string("(accepted)") : result.error();
+  };
+
+  auto uneven = frame;
+  uneven.channels[1] = Plane(frame.width() + 7, frame.height());
+  EXPECT_NE(refusal(uneven, m).find("channel 1 is"), std::string::npos) << refusal(uneven, m);
+
+  auto not_finite = frame;
+  not_finite.channels[0].pixels[5] = std::numeric_limits<float>::infinity();
+  EXPECT_NE(refusal(not_finite, m).find("finite"), std::string::npos) << refusal(not_finite, m);
+
+  auto bright = m;
+  bright.crosstalk[1] = 1e6;
+  EXPECT_NE(refusal(frame, bright).find("crosstalk"), std::string::npos) << refusal(frame, bright);
+
+  auto long_blur = m;
+  long_blur.blur_px = frame.width();
+  EXPECT_NE(refusal(frame, long_blur).find("does not fit"), std::string::npos)
+      << refusal(frame, long_blur);
+
+  EXPECT_NE(refusal(frame, m, 1e-300).find("phase step"), std::string::npos)
+      << refusal(frame, m, 1e-300);
 }
 
 }  // namespace
