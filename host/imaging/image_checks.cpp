@@ -49,6 +49,13 @@ std::string model_scale_problem(const CaptureModel& model) {
     if (!(v <= kMaxCrosstalk))
       return "a crosstalk entry (" + std::to_string(v) + ") is beyond " +
              std::to_string(static_cast<int>(kMaxCrosstalk));
+  for (double v : model.crosstalk)
+    if (v != 0 && !(std::abs(v) >= kMinCrosstalk)) {
+      std::ostringstream text;
+      text << "a crosstalk entry (" << v << ") is below " << kMinCrosstalk
+           << ": write 0 for a channel that does not see an LED";
+      return text.str();
+    }
   if (!(model.gain >= 1e-6))  // electrons = DN x gain: a denormal gain makes every pixel 0
     return "the conversion gain (" + std::to_string(model.gain) + " e-/DN) is below 1e-6";
   for (double v : model.led_electrons)  // a lit LED's light must survive float PSFs

@@ -22,6 +22,11 @@ inline constexpr long long kMaxFramePixels = 64LL << 20;
 /// its own, about 0..1 in practice).
 inline constexpr double kMaxCrosstalk = 1000;
 
+/// The smallest crosstalk entry other than 0: below it a channel's response is
+/// nothing a camera can measure, and its powers underflow in the deconvolutions
+/// (1 / 1e-318 is infinite).
+inline constexpr double kMinCrosstalk = 1e-9;
+
 /// The largest magnitude of a pixel the deconvolutions take (electrons or DN).
 inline constexpr float kMaxPixelValue = 1e15f;
 

@@ -424,10 +424,12 @@ std::string check_config(SessionConfig& c) {
   if (!(c.optics.paper_reflectance > 0 && c.optics.paper_reflectance <= 1))
     return outside("optics.paper_reflectance", c.optics.paper_reflectance, "(0, 1]");
   for (std::size_t i = 0; i < c.optics.crosstalk.size(); ++i)
-    if (!(c.optics.crosstalk[i] >= 0 && c.optics.crosstalk[i] <= kMaxCrosstalk))
+    if (!(c.optics.crosstalk[i] == 0 || (c.optics.crosstalk[i] >= imaging::kMinCrosstalk &&
+                                         c.optics.crosstalk[i] <= kMaxCrosstalk)))
       return outside(
           "optics.crosstalk[" + std::to_string(i / 3) + "][" + std::to_string(i % 3) + "]",
-          c.optics.crosstalk[i], "[0, " + number_text(kMaxCrosstalk) + "]",
+          c.optics.crosstalk[i],
+          "0 or [" + number_text(imaging::kMinCrosstalk) + ", " + number_text(kMaxCrosstalk) + "]",
           "a channel's response to an LED, about 0..1");
   const double full_scale_dn = std::pow(2.0, c.optics.bit_depth) - 1;
   if (!(c.optics.black_level_dn >= 0 && c.optics.black_level_dn < full_scale_dn))

@@ -226,6 +226,14 @@ TEST(SessionConfigFile, ReadsTheAnnotatedExampleAndNamesBadKeys) {
   SessionConfig bad;
   bad.controller.code = "1234";
   EXPECT_NE(check_config(bad).find("controller.code"), std::string::npos);
+  // A crosstalk entry is 0 or measurable: 1e-300 would underflow in the deconvolutions.
+  SessionConfig faint;
+  ASSERT_EQ(faint.optics.crosstalk.size(), 9u);
+  faint.optics.crosstalk[2] = 1e-300;
+  EXPECT_NE(check_config(faint).find("optics.crosstalk[0][2]"), std::string::npos)
+      << check_config(faint);
+  faint.optics.crosstalk[2] = 0;
+  EXPECT_EQ(check_config(faint), "");
 
   const auto no_rotate = parse_config("[processing]\ntry_rotate = false\n", "line3.toml");
   ASSERT_TRUE(no_rotate.ok()) << no_rotate.error();

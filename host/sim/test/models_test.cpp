@@ -218,6 +218,14 @@ TEST(RowPhaseModel, RefusesWhatItCannotProcessInsteadOfReadingPastIt) {
   auto bright = m;
   bright.crosstalk[1] = 1e6;
   EXPECT_NE(refusal(frame, bright).find("crosstalk"), std::string::npos) << refusal(frame, bright);
+  // A crosstalk too small to measure (a fuzz finding: 1.26e-321 made the tv path's
+  // result NaN, pipeline/corpus/finding-not-finite-7) is refused by name, and 0 is not.
+  auto faint = m;
+  faint.crosstalk[2] = 1.26e-321;
+  EXPECT_NE(refusal(frame, faint).find("crosstalk entry"), std::string::npos)
+      << refusal(frame, faint);
+  faint.crosstalk[2] = 0;
+  EXPECT_EQ(refusal(frame, faint), "(accepted)");
 
   auto long_blur = m;
   long_blur.blur_px = frame.width();
