@@ -6,6 +6,10 @@
 namespace flutterscan::imaging {
 namespace {
 
+void trim_trailing_zeros(std::vector<double>& taps) {
+  while (taps.size() > 1 && taps.back() == 0.0) taps.pop_back();
+}
+
 double timeline_end(std::span<const ExposureSegment> segments) {
   double end = 0;
   for (const auto& s : segments) end = std::max(end, s.start_px + s.width_px);
@@ -39,7 +43,7 @@ std::vector<double> timeline_psf(const CaptureModel& m, int channel, int only_le
         s.slot_fraction * (mask_weight(m, s.mask, channel, only_led) + ambient_per_slot);
     if (weight > 0) deposit_slot(taps, s.start_px, s.width_px, weight, m.pixel_model);
   }
-  while (taps.size() > 1 && taps.back() == 0.0) taps.pop_back();
+  trim_trailing_zeros(taps);
   return taps;
 }
 
@@ -81,6 +85,38 @@ std::vector<ExposureSegment> cyclic_phase_segments(const CaptureModel& model, do
 std::vector<double> timeline_channel_psf(const CaptureModel& model, int channel,
                                          std::span<const ExposureSegment> segments) {
   return timeline_psf(model, channel, -1, segments);
+}
+
+std::vector<std::vector<double>> timeline_channel_psfs(const CaptureModel& model,
+                                                       std::span<const ExposureSegment> segments) {
+  const auto channels = static_cast<std::size_t>(model.channels);
+  const std::size_t length = pixel_model_taps(timeline_end(segments), model.pixel_model);
+  std::vector<std::vector<double>> out(channels, std::vector<double>(length, 0.0));
+  std::vector<double> shape(length, 0.0), weights(channels);
+  for (const auto& s : segments) {
+    bool lit = false;
+    for (std::size_t c = 0; c < channels; ++c) {
+      const int channel = static_cast<int>(c);
+      const double ambient_per_slot = model.ambient_electrons[c] / model.code.length();
+      weights[c] = s.slot_fraction * (mask_weight(model, s.mask, channel, -1) + ambient_per_slot);
+      lit = lit || weights[c] > 0;
+    }
+    if (!lit) continue;
+    deposit_slot(shape, s.start_px, s.width_px, 1.0, model.pixel_model);
+    // Both pixel models lay a segment on [floor(start), floor(end) + 1] at most.
+    const auto first =
+        std::min(length - 1, static_cast<std::size_t>(std::max(0.0, std::floor(s.start_px))));
+    const std::size_t stop =
+        std::min(length - 1,
+                 static_cast<std::size_t>(std::max(0.0, std::floor(s.start_px + s.width_px))) + 1);
+    for (std::size_t j = first; j <= stop; ++j) {
+      for (std::size_t c = 0; c < channels; ++c)
+        if (weights[c] > 0) out[c][j] += weights[c] * shape[j];
+      shape[j] = 0;
+    }
+  }
+  for (auto& taps : out) trim_trailing_zeros(taps);
+  return out;
 }
 
 std::vector<double> timeline_led_psf(const CaptureModel& model, int led,

@@ -43,6 +43,13 @@ std::vector<ExposureSegment> cyclic_phase_segments(const CaptureModel& model, do
 std::vector<double> timeline_channel_psf(const CaptureModel& model, int channel,
                                          std::span<const ExposureSegment> segments);
 
+/// \brief Every channel's timeline_channel_psf() at once, each segment's shape
+/// over the pixels computed once for all channels (the motion refinement builds
+/// them for every candidate motion). Equal to the one-channel PSFs but for
+/// rounding.
+std::vector<std::vector<double>> timeline_channel_psfs(const CaptureModel& model,
+                                                       std::span<const ExposureSegment> segments);
+
 /// \brief LED `led`'s PSF without crosstalk or ambient light (e- per unit
 /// reflectance of its own band in its own channel): the colour model's terms.
 std::vector<double> timeline_led_psf(const CaptureModel& model, int led,

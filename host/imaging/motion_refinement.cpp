@@ -1,12 +1,15 @@
 #include "imaging/motion_refinement.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <complex>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <vector>
 
+#include "imaging/exposure_timeline.hpp"
 #include "imaging/golden_section.hpp"
 #include "imaging/motion_frame.hpp"
 #include "imaging/row_fft.hpp"
@@ -15,6 +18,8 @@ namespace flutterscan::imaging {
 namespace {
 
 constexpr int kBlocks = 8;
+/// The most channels a capture model has (capture_model_problem: 1 or 3).
+constexpr std::size_t kMaxChannels = 3;
 /// Below this significance the residual barely depends on the blur: no edges
 /// along the motion (MotionRefinement::significance).
 constexpr double kMinimumSignificance = 20;
@@ -25,10 +30,23 @@ constexpr double kAboveNoise = 1.05;
 constexpr double kAccelerationGain = 0.05;
 /// Speed ratios searched: exp(+-kLogRatioRange).
 constexpr double kLogRatioRange = 0.8;  // 0.45 .. 2.2
+/// Rows are read in batches, the first of this many; ...
+constexpr int kFirstRows = 32;
+/// ... then as many as the standard error of the first says bring it below this
+/// (px: 2.5 times below the 0.05 px rms the refinement is held to; the error
+/// falls as 1 / sqrt(rows)), ...
+constexpr double kEnoughPrecisionPx = 0.02;
+/// ... unless the frame is clearly without edges: a significance below this,
+/// where four times the rows could at most double it and still stay short of
+/// kMinimumSignificance.
+constexpr double kClearlyFlat = kMinimumSignificance / 4;
 
 double square(double v) {
   return v * v;
 }
+
+/// One differenced motion row per channel, all of one length.
+using RowSet = std::vector<std::vector<float>>;
 
 /// The motion rows with the most edge energy along the motion: every
 /// `stride`-th row scored, the `count` best returned in order of energy (best
@@ -52,19 +70,20 @@ std::vector<int> edgiest_rows(const Plane& plane, int count) {
   return out;
 }
 
-/// Cuts every row to the stretch along the motion where the rows of channel
-/// `channel` have edges (columns whose summed |difference| is well above the
-/// median column's, i.e. the labels), widened by `taps` samples on either side
-/// and to at least 4 `taps`: the rest is belt, whose samples add noise but no
-/// information, and shorter rows make every FFT cheaper.
-void crop_to_edges(std::vector<std::vector<std::vector<float>>>& rows, std::size_t channel,
-                   int taps) {
-  const std::size_t width = rows[0][0].size();
+/// The stretch [first, last] of differenced samples along the motion where the
+/// rows `rows` of `plane` have edges (columns whose summed |difference| is well
+/// above the median column's, i.e. the labels), widened by `taps` samples on
+/// either side and to at least 4 `taps`: the rest is belt, whose samples add
+/// noise but no information, and shorter rows make every FFT cheaper. The whole
+/// differenced row when nothing stands out.
+std::pair<std::size_t, std::size_t> edge_stretch(const Plane& plane, const std::vector<int>& rows,
+                                                 int taps) {
+  const auto width = static_cast<std::size_t>(plane.width) - 1;  // differenced
   std::vector<float> energy(width, 0.0f);
-  for (const auto& row : rows) {
-    const float* d = row[channel].data();
+  for (int r : rows) {
+    const float* d = plane.row(r).data();
 #pragma omp simd
-    for (std::size_t n = 0; n < width; ++n) energy[n] += std::abs(d[n]);
+    for (std::size_t n = 0; n < width; ++n) energy[n] += std::abs(d[n + 1] - d[n]);
   }
   std::vector<float> sorted = energy;
   std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(width / 2),
@@ -73,7 +92,7 @@ void crop_to_edges(std::vector<std::vector<std::vector<float>>>& rows, std::size
   std::size_t lo = width, hi = 0;
   for (std::size_t n = 0; n < width; ++n)
     if (energy[n] > floor) lo = std::min(lo, n), hi = n;
-  if (lo > hi) return;  // nothing stands out: keep the whole rows
+  if (lo > hi) return {0, width - 1};  // nothing stands out: the whole rows
   const auto margin = static_cast<std::size_t>(taps);
   lo = lo > margin ? lo - margin : 0;
   hi = std::min(width - 1, hi + margin);
@@ -82,116 +101,111 @@ void crop_to_edges(std::vector<std::vector<std::vector<float>>>& rows, std::size
     if (lo > 0) --lo;
     if (hi + 1 < width) ++hi;
   }
-  if (lo == 0 && hi + 1 == width) return;
-  for (auto& row : rows)
-    for (auto& channel_row : row)
-      channel_row = std::vector<float>(channel_row.begin() + static_cast<std::ptrdiff_t>(lo),
-                                       channel_row.begin() + static_cast<std::ptrdiff_t>(hi + 1));
+  return {lo, hi};
+}
+
+/// A row FFT of length n, planned once per thread and length (planning, even
+/// estimated, cost a tenth of a refinement); the last few lengths kept.
+const RowFft& row_fft_of_length(int n) {
+  thread_local std::vector<std::unique_ptr<RowFft>> plans;
+  auto it =
+      std::find_if(plans.begin(), plans.end(), [n](const auto& p) { return p->length() == n; });
+  if (it != plans.end()) return **it;
+  if (plans.size() >= 4) plans.erase(plans.begin());
+  plans.push_back(std::make_unique<RowFft>(n));
+  return *plans.back();
 }
 
 /// The residual of every candidate motion as quadratic forms in its taps
-/// (motion_refinement.hpp): G_ab per block of rows and pair of channels.
+/// (motion_refinement.hpp): G_ab per block of rows and pair of channels, built
+/// up as rows are added.
 class ResidualForms {
  public:
-  /// rows[r][c]: differenced row r of channel c (all of one length); block of row r = r % kBlocks.
-  ResidualForms(const std::vector<std::vector<std::vector<float>>>& rows, int taps)
-      : taps_(taps), channels_(static_cast<int>(rows[0].size())) {
-    const int width = static_cast<int>(rows[0][0].size());
-    valid_ = width - (taps - 1);
-    const RowFft fft(row_fft_length(width + taps));
-    const auto n = static_cast<std::size_t>(fft.length());
-    const auto bins = static_cast<std::size_t>(fft.bins());
+  /// Rows of `width` differenced samples, `channels` channels, PSFs of `taps` taps.
+  ResidualForms(int taps, int channels, int width)
+      : taps_(taps),
+        channels_(channels),
+        valid_(width - (taps - 1)),
+        fft_(row_fft_of_length(row_fft_length(width + taps))) {
     const auto p = static_cast<std::size_t>(taps);
-    const auto pairs = static_cast<std::size_t>(channels_ * (channels_ + 1) / 2);
-    gram_.assign(kBlocks * pairs, std::vector<double>(p * p, 0.0));
-    rows_in_block_.assign(kBlocks, 0);
-
-    AlignedFloats padded(n), correlation(n);
+    const std::size_t slots = kBlocks * pairs();
     // One aligned buffer per spectrum: FFTW's plans want the alignment they were made with.
-    std::vector<AlignedFloats> spectra, cross;
+    for (std::size_t i = 0; i < slots; ++i) cross_.emplace_back(2 * bins());
+    for (auto& s : cross_) std::fill(s.data(), s.data() + 2 * bins(), 0.0f);
+    base_ab_.assign(slots, std::vector<double>(p, 0.0));
+    base_ba_.assign(slots, std::vector<double>(p, 0.0));
+    ends_.assign(slots, std::vector<double>(p * p, 0.0));
+    gram_.assign(slots + pairs(), std::vector<double>(p * p, 0.0));
+    rows_in_block_.assign(kBlocks + 1, 0);
+  }
+
+  /// Adds rows[first..last) to the forms; the block of row r is r % kBlocks.
+  void add(const std::vector<RowSet>& rows, std::size_t first, std::size_t last) {
+    const auto n = static_cast<std::size_t>(fft_.length());
+    const auto p = static_cast<std::size_t>(taps_);
+    AlignedFloats padded(n);
+    std::vector<AlignedFloats> spectra;
+    for (int c = 0; c < channels_; ++c) spectra.emplace_back(2 * bins());
     std::vector<double> head_b(p), tail_b(p);
-    for (int c = 0; c < channels_; ++c) spectra.emplace_back(2 * bins);
-    for (std::size_t q = 0; q < pairs; ++q) cross.emplace_back(2 * bins);
-    // Per block: the cross-spectra summed over its rows, and the exact corrections.
-    for (int block = 0; block < kBlocks; ++block) {
-      for (auto& s : cross) std::fill(s.data(), s.data() + 2 * bins, 0.0f);
-      std::vector<std::vector<double>> base_ab(pairs, std::vector<double>(p, 0.0)),
-          base_ba(pairs, std::vector<double>(p, 0.0));
-      std::vector<std::vector<double>> ends(pairs, std::vector<double>(p * p, 0.0));
-      for (std::size_t r = static_cast<std::size_t>(block); r < rows.size(); r += kBlocks) {
-        ++rows_in_block_[static_cast<std::size_t>(block)];
-        for (int c = 0; c < channels_; ++c) {
-          const auto& row = rows[r][static_cast<std::size_t>(c)];
-          std::fill(padded.data(), padded.data() + n, 0.0f);
-          std::copy(row.begin(), row.end(), padded.data());
-          fft.forward(padded.data(), spectra[static_cast<std::size_t>(c)].complex());
-        }
-        std::size_t q = 0;
-        for (int a = 0; a < channels_; ++a)
-          for (int b = a; b < channels_; ++b, ++q) {
-            // sum_n a[n] b[n - k] has the spectrum A conj(B).
-            accumulate_spectra(spectra[static_cast<std::size_t>(b)].data(),
-                               spectra[static_cast<std::size_t>(a)].data(), cross[q].data(), bins,
-                               true);
-            const auto& ra = rows[r][static_cast<std::size_t>(a)];
-            const auto& rb = rows[r][static_cast<std::size_t>(b)];
-            const std::size_t first = p - 1;  // F, the first valid sample
-            // G[0][j] lacks sum_{n=j}^{F-1} a[n] b[n-j]; G[i][0] lacks the mirror.
-            for (std::size_t j = 0; j < first; ++j) {
-              double head_ab = 0, head_ba = 0;
-              const float* a_from = ra.data() + j;
-              const float* b_from = rb.data() + j;
-              const std::size_t count = first - j;
+    for (std::size_t r = first; r < last; ++r) {
+      const std::size_t block = r % kBlocks;
+      ++rows_in_block_[block];
+      ++rows_in_block_[kBlocks];
+      for (int c = 0; c < channels_; ++c) {
+        const auto& row = rows[r][static_cast<std::size_t>(c)];
+        std::copy(row.begin(), row.end(), padded.data());
+        std::fill(padded.data() + row.size(), padded.data() + n, 0.0f);
+        fft_.forward(padded.data(), spectra[static_cast<std::size_t>(c)].complex());
+      }
+      std::size_t q = 0;
+      for (int a = 0; a < channels_; ++a)
+        for (int b = a; b < channels_; ++b, ++q) {
+          const std::size_t slot = block * pairs() + q;
+          // sum_n a[n] b[n - k] has the spectrum A conj(B).
+          accumulate_spectra(spectra[static_cast<std::size_t>(b)].data(),
+                             spectra[static_cast<std::size_t>(a)].data(), cross_[slot].data(),
+                             bins(), true);
+          const auto& ra = rows[r][static_cast<std::size_t>(a)];
+          const auto& rb = rows[r][static_cast<std::size_t>(b)];
+          const std::size_t head = p - 1;  // F, the first valid sample
+          // G[0][j] lacks sum_{n=j}^{F-1} a[n] b[n-j]; G[i][0] lacks the mirror.
+          for (std::size_t j = 0; j < head; ++j) {
+            double head_ab = 0, head_ba = 0;
+            const float* a_from = ra.data() + j;
+            const float* b_from = rb.data() + j;
+            const std::size_t count = head - j;
 #pragma omp simd reduction(+ : head_ab, head_ba)
-              for (std::size_t k = 0; k < count; ++k) {
-                head_ab += static_cast<double>(a_from[k]) * rb[k];
-                head_ba += static_cast<double>(b_from[k]) * ra[k];
-              }
-              base_ab[q][j] -= head_ab;
-              base_ba[q][j] -= head_ba;
+            for (std::size_t k = 0; k < count; ++k) {
+              head_ab += static_cast<double>(a_from[k]) * rb[k];
+              head_ba += static_cast<double>(b_from[k]) * ra[k];
             }
-            // G[i+1][j+1] = G[i][j] + a[F-1-i] b[F-1-j] - a[W-1-i] b[W-1-j]: the
-            // ends of b reversed into contiguous scratch, so the update vectorises.
-            const std::size_t last = ra.size() - 1;
-            for (std::size_t j = 0; j + 1 < p; ++j) {
-              head_b[j] = rb[first - 1 - j];
-              tail_b[j] = rb[last - j];
-            }
-            auto& e = ends[q];
-            const std::size_t inner = p - 1;
-            for (std::size_t i = 0; i < inner; ++i) {
-              const double head_a = ra[first - 1 - i], tail_a = ra[last - i];
-              double* out = e.data() + i * p;
-              const double* hb = head_b.data();
-              const double* tb = tail_b.data();
-#pragma omp simd
-              for (std::size_t j = 0; j < inner; ++j) out[j] += head_a * hb[j] - tail_a * tb[j];
-            }
+            base_ab_[slot][j] -= head_ab;
+            base_ba_[slot][j] -= head_ba;
           }
-      }
-      for (std::size_t q = 0; q < pairs; ++q) {
-        fft.inverse(cross[q].complex(), correlation.data());
-        const double scale = 1.0 / static_cast<double>(n);
-        auto& g = gram_[static_cast<std::size_t>(block) * pairs + q];
-        for (std::size_t j = 0; j < p; ++j) {
-          g[j] = correlation[j] * scale + base_ab[q][j];                // G[0][j]
-          g[j * p] = correlation[(n - j) % n] * scale + base_ba[q][j];  // G[j][0]
+          // G[i+1][j+1] = G[i][j] + a[F-1-i] b[F-1-j] - a[W-1-i] b[W-1-j]: the
+          // ends of b reversed into contiguous scratch, so the update vectorises.
+          const std::size_t tail = ra.size() - 1;
+          for (std::size_t j = 0; j + 1 < p; ++j) {
+            head_b[j] = rb[head - 1 - j];
+            tail_b[j] = rb[tail - j];
+          }
+          auto& e = ends_[slot];
+          const std::size_t inner = p - 1;
+          for (std::size_t i = 0; i < inner; ++i) {
+            const double head_a = ra[head - 1 - i], tail_a = ra[tail - i];
+            double* out = e.data() + i * p;
+            const double* hb = head_b.data();
+            const double* tb = tail_b.data();
+#pragma omp simd
+            for (std::size_t j = 0; j < inner; ++j) out[j] += head_a * hb[j] - tail_a * tb[j];
+          }
         }
-        for (std::size_t i = 1; i < p; ++i)
-          for (std::size_t j = 1; j < p; ++j)
-            g[i * p + j] = g[(i - 1) * p + j - 1] + ends[q][(i - 1) * p + j - 1];
-      }
     }
-    // The sums over every block, for the search (blocks only for the standard error).
-    for (std::size_t q = 0; q < pairs; ++q) {
-      std::vector<double> total(p * p, 0.0);
-      for (int block = 0; block < kBlocks; ++block) {
-        const auto& g = gram_[static_cast<std::size_t>(block) * pairs + q];
-        for (std::size_t i = 0; i < total.size(); ++i) total[i] += g[i];
-      }
-      gram_.push_back(std::move(total));
-    }
-    rows_in_block_.push_back(static_cast<int>(rows.size()));
+    update_grams();
+  }
+
+  int rows() const {
+    return rows_in_block_[kBlocks];
   }
 
   struct Sum {
@@ -205,42 +219,51 @@ class ResidualForms {
   Sum operator()(const std::vector<std::vector<double>>& taps, const std::vector<double>& variances,
                  int block) const {
     const auto p = static_cast<std::size_t>(taps_);
-    const auto pairs = static_cast<std::size_t>(channels_ * (channels_ + 1) / 2);
-    // |difference of h|^2: the noise of a differenced residual.
-    std::vector<double> power(taps.size());
+    // |difference of h|^2: the noise of a differenced residual; and the taps up
+    // to the last one that is not 0 (shorter blurs than the longest searched).
+    std::array<double, kMaxChannels> power{};
+    std::array<std::size_t, kMaxChannels> support{};
     for (std::size_t c = 0; c < taps.size(); ++c) {
       double sum = 0, previous = 0;
-      for (double t : taps[c]) {
-        sum += square(t - previous);
-        previous = t;
+      for (std::size_t i = 0; i < p; ++i) {
+        sum += square(taps[c][i] - previous);
+        previous = taps[c][i];
+        if (previous != 0) support[c] = i + 1;
       }
       power[c] = sum + square(previous);
     }
     Sum total;
-    const int k = block < 0 ? kBlocks : block;  // the totals follow the blocks
-    {
-      const auto rows = static_cast<std::size_t>(rows_in_block_[static_cast<std::size_t>(k)]);
-      for (int c = 0; c < channels_; ++c)
-        for (int d = c + 1; d < channels_; ++d) {
-          const auto uc = static_cast<std::size_t>(c), ud = static_cast<std::size_t>(d);
-          const double variance = variances[uc] * power[ud] + variances[ud] * power[uc];
-          if (!(variance > 0)) continue;
-          const auto& g_cc = gram_[static_cast<std::size_t>(k) * pairs + pair_index(c, c)];
-          const auto& g_dd = gram_[static_cast<std::size_t>(k) * pairs + pair_index(d, d)];
-          const auto& g_cd = gram_[static_cast<std::size_t>(k) * pairs + pair_index(c, d)];
-          const double energy = form(taps[ud], g_cc, taps[ud], p) +
-                                form(taps[uc], g_dd, taps[uc], p) -
-                                2 * form(taps[ud], g_cd, taps[uc], p);
-          total.value += energy / variance;
-          total.samples += rows * static_cast<std::size_t>(valid_);
-        }
-    }
+    const auto k = static_cast<std::size_t>(block < 0 ? kBlocks : block);  // totals after blocks
+    const auto rows = static_cast<std::size_t>(rows_in_block_[k]);
+    for (int c = 0; c < channels_; ++c)
+      for (int d = c + 1; d < channels_; ++d) {
+        const auto uc = static_cast<std::size_t>(c), ud = static_cast<std::size_t>(d);
+        const double variance = variances[uc] * power[ud] + variances[ud] * power[uc];
+        if (!(variance > 0)) continue;
+        const auto& g_cc = gram_[k * pairs() + pair_index(c, c)];
+        const auto& g_dd = gram_[k * pairs() + pair_index(d, d)];
+        const auto& g_cd = gram_[k * pairs() + pair_index(c, d)];
+        const auto& hc = taps[uc];
+        const auto& hd = taps[ud];
+        const std::size_t sc = support[uc], sd = support[ud];
+        const double energy = form(hd, sd, g_cc, hd, sd, p) + form(hc, sc, g_dd, hc, sc, p) -
+                              2 * form(hd, sd, g_cd, hc, sc, p);
+        total.value += energy / variance;
+        total.samples += rows * static_cast<std::size_t>(valid_);
+      }
     return total;
   }
 
  private:
+  std::size_t pairs() const {
+    return static_cast<std::size_t>(channels_ * (channels_ + 1) / 2);
+  }
+  std::size_t bins() const {
+    return static_cast<std::size_t>(fft_.bins());
+  }
+
   std::size_t pair_index(int a, int b) const {
-    // (a, b), a <= b, in the order the constructor fills them.
+    // (a, b), a <= b, in the order add() fills them.
     std::size_t q = 0;
     for (int i = 0; i < channels_; ++i)
       for (int j = i; j < channels_; ++j, ++q)
@@ -248,14 +271,48 @@ class ResidualForms {
     return q;
   }
 
-  static double form(const std::vector<double>& x, const std::vector<double>& g,
-                     const std::vector<double>& y, std::size_t p) {
+  /// The Gram matrices of every block, and their sums, from what add() gathered.
+  void update_grams() {
+    const auto n = static_cast<std::size_t>(fft_.length());
+    const auto p = static_cast<std::size_t>(taps_);
+    const double scale = 1.0 / static_cast<double>(n);
+    AlignedFloats spectrum(2 * bins()), correlation(n);
+    for (std::size_t q = 0; q < pairs(); ++q) std::fill(total(q).begin(), total(q).end(), 0.0);
+    for (std::size_t block = 0; block < kBlocks; ++block)
+      for (std::size_t q = 0; q < pairs(); ++q) {
+        const std::size_t slot = block * pairs() + q;
+        std::copy(cross_[slot].data(), cross_[slot].data() + 2 * bins(), spectrum.data());
+        fft_.inverse(spectrum.complex(), correlation.data());  // destroys its input
+        auto& g = gram_[slot];
+        for (std::size_t j = 0; j < p; ++j) {
+          g[j] = correlation[j] * scale + base_ab_[slot][j];                // G[0][j]
+          g[j * p] = correlation[(n - j) % n] * scale + base_ba_[slot][j];  // G[j][0]
+        }
+        const auto& e = ends_[slot];
+        for (std::size_t i = 1; i < p; ++i)
+          for (std::size_t j = 1; j < p; ++j)
+            g[i * p + j] = g[(i - 1) * p + j - 1] + e[(i - 1) * p + j - 1];
+        auto& sum = total(q);
+        for (std::size_t i = 0; i < sum.size(); ++i) sum[i] += g[i];
+      }
+  }
+
+  std::vector<double>& total(std::size_t q) {
+    return gram_[kBlocks * pairs() + q];
+  }
+
+  /// x' G y, G P x P row-major, x 0 from entry nx on and y from ny on (the
+  /// search's inner loop: vectorised).
+  static double form(const std::vector<double>& x, std::size_t nx, const std::vector<double>& g,
+                     const std::vector<double>& y, std::size_t ny, std::size_t p) {
+    const double* yd = y.data();
     double sum = 0;
-    for (std::size_t i = 0; i < p; ++i) {
+    for (std::size_t i = 0; i < nx; ++i) {
       if (x[i] == 0) continue;
       const double* row = g.data() + i * p;
       double inner = 0;
-      for (std::size_t j = 0; j < p; ++j) inner += row[j] * y[j];
+#pragma omp simd reduction(+ : inner)
+      for (std::size_t j = 0; j < ny; ++j) inner += row[j] * yd[j];
       sum += x[i] * inner;
     }
     return sum;
@@ -263,10 +320,141 @@ class ResidualForms {
 
   int taps_;
   int channels_;
-  int valid_ = 0;
+  int valid_;
+  const RowFft& fft_;
+  /// Per [block * pairs + pair]: the cross-spectra summed over the block's rows,
+  /// and the exact corrections at the rows' ends (G[0][j], G[j][0], the diagonals).
+  std::vector<AlignedFloats> cross_;
+  std::vector<std::vector<double>> base_ab_, base_ba_, ends_;
   /// [block * pairs + pair], P x P row-major; "block" kBlocks holds the sums over all.
   std::vector<std::vector<double>> gram_;
   std::vector<int> rows_in_block_;  ///< kBlocks + 1 entries, the last all rows
+};
+
+/// The search over the motion on the rows `forms` holds (refine_motion()'s
+/// steps after reading the rows): blur_px within [lo, hi] at constant speed,
+/// the accelerating motion when the residual asks for it, and the standard error.
+class MotionSearch {
+ public:
+  MotionSearch(const ResidualForms& forms, const std::vector<double>& variances,
+               const CaptureModel& model, double lo, double hi, int taps)
+      : forms_(forms), variances_(variances), model_(model), lo_(lo), hi_(hi), taps_(taps) {}
+
+  MotionRefinement run(const MotionRefinementOptions& options) const {
+    MotionRefinement out;
+    out.rows_used = forms_.rows();
+    out.blur_px = model_.blur_px;
+    out.speed_ratio = model_.speed_ratio;
+    const double slot = model_.blur_px / model_.code.length();
+    const double start_ratio = model_.speed_ratio;
+
+    // Constant speed (the model's ratio): a grid of one slot (a blur wrong by
+    // less than a slot moves no slot by more than one: the residual's basin
+    // around the true blur is wider than that), then golden section.
+    double best = model_.blur_px;
+    std::vector<double> grid;
+    if (options.tolerance > 0) {
+      const double step = std::max(0.02, slot);
+      double best_cost = INFINITY;
+      for (double b = lo_; b <= hi_ + 1e-9; b += step) {
+        const double c = mean(b, start_ratio);
+        grid.push_back(c);
+        if (c < best_cost) best_cost = c, best = b;
+      }
+      best =
+          golden_minimum([&](double b) { return mean(b, start_ratio); }, std::max(lo_, best - step),
+                         std::min(hi_, best + step), 0.005 * std::max(1.0, slot));
+    }
+    out.constant_speed_residual = mean(best, start_ratio);
+    out.residual_per_sample = out.constant_speed_residual;
+    if (grid.empty()) return out;  // tolerance 0: the given motion, checked
+    std::nth_element(grid.begin(), grid.begin() + static_cast<std::ptrdiff_t>(grid.size() / 2),
+                     grid.end());
+    out.contrast = grid[grid.size() / 2] / out.constant_speed_residual - 1;
+
+    // The accelerating motion, when the constant one leaves a residual above the noise.
+    double ratio = start_ratio;
+    if (options.speed_change && out.contrast > 0 && out.constant_speed_residual > kAboveNoise) {
+      double log_ratio = 0, best_cost = INFINITY;
+      for (double x = -kLogRatioRange; x <= kLogRatioRange + 1e-9; x += 0.1) {
+        const double c = mean(best, std::exp(x));
+        if (c < best_cost) best_cost = c, log_ratio = x;
+      }
+      double blur = best;
+      for (int pass = 0; pass < 2; ++pass) {
+        const double r = std::exp(log_ratio);
+        blur = golden_minimum([&](double b) { return mean(b, r); }, std::max(lo_, blur - 2 * slot),
+                              std::min(hi_, blur + 2 * slot), 0.005 * std::max(1.0, slot));
+        log_ratio = golden_minimum([&](double x) { return mean(blur, std::exp(x)); },
+                                   std::max(-kLogRatioRange, log_ratio - 0.15),
+                                   std::min(kLogRatioRange, log_ratio + 0.15), 0.002);
+      }
+      const double accelerating = mean(blur, std::exp(log_ratio));
+      if (accelerating < out.constant_speed_residual * (1 - kAccelerationGain)) {
+        out.accelerating = true;
+        best = blur;
+        ratio = std::exp(log_ratio);
+        out.residual_per_sample = accelerating;
+      }
+    }
+
+    // Sandwich standard error of the blur over the blocks of rows.
+    const double h = std::max(0.02, 0.1 * slot);
+    const double below = std::max(lo_, best - h), above = std::min(hi_, best + h);
+    const auto taps_below = taps_of(below, ratio), taps_above = taps_of(above, ratio);
+    // The blocks' residuals sum to the whole: the curvature needs the whole only.
+    const auto whole = forms_(taps_of(best, ratio), variances_, -1);
+    double gradient_variance = 0, sum_below = 0, sum_above = 0;
+    for (int k = 0; k < kBlocks; ++k) {
+      const double fb = forms_(taps_below, variances_, k).value,
+                   fa = forms_(taps_above, variances_, k).value;
+      gradient_variance += square((fa - fb) / (above - below));
+      sum_below += fb;
+      sum_above += fa;
+    }
+    const double half = (above - below) / 2;
+    const double curvature = (sum_above - 2 * whole.value + sum_below) / (half * half);
+    // Edges: the best blur explains the frame better than a typical one by far
+    // more than noise could (the residual's spread over the samples is about
+    // sqrt(2 / samples) per sample), and the residual curves up around it.
+    const double samples = static_cast<double>(whole.samples);
+    out.significance = out.contrast * out.constant_speed_residual * std::sqrt(samples / 2);
+    out.edges = out.significance >= kMinimumSignificance && curvature > 0;
+    out.standard_error_px = out.edges ? std::sqrt(gradient_variance) / curvature
+                                      : std::numeric_limits<double>::infinity();
+    if (!out.edges) {
+      out.accelerating = false;
+      out.residual_per_sample = out.constant_speed_residual;
+      return out;
+    }
+    out.blur_px = best;
+    out.speed_ratio = ratio;
+    const double edge_margin = std::max(0.02, slot / 4);
+    out.at_range_edge = best - lo_ < edge_margin || hi_ - best < edge_margin;
+    return out;
+  }
+
+ private:
+  /// Each channel's PSF taps for the motion (blur, end / start speed ratio).
+  std::vector<std::vector<double>> taps_of(double blur, double ratio) const {
+    CaptureModel m = model_;
+    m.blur_px = std::clamp(blur, lo_, hi_);
+    m.speed_ratio = ratio;
+    auto out = timeline_channel_psfs(m, slot_segments(m));
+    for (auto& t : out) t.resize(static_cast<std::size_t>(taps_), 0.0);
+    return out;
+  }
+
+  /// The residual per sample of the motion over every row.
+  double mean(double blur, double ratio) const {
+    return forms_(taps_of(blur, ratio), variances_, -1).mean();
+  }
+
+  const ResidualForms& forms_;
+  const std::vector<double>& variances_;
+  const CaptureModel& model_;
+  double lo_, hi_;
+  int taps_;
 };
 
 }  // namespace
@@ -305,7 +493,7 @@ Result<MotionRefinement, std::string> refine_motion(const MotionFrame& frame,
   if (frame.lines() < kBlocks)
     return Out::failure("the frame has too few rows along the motion to refine the blur");
 
-  // The edgiest rows of the brightest channel, differenced, every channel.
+  // The edgiest rows of the brightest channel, read in batches (best first).
   std::size_t brightest = 0;
   {
     double best = -1;
@@ -315,131 +503,57 @@ Result<MotionRefinement, std::string> refine_motion(const MotionFrame& frame,
     }
   }
   const auto chosen = edgiest_rows(frame.channel(static_cast<int>(brightest)), options.rows);
-  std::vector<std::vector<std::vector<float>>> rows;
-  std::vector<double> means(static_cast<std::size_t>(frame.channel_count()), 0.0);
-  for (int r : chosen) {
-    std::vector<std::vector<float>> per_channel;
-    for (int c = 0; c < frame.channel_count(); ++c) {
-      const auto line = frame.channel(c).row(r);
-      std::vector<float> diff(line.size() - 1);
-      double sum = 0;
-      for (std::size_t n = 0; n + 1 < line.size(); ++n) {
-        diff[n] = line[n + 1] - line[n];
-        sum += line[n];
-      }
-      means[static_cast<std::size_t>(c)] += sum / static_cast<double>(line.size() - 1);
-      per_channel.push_back(std::move(diff));
-    }
-    rows.push_back(std::move(per_channel));
-  }
-  if (static_cast<int>(rows.size()) < kBlocks)
+  if (static_cast<int>(chosen.size()) < kBlocks)
     return Out::failure("the frame has too few rows along the motion to refine the blur");
-  crop_to_edges(rows, brightest, taps);
-  std::vector<double> variances;
-  for (double m : means)
-    variances.push_back(channel_noise_variance(model, std::max(0.0, m / rows.size())));
+  // Without a search there is nothing to stop early for: every row at once.
+  std::size_t batch = options.tolerance > 0
+                          ? std::min(chosen.size(), static_cast<std::size_t>(kFirstRows))
+                          : chosen.size();
+  const auto [from, to] = edge_stretch(
+      frame.channel(static_cast<int>(brightest)),
+      std::vector<int>(chosen.begin(), chosen.begin() + static_cast<std::ptrdiff_t>(batch)), taps);
+  const std::size_t width = to - from + 1;
 
-  const ResidualForms forms(rows, taps);
-  const auto taps_of = [&](double blur, double ratio) {
-    CaptureModel m = model;
-    m.blur_px = std::clamp(blur, lo, hi);
-    m.speed_ratio = ratio;
-    std::vector<std::vector<double>> out;
-    for (int c = 0; c < model.channels; ++c) {
-      auto t = channel_psf(m, c);
-      t.resize(static_cast<std::size_t>(taps), 0.0);
-      out.push_back(std::move(t));
-    }
-    return out;
-  };
-  const auto residual = [&](double blur, double ratio, int block = -1) {
-    return forms(taps_of(blur, ratio), variances, block);
-  };
-
+  ResidualForms forms(taps, frame.channel_count(), static_cast<int>(width));
+  std::vector<RowSet> rows;
+  std::vector<double> sums(static_cast<std::size_t>(frame.channel_count()), 0.0);
+  std::vector<double> variances(sums.size());
   MotionRefinement out;
-  out.rows_used = static_cast<int>(rows.size());
-  out.blur_px = model.blur_px;
-  out.speed_ratio = model.speed_ratio;
-  const double slot = model.blur_px / model.code.length();
-  const double start_ratio = model.speed_ratio;
-
-  // Constant speed (the model's ratio): a grid of a quarter slot, then golden section.
-  double best = model.blur_px;
-  std::vector<double> grid;
-  if (options.tolerance > 0) {
-    const double step = std::max(0.02, slot / 4);
-    double best_cost = INFINITY;
-    for (double b = lo; b <= hi + 1e-9; b += step) {
-      const double c = residual(b, start_ratio).mean();
-      grid.push_back(c);
-      if (c < best_cost) best_cost = c, best = b;
+  for (;;) {
+    const std::size_t first = rows.size();
+    for (std::size_t i = first; i < batch; ++i) {
+      RowSet per_channel;
+      for (int c = 0; c < frame.channel_count(); ++c) {
+        const auto line = frame.channel(c).row(chosen[i]);
+        // The row's mean level sets its noise (whole row, as the belt around the labels).
+        const float* samples = line.data();
+        const std::size_t count = line.size() - 1;
+        float sum = 0;  // in float (vectorised); the rows in double
+#pragma omp simd reduction(+ : sum)
+        for (std::size_t n = 0; n < count; ++n) sum += samples[n];
+        sums[static_cast<std::size_t>(c)] += sum / static_cast<double>(count);
+        std::vector<float> diff(width);
+        for (std::size_t n = 0; n < width; ++n) diff[n] = line[from + n + 1] - line[from + n];
+        per_channel.push_back(std::move(diff));
+      }
+      rows.push_back(std::move(per_channel));
     }
-    best = golden_minimum([&](double b) { return residual(b, start_ratio).mean(); },
-                          std::max(lo, best - step), std::min(hi, best + step),
-                          0.005 * std::max(1.0, slot));
+    forms.add(rows, first, rows.size());
+    for (std::size_t c = 0; c < sums.size(); ++c)
+      variances[c] =
+          channel_noise_variance(model, std::max(0.0, sums[c] / static_cast<double>(rows.size())));
+    out = MotionSearch(forms, variances, model, lo, hi, taps).run(options);
+    const bool precise = out.edges && out.standard_error_px <= kEnoughPrecisionPx;
+    const bool flat = !out.edges && out.significance < kClearlyFlat;
+    if (rows.size() == chosen.size() || precise || flat || options.tolerance == 0) break;
+    // The rows that bring the error below kEnoughPrecisionPx (a fifth more, whole
+    // blocks), at least twice as many when the frame gave no error yet.
+    const double wanted = out.edges ? 1.2 * static_cast<double>(rows.size()) *
+                                          square(out.standard_error_px / kEnoughPrecisionPx)
+                                    : 2.0 * static_cast<double>(rows.size());
+    const auto blocks = static_cast<std::size_t>(std::ceil(wanted / kBlocks));
+    batch = std::min(chosen.size(), std::max(rows.size() + kBlocks, blocks * kBlocks));
   }
-  out.constant_speed_residual = residual(best, start_ratio).mean();
-  out.residual_per_sample = out.constant_speed_residual;
-  if (grid.empty()) return Out::success(out);  // tolerance 0: the given motion, checked
-  std::nth_element(grid.begin(), grid.begin() + static_cast<std::ptrdiff_t>(grid.size() / 2),
-                   grid.end());
-  out.contrast = grid[grid.size() / 2] / out.constant_speed_residual - 1;
-
-  // The accelerating motion, when the constant one leaves a residual above the noise.
-  double ratio = start_ratio;
-  if (options.speed_change && out.contrast > 0 && out.constant_speed_residual > kAboveNoise) {
-    double log_ratio = 0, best_cost = INFINITY;
-    for (double x = -kLogRatioRange; x <= kLogRatioRange + 1e-9; x += 0.1) {
-      const double c = residual(best, std::exp(x)).mean();
-      if (c < best_cost) best_cost = c, log_ratio = x;
-    }
-    double blur = best;
-    for (int pass = 0; pass < 2; ++pass) {
-      const double r = std::exp(log_ratio);
-      blur = golden_minimum([&](double b) { return residual(b, r).mean(); },
-                            std::max(lo, blur - 2 * slot), std::min(hi, blur + 2 * slot),
-                            0.005 * std::max(1.0, slot));
-      log_ratio = golden_minimum([&](double x) { return residual(blur, std::exp(x)).mean(); },
-                                 std::max(-kLogRatioRange, log_ratio - 0.15),
-                                 std::min(kLogRatioRange, log_ratio + 0.15), 0.002);
-    }
-    const double accelerating = residual(blur, std::exp(log_ratio)).mean();
-    if (accelerating < out.constant_speed_residual * (1 - kAccelerationGain)) {
-      out.accelerating = true;
-      best = blur;
-      ratio = std::exp(log_ratio);
-      out.residual_per_sample = accelerating;
-    }
-  }
-
-  // Sandwich standard error of the blur over the blocks of rows.
-  const double h = std::max(0.02, 0.1 * slot);
-  const double below = std::max(lo, best - h), above = std::min(hi, best + h);
-  double gradient_variance = 0, curvature = 0;
-  for (int k = 0; k < kBlocks; ++k) {
-    const double fb = residual(below, ratio, k).value, fa = residual(above, ratio, k).value,
-                 f0 = residual(best, ratio, k).value;
-    const double half = (above - below) / 2;
-    gradient_variance += square((fa - fb) / (above - below));
-    curvature += (fa - 2 * f0 + fb) / (half * half);
-  }
-  // Edges: the best blur explains the frame better than a typical one by far
-  // more than noise could (the residual's spread over the samples is about
-  // sqrt(2 / samples) per sample), and the residual curves up around it.
-  const double samples = static_cast<double>(residual(best, ratio).samples);
-  out.significance = out.contrast * out.constant_speed_residual * std::sqrt(samples / 2);
-  out.edges = out.significance >= kMinimumSignificance && curvature > 0;
-  out.standard_error_px = out.edges ? std::sqrt(gradient_variance) / curvature
-                                    : std::numeric_limits<double>::infinity();
-  if (!out.edges) {
-    out.accelerating = false;
-    out.residual_per_sample = out.constant_speed_residual;
-    return Out::success(out);
-  }
-  out.blur_px = best;
-  out.speed_ratio = ratio;
-  const double edge_margin = std::max(0.02, slot / 4);
-  out.at_range_edge = best - lo < edge_margin || hi - best < edge_margin;
   return Out::success(out);
 }
 

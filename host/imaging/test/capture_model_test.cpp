@@ -7,6 +7,7 @@
 #include <numeric>
 
 #include "imaging/capture_descriptor.hpp"
+#include "imaging/exposure_timeline.hpp"
 #include "imaging/motion_frame.hpp"
 
 namespace flutterscan::imaging {
@@ -99,6 +100,30 @@ TEST(CaptureModel, CrosstalkAndAmbientEnterEveryChannel) {
     expected += m.crosstalk[static_cast<std::size_t>(k)] *
                 m.led_electrons[static_cast<std::size_t>(k)] * m.code.on_slots(k);
   EXPECT_NEAR(channel_white_electrons(m, 0), expected, 1e-6);
+}
+
+TEST(CaptureModel, AllChannelsAtOnceEqualEachChannelAlone) {
+  // timeline_channel_psfs (the motion refinement's builder) against channel_psf,
+  // with crosstalk, ambient light, both pixel models, sub-pixel and accelerating motion.
+  CaptureModel m = seed_capture(52);
+  m.crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
+  m.ambient_electrons = {100, 0, 40};
+  for (const PixelModel pixels : {PixelModel::kBoxAperture, PixelModel::kTapGrid})
+    for (const double blur : {52.0, 23.7, 61.3})
+      for (const double ratio : {1.0, 1.4}) {
+        m.pixel_model = pixels;
+        m.blur_px = blur;
+        m.speed_ratio = ratio;
+        const auto all = timeline_channel_psfs(m, slot_segments(m));
+        ASSERT_EQ(all.size(), 3u);
+        for (int c = 0; c < 3; ++c) {
+          const auto one = channel_psf(m, c);
+          const auto& taps = all[static_cast<std::size_t>(c)];
+          ASSERT_EQ(taps.size(), one.size()) << blur << " " << ratio << " channel " << c;
+          for (std::size_t i = 0; i < one.size(); ++i)
+            EXPECT_NEAR(taps[i], one[i], 1e-12 * sum(one)) << blur << " tap " << i;
+        }
+      }
 }
 
 TEST(CaptureModel, ProblemsAreNamed) {
