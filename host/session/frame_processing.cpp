@@ -85,7 +85,7 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
                                    imaging::BayerMode::kRawPlanes);
     if (r.ok()) {
       latent = std::move(r.value().latent);
-      motion_latent = imaging::to_motion_frame(latent, direction);
+      motion_latent = std::move(r.value().motion_latent);
     } else {
       deblur_error = r.error();
     }
