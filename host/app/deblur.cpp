@@ -249,24 +249,33 @@ void run(const DeblurFlags& f) {
   }
   const double refine_ms = elapsed_ms(start);
   start = std::chrono::steady_clock::now();
-  auto result = model.bayer_rggb
-                    ? imaging::deblur_bayer(electrons.channels[0], model, options, *bayer_mode)
-                    : imaging::deblur(motion_frame.value(), model, options);
-  if (!result.ok()) throw UsageError("'" + f.input + "': " + result.error());
-  if (!model.bayer_rggb)
-    result.value().latent = motion_frame.value().to_camera(result.value().latent);
+  // The latent in the camera's orientation, and in the motion frame (made there, turned back once).
+  imaging::DeblurResult deblurred;
+  imaging::Plane motion_latent;
+  if (model.bayer_rggb) {
+    auto r = imaging::deblur_bayer(electrons.channels[0], model, options, *bayer_mode);
+    if (!r.ok()) throw UsageError("'" + f.input + "': " + r.error());
+    motion_latent = std::move(r.value().motion_latent);
+    deblurred = std::move(r.value());
+  } else {
+    auto r = imaging::deblur(motion_frame.value(), model, options);
+    if (!r.ok()) throw UsageError("'" + f.input + "': " + r.error());
+    deblurred = std::move(r.value());
+    motion_latent = std::move(deblurred.latent);
+    deblurred.latent = motion_frame.value().to_camera(motion_latent);
+  }
   const double deblur_ms = elapsed_ms(start);
 
   start = std::chrono::steady_clock::now();
   imaging::Image out;
-  out.channels.push_back(result.value().latent);
+  out.channels.push_back(deblurred.latent);
   for (float& v : out.channels[0].pixels) v = std::clamp(v, 0.0f, 1.0f) * 65535.0f;
   if (auto error = write_png16(f.output, out); !error.empty()) throw RuntimeFailure(error);
   const double write_ms = elapsed_ms(start);
 
   double psnr_db = 0, ssim_index = 0;
   if (!f.truth.empty()) {
-    const imaging::Plane& latent = result.value().latent;
+    const imaging::Plane& latent = deblurred.latent;
     const imaging::Plane truth = read_truth(f.truth, latent.width, latent.height);
     const auto region =
         imaging::scored_region(latent.width, latent.height, model.blur_px, model.direction);
@@ -278,7 +287,7 @@ void run(const DeblurFlags& f) {
   double decode_ms = 0;
   if (f.decode) {
     start = std::chrono::steady_clock::now();
-    decoded = reader::code_texts(reader::read_barcodes(result.value().latent));
+    decoded = reader::code_texts(reader::read_barcodes(deblurred.latent));
     decode_ms = elapsed_ms(start);
   }
   if (f.json) {
@@ -288,7 +297,7 @@ void run(const DeblurFlags& f) {
         {"method", f.method},
         {"timings_ms",
          {{"read", read_ms}, {"refine", refine_ms}, {"deblur", deblur_ms}, {"write", write_ms}}},
-        {"noise_variance_e2", result.value().noise_variance}};
+        {"noise_variance_e2", deblurred.noise_variance}};
     if (!motion.is_null()) report["motion"] = motion;
     if (f.decode) {
       report["timings_ms"]["decode"] = decode_ms;
@@ -373,9 +382,10 @@ void add_deblur(CLI::App& app) {
   command->add_option("--flat", f->flat,
                       "flat-field file (`calibrate flat`): corrects light that varies across the "
                       "field of view before deblurring");
-  command->add_option("--truth", f->truth,
-                      "ground truth to score against (16-bit grey PNG of reflectance, as "
-                      "`simulate` writes): prints PSNR and SSIM over the scoring region of docs/conventions.md");
+  command->add_option(
+      "--truth", f->truth,
+      "ground truth to score against (16-bit grey PNG of reflectance, as "
+      "`simulate` writes): prints PSNR and SSIM over the scoring region of docs/conventions.md");
   command->add_flag("--json", f->json, "print one JSON object (method, timings, decoded values)");
   command->callback([f] { run(*f); });
 }
