@@ -24,6 +24,8 @@
 #include "imaging/motion_frame.hpp"
 #include "imaging/motion_refinement.hpp"
 #include "reader/barcode_reader.hpp"
+#include "reader/code_reading.hpp"
+#include "reader/reader_options.hpp"
 #include "sim/scene.hpp"
 
 namespace flutterscan::app {
@@ -47,6 +49,7 @@ struct DeblurFlags {
   int threads = 2;
   std::string output;
   bool decode = false;
+  std::string decode_area = "frame";  ///< --decode-area: labels or frame (reader_options.hpp)
   bool json = false;
   std::string truth;  ///< ground truth (reflectance x 65535) to score against
   std::string flat;   ///< flat-field file (calibrate flat)
@@ -181,6 +184,12 @@ void run(const DeblurFlags& f) {
                      "': the methods are joint-wiener, wiener-avg, rl or tv");
   if (f.edge_prior != "tv" && f.edge_prior != "l0")
     throw UsageError("--edge-prior must be tv or l0, not '" + f.edge_prior + "'");
+  // The reader's options: the session's, on the whole frame unless --decode-area labels.
+  reader::ReaderOptions reader_options;
+  if (const auto area = reader::decode_area_from_name(f.decode_area))
+    reader_options.area = *area;
+  else
+    throw UsageError("--decode-area must be labels or frame, not '" + f.decode_area + "'");
   const auto bayer_mode = imaging::bayer_mode_from_name(f.bayer_mode);
   if (!bayer_mode)
     throw UsageError("--bayer-mode must be raw or demosaic, not '" + f.bayer_mode + "'");
@@ -287,7 +296,11 @@ void run(const DeblurFlags& f) {
   double decode_ms = 0;
   if (f.decode) {
     start = std::chrono::steady_clock::now();
-    decoded = reader::code_texts(reader::read_barcodes(deblurred.latent));
+    const std::vector<reader::LabelRegion> paper =
+        reader_options.area == reader::DecodeArea::kLabels ? reader::find_paper_runs(motion_latent)
+                                                           : std::vector<reader::LabelRegion>{};
+    decoded = reader::code_texts(
+        reader::read_codes(deblurred.latent, paper, model.direction, reader_options).readout);
     decode_ms = elapsed_ms(start);
   }
   if (f.json) {
@@ -379,6 +392,11 @@ void add_deblur(CLI::App& app) {
       ->capture_default_str();
   command->add_option("-o,--output", f->output, "16-bit grey PNG to write")->required();
   command->add_flag("--decode", f->decode, "also decode the barcodes on the result");
+  command
+      ->add_option("--decode-area", f->decode_area,
+                   "with --decode: frame (the whole result) or labels (the label paper found "
+                   "along the motion, as a session reads by default)")
+      ->capture_default_str();
   command->add_option("--flat", f->flat,
                       "flat-field file (`calibrate flat`): corrects light that varies across the "
                       "field of view before deblurring");

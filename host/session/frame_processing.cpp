@@ -13,6 +13,7 @@
 #include "imaging/deblur.hpp"
 #include "imaging/motion_frame.hpp"
 #include "reader/barcode_reader.hpp"
+#include "reader/code_reading.hpp"
 #include "session/frame_model.hpp"
 #include "session/model_fit.hpp"
 #include "session/session_clock.hpp"
@@ -157,20 +158,16 @@ struct Decoded {
 };
 
 /// Step "decode": the paper along the motion, then the codes in
-/// processing.decode_area (the paper runs widened, or the whole frame).
+/// processing.decode_area (the paper runs widened, or the whole frame) with
+/// the session's reader options.
 Decoded decode(const Deblurred& image, imaging::Direction direction,
                const ProcessingConfig& processing) {
   Decoded out;
   out.paper = reader::find_paper_runs(image.motion_latent);
-  const bool labels_only = processing.decode_area == reader::DecodeArea::kLabels;
-  const std::vector<reader::DecodeWindow> windows =
-      labels_only
-          ? reader::decode_windows(out.paper, image.latent.width, image.latent.height, direction)
-          : std::vector<reader::DecodeWindow>{};
-  if (!labels_only || !windows.empty())
-    out.readout =
-        reader::read_barcodes(image.latent, processing.symbologies, processing.try_rotate, windows);
-  if (labels_only) out.windows = windows.size();
+  reader::CodeReading reading =
+      reader::read_codes(image.latent, out.paper, direction, reader_options(processing));
+  out.readout = std::move(reading.readout);
+  out.windows = reading.windows;
   return out;
 }
 
