@@ -108,6 +108,13 @@ TEST(Protocol, ControllerStatesHaveTheirNamesAndOthersAreUnknown) {
   EXPECT_STREQ(controller_state_name(4), "unknown");
 }
 
+TEST(Protocol, SyncModesHaveTheirNamesAndOthersAreUnknown) {
+  EXPECT_STREQ(sync_mode_name(0), "slave");
+  EXPECT_STREQ(sync_mode_name(1), "master");
+  EXPECT_STREQ(sync_mode_name(2), "free-run");
+  EXPECT_STREQ(sync_mode_name(3), "unknown");
+}
+
 TEST(Protocol, PayloadMustHaveTheExactSize) {
   std::array<std::uint8_t, 13> bytes{};
   EXPECT_EQ(decode_payload<SetTimingRequest>(std::span(bytes).first(11)).error(),

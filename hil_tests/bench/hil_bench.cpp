@@ -28,6 +28,7 @@
 
 #include "device/controller_client.hpp"
 #include "device/usb_discovery.hpp"
+#include "flutterscan/common/protocol.hpp"
 
 extern char** environ;
 
@@ -147,6 +148,16 @@ double seconds_since(Clock::time_point t0) {
   return std::chrono::duration<double>(Clock::now() - t0).count();
 }
 
+/// dfu-util's -d: the application's and the bootloader's VID:PID (protocol.hpp),
+/// "1209:0001,1209:0002".
+std::string dfu_util_devices() {
+  char text[32];
+  std::snprintf(text, sizeof text, "%04x:%04x,%04x:%04x", protocol::kUsbVendorId,
+                protocol::kUsbProductIdApplication, protocol::kUsbVendorId,
+                protocol::kUsbProductIdBootloader);
+  return text;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -216,7 +227,7 @@ int main(int argc, char** argv) {
     const double s1 = seconds_since(t0);
     t0 = Clock::now();
     auto [rc2, out2] = run({HIL_HARNESS, "--timeout-s", "120", "--", DFU_UTIL, "-d",
-                            "1209:0001,1209:0002", "-D", image, "-R"});
+                            dfu_util_devices(), "-D", image, "-R"});
     const double s2 = seconds_since(t0);
     char a[64], b[64];
     std::snprintf(a, sizeof a, "%.1f", 64 / s1);

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "device_port.hpp"
+#include "flutterscan/firmware/usb/usb_descriptors.hpp"
 
 namespace flutterscan::hil {
 
@@ -25,8 +26,8 @@ struct HidrawIdentity {
   std::string phys;
   std::string uniq;  ///< serial number
   std::vector<std::uint8_t> report_descriptor;
-  std::uint8_t in_endpoint = 0x81;
-  std::uint8_t out_endpoint = 0x01;
+  std::uint8_t in_endpoint = firmware::usb::kHidInEndpoint.address;  ///< the firmware's own
+  std::uint8_t out_endpoint = firmware::usb::kHidOutEndpoint.address;
 };
 
 /// \brief The read/write/ioctl handler of one hidraw node.

@@ -24,6 +24,8 @@
 #include "imaging/motion_frame.hpp"
 #include "imaging/motion_refinement.hpp"
 #include "reader/barcode_reader.hpp"
+#include "reader/code_reading.hpp"
+#include "reader/reader_options.hpp"
 #include "sim/scene.hpp"
 
 namespace flutterscan::app {
@@ -47,6 +49,7 @@ struct DeblurFlags {
   int threads = 2;
   std::string output;
   bool decode = false;
+  std::string decode_area = "frame";  ///< --decode-area: labels or frame (reader_options.hpp)
   bool json = false;
   std::string truth;  ///< ground truth (reflectance x 65535) to score against
   std::string flat;   ///< flat-field file (calibrate flat)
@@ -181,6 +184,12 @@ void run(const DeblurFlags& f) {
                      "': the methods are joint-wiener, wiener-avg, rl or tv");
   if (f.edge_prior != "tv" && f.edge_prior != "l0")
     throw UsageError("--edge-prior must be tv or l0, not '" + f.edge_prior + "'");
+  // The reader's options: the session's, on the whole frame unless --decode-area labels.
+  reader::ReaderOptions reader_options;
+  if (const auto area = reader::decode_area_from_name(f.decode_area))
+    reader_options.area = *area;
+  else
+    throw UsageError("--decode-area must be labels or frame, not '" + f.decode_area + "'");
   const auto bayer_mode = imaging::bayer_mode_from_name(f.bayer_mode);
   if (!bayer_mode)
     throw UsageError("--bayer-mode must be raw or demosaic, not '" + f.bayer_mode + "'");
@@ -249,24 +258,33 @@ void run(const DeblurFlags& f) {
   }
   const double refine_ms = elapsed_ms(start);
   start = std::chrono::steady_clock::now();
-  auto result = model.bayer_rggb
-                    ? imaging::deblur_bayer(electrons.channels[0], model, options, *bayer_mode)
-                    : imaging::deblur(motion_frame.value(), model, options);
-  if (!result.ok()) throw UsageError("'" + f.input + "': " + result.error());
-  if (!model.bayer_rggb)
-    result.value().latent = motion_frame.value().to_camera(result.value().latent);
+  // The latent in the camera's orientation, and in the motion frame (made there, turned back once).
+  imaging::DeblurResult deblurred;
+  imaging::Plane motion_latent;
+  if (model.bayer_rggb) {
+    auto r = imaging::deblur_bayer(electrons.channels[0], model, options, *bayer_mode);
+    if (!r.ok()) throw UsageError("'" + f.input + "': " + r.error());
+    motion_latent = std::move(r.value().motion_latent);
+    deblurred = std::move(r.value());
+  } else {
+    auto r = imaging::deblur(motion_frame.value(), model, options);
+    if (!r.ok()) throw UsageError("'" + f.input + "': " + r.error());
+    deblurred = std::move(r.value());
+    motion_latent = std::move(deblurred.latent);
+    deblurred.latent = motion_frame.value().to_camera(motion_latent);
+  }
   const double deblur_ms = elapsed_ms(start);
 
   start = std::chrono::steady_clock::now();
   imaging::Image out;
-  out.channels.push_back(result.value().latent);
+  out.channels.push_back(deblurred.latent);
   for (float& v : out.channels[0].pixels) v = std::clamp(v, 0.0f, 1.0f) * 65535.0f;
   if (auto error = write_png16(f.output, out); !error.empty()) throw RuntimeFailure(error);
   const double write_ms = elapsed_ms(start);
 
   double psnr_db = 0, ssim_index = 0;
   if (!f.truth.empty()) {
-    const imaging::Plane& latent = result.value().latent;
+    const imaging::Plane& latent = deblurred.latent;
     const imaging::Plane truth = read_truth(f.truth, latent.width, latent.height);
     const auto region =
         imaging::scored_region(latent.width, latent.height, model.blur_px, model.direction);
@@ -278,7 +296,11 @@ void run(const DeblurFlags& f) {
   double decode_ms = 0;
   if (f.decode) {
     start = std::chrono::steady_clock::now();
-    decoded = reader::code_texts(reader::read_barcodes(result.value().latent));
+    const std::vector<reader::LabelRegion> paper =
+        reader_options.area == reader::DecodeArea::kLabels ? reader::find_paper_runs(motion_latent)
+                                                           : std::vector<reader::LabelRegion>{};
+    decoded = reader::code_texts(
+        reader::read_codes(deblurred.latent, paper, model.direction, reader_options).readout);
     decode_ms = elapsed_ms(start);
   }
   if (f.json) {
@@ -288,7 +310,7 @@ void run(const DeblurFlags& f) {
         {"method", f.method},
         {"timings_ms",
          {{"read", read_ms}, {"refine", refine_ms}, {"deblur", deblur_ms}, {"write", write_ms}}},
-        {"noise_variance_e2", result.value().noise_variance}};
+        {"noise_variance_e2", deblurred.noise_variance}};
     if (!motion.is_null()) report["motion"] = motion;
     if (f.decode) {
       report["timings_ms"]["decode"] = decode_ms;
@@ -370,12 +392,18 @@ void add_deblur(CLI::App& app) {
       ->capture_default_str();
   command->add_option("-o,--output", f->output, "16-bit grey PNG to write")->required();
   command->add_flag("--decode", f->decode, "also decode the barcodes on the result");
+  command
+      ->add_option("--decode-area", f->decode_area,
+                   "with --decode: frame (the whole result) or labels (the label paper found "
+                   "along the motion, as a session reads by default)")
+      ->capture_default_str();
   command->add_option("--flat", f->flat,
                       "flat-field file (`calibrate flat`): corrects light that varies across the "
                       "field of view before deblurring");
-  command->add_option("--truth", f->truth,
-                      "ground truth to score against (16-bit grey PNG of reflectance, as "
-                      "`simulate` writes): prints PSNR and SSIM over the scoring region of docs/conventions.md");
+  command->add_option(
+      "--truth", f->truth,
+      "ground truth to score against (16-bit grey PNG of reflectance, as "
+      "`simulate` writes): prints PSNR and SSIM over the scoring region of docs/conventions.md");
   command->add_flag("--json", f->json, "print one JSON object (method, timings, decoded values)");
   command->callback([f] { run(*f); });
 }

@@ -10,18 +10,6 @@
 namespace flutterscan::app {
 namespace {
 
-const char* mode_name(std::uint8_t mode) {
-  switch (static_cast<protocol::SyncMode>(mode)) {
-    case protocol::SyncMode::kSlave:
-      return "slave";
-    case protocol::SyncMode::kMaster:
-      return "master";
-    case protocol::SyncMode::kFreeRun:
-      return "free";
-  }
-  return "unknown";
-}
-
 const char* fault_name(std::uint8_t fault) {
   switch (static_cast<protocol::FaultCode>(fault)) {
     case protocol::FaultCode::kNone:
@@ -63,7 +51,7 @@ void run(const DeviceTarget& target) {
   DeviceSession session(target);
   const auto s = value_or_throw(session.client().status());
   std::printf("state            %s\n", protocol::controller_state_name(s.state));
-  std::printf("mode             %s\n", mode_name(s.sync_mode));
+  std::printf("mode             %s\n", protocol::sync_mode_name(s.sync_mode));
   std::printf("active code      %s\n", code_id_text(s.active_code_id).c_str());
   std::printf("pending code     %s\n", code_id_text(s.pending_code_id).c_str());
   std::printf("codes stored     %s\n", stored_text(s.codes_stored).c_str());

@@ -32,6 +32,8 @@
 #include "plot/heat_map.hpp"
 #include "plot/line_chart.hpp"
 #include "reader/barcode_reader.hpp"
+#include "reader/code_reading.hpp"
+#include "reader/reader_options.hpp"
 #include "sim/forward_model.hpp"
 #include "sim/pixel_integration.hpp"
 #include "sim/scene.hpp"
@@ -189,7 +191,11 @@ int main(int argc, char** argv) {
         if (psnr_only) continue;
         s.ssim = imaging::ssim(scene.reflectance, result.value().latent, region);
         if (!scene.content.empty()) {
-          const auto decoded = reader::code_texts(reader::read_barcodes(result.value().latent));
+          // The session's reader options on the whole frame (docs/benchmarks.md says so).
+          const auto decoded =
+              reader::code_texts(reader::read_codes(result.value().latent, {}, model.direction,
+                                                    reader::whole_frame_options())
+                                     .readout);
           s.decoded = std::find(decoded.begin(), decoded.end(), scene.content) != decoded.end();
         }
       }

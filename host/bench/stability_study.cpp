@@ -22,6 +22,8 @@
 #include "imaging/row_phase_deblur.hpp"
 #include "plot/line_chart.hpp"
 #include "reader/barcode_reader.hpp"
+#include "reader/code_reading.hpp"
+#include "reader/reader_options.hpp"
 #include "sim/colour_scene.hpp"
 #include "sim/forward_model.hpp"
 #include "sim/pixel_integration.hpp"
@@ -97,7 +99,10 @@ Score judge(const Plane& latent, const Plane& truth, const std::string& content)
   s.psnr = imaging::psnr(
       truth, latent,
       imaging::scored_region(truth.width, truth.height, kBlur, imaging::Direction::kPlusX));
-  const auto found = reader::code_texts(reader::read_barcodes(latent));
+  // The session's reader options on the whole frame (docs/benchmarks.md says so).
+  const auto found = reader::code_texts(
+      reader::read_codes(latent, {}, imaging::Direction::kPlusX, reader::whole_frame_options())
+          .readout);
   s.decoded = std::find(found.begin(), found.end(), content) != found.end();
   return s;
 }

@@ -51,11 +51,15 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   options.iterations = 3;  // a fixed, short run: the path, not the convergence
   options.threads = 1;
   const imaging::Image electrons = imaging::dn_to_electrons(dn, m);
-  const auto result =
-      m.bayer_rggb ? imaging::deblur_bayer(electrons.channels[0], m, options,
-                                           (mode & 4) != 0 ? imaging::BayerMode::kDemosaicFirst
-                                                           : imaging::BayerMode::kRawPlanes)
-                   : imaging::deblur(electrons, m, options);
+  using Deblurred = Result<imaging::DeblurResult, std::string>;
+  const Deblurred result = [&] {
+    if (!m.bayer_rggb) return imaging::deblur(electrons, m, options);
+    auto bayer = imaging::deblur_bayer(
+        electrons.channels[0], m, options,
+        (mode & 4) != 0 ? imaging::BayerMode::kDemosaicFirst : imaging::BayerMode::kRawPlanes);
+    if (!bayer.ok()) return Deblurred::failure(bayer.error());
+    return Deblurred::success(std::move(bayer.value()));
+  }();
   if (!result.ok()) {
     fuzz::trace("deblur refused: " + result.error());
     FUZZ_CHECK(!result.error().empty(), "a refused deblur without a message");

@@ -24,10 +24,6 @@ int channel_at(int x, int y) {
   return kColours[static_cast<std::size_t>((y % 2) * 2 + (x % 2))].channel;
 }
 
-bool moves_forward(Direction d) {
-  return d == Direction::kPlusX || d == Direction::kPlusY;
-}
-
 /// A full-resolution PSF delayed by `delay` pixels and summed over pixel pairs:
 /// tap k of the result is the light over delayed full-resolution pixels 2k and 2k+1.
 std::vector<double> pair_summed_psf(const std::vector<double>& full, int delay) {
@@ -90,37 +86,47 @@ Plane upsample_pairs(const Plane& half, int width) {
   return out;
 }
 
-/// `plane` grown to width x height by repeating its last column and row.
-Plane pad_to(const Plane& plane, int width, int height) {
-  if (plane.width == width && plane.height == height) return plane;
-  Plane out(width, height);
-  for (int y = 0; y < height; ++y)
-    for (int x = 0; x < width; ++x)
-      out.at(x, y) = plane.at(std::min(x, plane.width - 1), std::min(y, plane.height - 1));
+/// `motion` (motion-frame samples of the even part along the motion) grown to
+/// the frame's `length` samples along the motion: an odd frame's last camera
+/// column (row) along the motion repeats its neighbour. In the motion frame
+/// that camera pixel is the last sample, or the first when the motion runs
+/// toward smaller camera index.
+Plane pad_along_motion(const Plane& motion, Direction direction, int length) {
+  if (motion.width == length) return motion;
+  const bool extra_first =
+      position_along_motion(direction, length - 1, length - 1, length, length) == 0;
+  const int shift = extra_first ? length - motion.width : 0;
+  Plane out(length, motion.height);
+  for (int y = 0; y < motion.height; ++y)
+    for (int n = 0; n < length; ++n)
+      out.at(n, y) = motion.at(std::clamp(n - shift, 0, motion.width - 1), y);
   return out;
 }
 
-Result<DeblurResult, std::string> deblur_raw_planes(const Plane& mosaic, const CaptureModel& model,
-                                                    const DeblurOptions& options) {
-  using Out = Result<DeblurResult, std::string>;
+Result<BayerDeblurResult, std::string> deblur_raw_planes(const Plane& mosaic,
+                                                         const CaptureModel& model,
+                                                         const DeblurOptions& options) {
+  using Out = Result<BayerDeblurResult, std::string>;
   const bool along_x = moves_along_x(model.direction);
-  const int along = (along_x ? mosaic.width : mosaic.height) & ~1;  // even part along the motion
+  const int length = length_along_motion(model.direction, mosaic.width, mosaic.height);
+  const int along = length & ~1;  // even part along the motion
   if (model.blur_px / 2 >= along / 2.0)
     return Out::failure("the blur (" + std::to_string(model.blur_px) +
                         " px) is not shorter than the image along the motion (" +
                         std::to_string(along) + " px)");
 
-  DeblurResult result;
+  BayerDeblurResult result;
   std::vector<Plane> rows;
   std::vector<ChannelPsf> psfs;
   double white = 0;
   for (const BayerColour& colour : kColours) {
     rows.push_back(
         to_motion_frame(row_aligned_plane(mosaic, colour, along_x, along), model.direction));
-    const int parity = along_x ? colour.x_parity : colour.y_parity;
-    // Motion-frame column of this colour within each pair: parity when moving
-    // forward; reversing the rows (even length) swaps it.
-    const int offset = moves_forward(model.direction) ? parity : 1 - parity;
+    // Motion-frame column of this colour within each pair: where its first site
+    // lands along the motion (of the even part, so reversing swaps the parity).
+    const int offset = static_cast<int>(position_along_motion(model.direction, colour.x_parity,
+                                                              colour.y_parity, along, along)) &
+                       1;
     const double variance = channel_noise_variance(model, noise_level_mean(rows.back()));
     result.noise_variance.push_back(variance);
     psfs.push_back({pair_summed_psf(channel_psf(model, colour.channel), 1 - offset), variance});
@@ -131,8 +137,9 @@ Result<DeblurResult, std::string> deblur_raw_planes(const Plane& mosaic, const C
   // Half as many samples along the motion carry the same edges: twice the gradient variance.
   const Plane latent = deconvolve_motion_rows(psfs, rows, 1.0 / (2.0 * options.gradient_variance),
                                               model.read_noise * model.read_noise, options);
-  const Plane full = from_motion_frame(upsample_pairs(latent, along), model.direction);
-  result.latent = pad_to(full, mosaic.width, mosaic.height);
+  // Padded in the motion frame, turned back once.
+  result.motion_latent = pad_along_motion(upsample_pairs(latent, along), model.direction, length);
+  result.latent = from_motion_frame(result.motion_latent, model.direction);
   return Out::success(std::move(result));
 }
 
@@ -206,10 +213,10 @@ Image demosaic_bilinear(const Plane& mosaic) {
   return out;
 }
 
-Result<DeblurResult, std::string> deblur_bayer(const Plane& mosaic_electrons,
-                                               const CaptureModel& model,
-                                               const DeblurOptions& options, BayerMode mode) {
-  using Out = Result<DeblurResult, std::string>;
+Result<BayerDeblurResult, std::string> deblur_bayer(const Plane& mosaic_electrons,
+                                                    const CaptureModel& model,
+                                                    const DeblurOptions& options, BayerMode mode) {
+  using Out = Result<BayerDeblurResult, std::string>;
   if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
   if (model.channels != 3)
     return Out::failure("a Bayer mosaic needs a 3-channel (RGB) capture model");
@@ -229,8 +236,17 @@ Result<DeblurResult, std::string> deblur_bayer(const Plane& mosaic_electrons,
           "the blur");
       !problem.empty())
     return Out::failure(problem);
-  if (mode == BayerMode::kDemosaicFirst)
-    return deblur(demosaic_bilinear(mosaic_electrons), model, options);
+  if (mode == BayerMode::kDemosaicFirst) {
+    auto frame = MotionFrame::make(demosaic_bilinear(mosaic_electrons), model.direction);
+    if (!frame.ok()) return Out::failure(frame.error());
+    auto r = deblur(frame.value(), model, options);
+    if (!r.ok()) return Out::failure(r.error());
+    BayerDeblurResult result;
+    result.noise_variance = std::move(r.value().noise_variance);
+    result.motion_latent = std::move(r.value().latent);
+    result.latent = frame.value().to_camera(result.motion_latent);
+    return Out::success(std::move(result));
+  }
   if (!(options.gradient_variance > 0) || !std::isfinite(options.gradient_variance))
     return Out::failure("the prior gradient variance must be a finite number > 0");
   if (options.iterations && *options.iterations < 1)

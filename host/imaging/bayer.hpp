@@ -70,13 +70,20 @@ Image split_bayer_planes(const Plane& mosaic);
 /// of that colour in the 3x3 neighbourhood (2 or 4 of them; fewer at the border).
 Image demosaic_bilinear(const Plane& mosaic);
 
+/// \brief deblur_bayer's latent, in the camera's orientation (`latent`, as
+/// deblur() of a camera frame gives it) and in the motion frame
+/// (`motion_latent`, motion_frame.hpp), where the session looks for labels.
+struct BayerDeblurResult : DeblurResult {
+  Plane motion_latent;  ///< `latent` in the motion frame: made there, turned back once
+};
+
 /// \brief Deblurs a raw RGGB mosaic (electrons, black level removed, linear)
 /// into one grey latent of the mosaic's size, registered as deblur()'s.
 /// `model` is the frame's 3-channel RGB model (full-resolution blur). The
 /// result's noise_variance has one entry per plane deblurred: R, G1, G2, B for
 /// kRawPlanes, R, G, B for kDemosaicFirst.
-Result<DeblurResult, std::string> deblur_bayer(const Plane& mosaic_electrons,
-                                               const CaptureModel& model,
-                                               const DeblurOptions& options, BayerMode mode);
+Result<BayerDeblurResult, std::string> deblur_bayer(const Plane& mosaic_electrons,
+                                                    const CaptureModel& model,
+                                                    const DeblurOptions& options, BayerMode mode);
 
 }  // namespace flutterscan::imaging

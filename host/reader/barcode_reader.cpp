@@ -3,6 +3,7 @@
 
 #include "reader/barcode_reader.hpp"
 
+#include "imaging/motion_frame.hpp"
 #include "reader/assertion_guard.hpp"
 
 #include <ZXing/BarcodeFormat.h>
@@ -164,17 +165,18 @@ std::optional<DecodeArea> decode_area_from_name(const std::string& name) {
 std::vector<DecodeWindow> decode_windows(std::span<const LabelRegion> runs, int width, int height,
                                          imaging::Direction direction, int margin) {
   const bool along_x = imaging::moves_along_x(direction);
-  const bool reversed =
-      direction == imaging::Direction::kMinusX || direction == imaging::Direction::kMinusY;
-  const int length = along_x ? width : height;
+  const int length = imaging::length_along_motion(direction, width, height);
+  // The camera coordinate of the boundary before motion-frame sample `n`
+  // (mirrored for -x and -y: the boundary before n is then after its pixel).
+  auto camera_boundary = [&](int n) {
+    return static_cast<int>(std::lround(
+        imaging::position_along_motion(direction, n - 0.5, n - 0.5, width, height) + 0.5));
+  };
   std::vector<DecodeWindow> windows;
   for (const LabelRegion& r : runs) {
-    int begin = std::max(0, r.begin - margin), end = std::min(length, r.end + margin);
-    if (reversed) {
-      const int b = length - end;
-      end = length - begin;
-      begin = b;
-    }
+    const int a = camera_boundary(std::max(0, r.begin - margin));
+    const int b = camera_boundary(std::min(length, r.end + margin));
+    const int begin = std::min(a, b), end = std::max(a, b);
     windows.push_back(along_x ? DecodeWindow{begin, 0, end - begin, height}
                               : DecodeWindow{0, begin, width, end - begin});
   }

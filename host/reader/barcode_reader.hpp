@@ -6,7 +6,9 @@
 // are, and the label regions (bright paper on the darker belt) whether a code
 // was read on them or not: a region without a decode is what becomes a NO-READ.
 // The options: the symbologies (kDefaultSymbologies), try-rotate (on) and the
-// windows to look in (none: the whole image).
+// windows to look in (none: the whole image). Callers read with the bundle of
+// reader_options.hpp through read_codes() (code_reading.hpp), which makes the
+// windows from the label paper when the decode area is "labels".
 
 #include <optional>
 #include <span>

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "capture/frame_pixels.hpp"
@@ -11,14 +13,29 @@
 #include "imaging/deblur.hpp"
 #include "imaging/motion_frame.hpp"
 #include "reader/barcode_reader.hpp"
+#include "reader/code_reading.hpp"
 #include "session/frame_model.hpp"
 #include "session/model_fit.hpp"
 #include "session/session_clock.hpp"
 
 namespace flutterscan::session {
+namespace {
 
-FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
-                           std::atomic<double>& last_blur_px, const imaging::FlatField* flat) {
+// One frame's way through a worker, step by step (docs/session.md, "Workers"):
+//   convert: event -> descriptor -> electrons
+//   deblur:  flat field -> model fit + deblur (latent in the camera's orientation and the motion
+//            frame)
+//   decode:  paper runs -> decode
+//   record:  labels judged -> the frame's log line, descriptor and files
+
+/// Why a step stopped the frame: the log's error and the flag it raises.
+struct StepFailure {
+  std::string error;
+  std::string flag = "error";
+};
+
+/// The frame's identity in its outcome, and the head of its log line.
+FrameOutcome start_outcome(const FrameJob& job) {
   FrameOutcome out;
   out.index = job.index;
   out.sequence = job.frame.sequence;
@@ -26,139 +43,153 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
   out.arrival_ns = job.frame.host_arrival_ns;
   out.truth = job.frame.truth;
   out.truth_in_view = job.frame.truth_in_view;
-  const std::int64_t t0 = now_ns();
-  nlohmann::json flags = nlohmann::json::array();
-  nlohmann::json& log = out.log;
-  log = {{"index", job.index},
-         {"sequence", job.frame.sequence},
-         {"camera_ns", job.frame.timestamp_ns},
-         {"event",
-          {{"counter", job.event.frame_counter},
-           {"start_us", job.event.start_us},
-           {"encoder_delta", job.event.encoder_delta},
-           {"code_id", job.event.code_id},
-           {"slot_time_us", job.event.slot_time_us},
-           {"flags", job.event.flags}}},
-         {"clock_residual_us", std::round(job.residual_us * 10) / 10},
-         {"method", imaging::method_name(config.processing.method)}};
-  if (!job.match_note.empty()) log["match_note"] = job.match_note;
-  // A blur the encoder implies but the frame cannot hold: flagged, counted, the session goes on.
-  if (auto problem = blur_out_of_range(job.event, config.optics, job.frame.format);
-      !problem.empty()) {
-    log["error"] = problem;
-    log["flags"] = nlohmann::json::array({"blur-out-of-range"});
-    return out;
-  }
-  auto model = frame_model(job.event, config.controller.parsed_code, config, job.frame.format);
-  auto converted = model.ok() ? capture::frame_to_electrons(job.frame, model.value())
-                              : Result<capture::ElectronFrame, std::string>::failure(model.error());
-  if (!converted.ok()) {
-    log["error"] = converted.error();
-    flags.push_back("error");
-    log["flags"] = flags;
-    return out;
-  }
-  log["blur_px"] = std::round(model.value().blur_px * 100) / 100;
-  const std::int64_t t1 = now_ns();
-  imaging::DeblurOptions options;
-  options.method = config.processing.method;
-  options.threads = config.processing.threads_per_worker;
-  options.plan_effort = imaging::PlanEffort::kMeasuredIfKnown;  // measured before streaming
-  imaging::Image& electrons = converted.value().electrons;
-  if (flat != nullptr && !model.value().bayer_rggb) {
-    if (auto problem = imaging::apply_flat_field(electrons, *flat); !problem.empty()) {
-      log["error"] = "optics.flat_field: " + problem;
-      flags.push_back("error");
-      log["flags"] = flags;
-      return out;
-    }
-  }
-  // The simplest model that fits the frame, and the guards (model_fit.hpp), on
-  // the frame turned once into the motion frame; raw Bayer frames keep the grey
-  // global model on their raw planes (split in the mosaic's own geometry).
-  const imaging::Direction direction = model.value().direction;
-  imaging::Plane latent;         // the camera's orientation: decoded and kept
-  imaging::Plane motion_latent;  // the motion frame: where labels are looked for
-  std::string deblur_error;
-  if (model.value().bayer_rggb) {
-    auto r = imaging::deblur_bayer(electrons.channels[0], model.value(), options,
-                                   imaging::BayerMode::kRawPlanes);
-    if (r.ok()) {
-      latent = std::move(r.value().latent);
-      motion_latent = imaging::to_motion_frame(latent, direction);
-    } else {
-      deblur_error = r.error();
-    }
-  } else if (auto frame = imaging::MotionFrame::make(std::move(electrons), direction);
-             !frame.ok()) {
-    deblur_error = frame.error();
-  } else {
-    ModelFitConfig fit;
-    fit.encoder = config.optics.encoder;
-    fit.choose_latent = config.processing.choose_model;
-    fit.line_time_us = config.optics.line_time_us;
-    fit.slot_time_us = job.event.slot_time_us;
-    fit.blur_check_every = config.processing.blur_check_every;
-    fit.blur_tolerance = config.processing.blur_tolerance_pct / 100;
-    fit.fallback_blur_px = last_blur_px.load();
-    auto r = deblur_fitting_model(converted.value().saturated_share, frame.value(), model.value(),
-                                  options, fit, job.index);
-    if (r.ok()) {
-      if (r.value().estimated_blur_px > 0) last_blur_px.store(r.value().estimated_blur_px);
-      motion_latent = std::move(r.value().latent);
-      latent = frame.value().to_camera(motion_latent);
-      for (const auto& flag : r.value().flags) flags.push_back(flag);
-      log.update(r.value().log);
-      if (r.value().log.contains("model"))
-        model.value().blur_px = r.value().log["model"]["blur_px"].get<double>();
-    } else {
-      deblur_error = r.error();
-    }
-  }
-  const std::int64_t t2 = now_ns();
-  if (!deblur_error.empty()) {
-    log["error"] = deblur_error;
-    flags.push_back("error");
-    log["flags"] = flags;
-    return out;
-  }
-  // Paper along the motion: where codes are looked for (processing.decode_area) and
-  // the labels judged (read, or NO-READ).
-  const std::vector<reader::LabelRegion> paper = reader::find_paper_runs(motion_latent);
-  const bool labels_only = config.processing.decode_area == reader::DecodeArea::kLabels;
-  const std::vector<reader::DecodeWindow> windows =
-      labels_only ? reader::decode_windows(paper, latent.width, latent.height, direction)
-                  : std::vector<reader::DecodeWindow>{};
-  reader::BarcodeReadout readout;
-  if (!labels_only || !windows.empty())
-    readout = reader::read_barcodes(latent, config.processing.symbologies,
-                                    config.processing.try_rotate, windows);
-  if (labels_only) log["decode_windows"] = windows.size();
-  const std::vector<reader::DecodedCode>& codes = readout.codes;
-  if (!readout.decoder_fault.empty()) {
-    // ZXing failed an internal assertion on this image: nothing read, the session goes on.
-    log["decoder_fault"] = readout.decoder_fault;
-    flags.push_back("decoder-fault");
-  }
-  std::vector<reader::LabelRegion> regions = paper;
-  // A label cut by the frame is not judged; near the upstream edge the deblurred
-  // image has no support: no judging there either.
-  const double upstream = model.value().blur_px + 4;
-  std::erase_if(regions, [&](const reader::LabelRegion& r) { return r.cut || r.begin < upstream; });
-  const std::int64_t t3 = now_ns();
+  return out;
+}
 
+nlohmann::json log_head(const FrameJob& job, const SessionConfig& config) {
+  nlohmann::json log = {{"index", job.index},
+                        {"sequence", job.frame.sequence},
+                        {"camera_ns", job.frame.timestamp_ns},
+                        {"event",
+                         {{"counter", job.event.frame_counter},
+                          {"start_us", job.event.start_us},
+                          {"encoder_delta", job.event.encoder_delta},
+                          {"code_id", job.event.code_id},
+                          {"slot_time_us", job.event.slot_time_us},
+                          {"flags", job.event.flags}}},
+                        {"clock_residual_us", std::round(job.residual_us * 10) / 10},
+                        {"method", imaging::method_name(config.processing.method)}};
+  if (!job.match_note.empty()) log["match_note"] = job.match_note;
+  return log;
+}
+
+/// The frame's model (from its exposure event) and its samples in electrons.
+struct Converted {
+  imaging::CaptureModel model;
+  capture::ElectronFrame frame;
+};
+
+/// Step "convert": the descriptor from the event, the frame in electrons (one pass).
+/// A blur the encoder implies but the frame cannot hold is flagged, not an error.
+Result<Converted, StepFailure> convert(const FrameJob& job, const SessionConfig& config) {
+  using Out = Result<Converted, StepFailure>;
+  if (auto problem = blur_out_of_range(job.event, config.optics, job.frame.format);
+      !problem.empty())
+    return Out::failure({problem, "blur-out-of-range"});
+  auto model = frame_model(job.event, config.controller.parsed_code, config, job.frame.format);
+  if (!model.ok()) return Out::failure({model.error()});
+  auto electrons = capture::frame_to_electrons(job.frame, model.value());
+  if (!electrons.ok()) return Out::failure({electrons.error()});
+  return Out::success(Converted{std::move(model.value()), std::move(electrons.value())});
+}
+
+/// The fused latent, in the camera's orientation (decoded and kept) and in the
+/// motion frame (where labels are looked for), with what the model fit said.
+struct Deblurred {
+  imaging::Plane latent;
+  imaging::Plane motion_latent;
+  std::vector<std::string> flags;                 ///< guards that fired
+  nlohmann::json log = nlohmann::json::object();  ///< model fit: {"model": ..., "guards": ...}
+};
+
+imaging::DeblurOptions deblur_options(const ProcessingConfig& processing) {
+  imaging::DeblurOptions options;
+  options.method = processing.method;
+  options.threads = processing.threads_per_worker;
+  options.plan_effort = imaging::PlanEffort::kMeasuredIfKnown;  // measured before streaming
+  return options;
+}
+
+/// Raw Bayer frames: the grey global model on their raw planes (split in the
+/// mosaic's own geometry), no flat field.
+Result<Deblurred, StepFailure> deblur_bayer_frame(const Converted& in,
+                                                  const imaging::DeblurOptions& options) {
+  using Out = Result<Deblurred, StepFailure>;
+  auto r = imaging::deblur_bayer(in.frame.electrons.channels[0], in.model, options,
+                                 imaging::BayerMode::kRawPlanes);
+  if (!r.ok()) return Out::failure({r.error()});
+  Deblurred out;
+  out.latent = std::move(r.value().latent);
+  out.motion_latent = std::move(r.value().motion_latent);
+  return Out::success(std::move(out));
+}
+
+/// Step "deblur": the flat field (if any), then the simplest model that fits
+/// and the guards (model_fit.hpp) on the frame turned once into the motion
+/// frame. The blur the model used replaces the encoder's in `in.model`.
+Result<Deblurred, StepFailure> deblur(Converted& in, const FrameJob& job,
+                                      const SessionConfig& config,
+                                      std::atomic<double>& last_blur_px,
+                                      const imaging::FlatField* flat) {
+  using Out = Result<Deblurred, StepFailure>;
+  const imaging::DeblurOptions options = deblur_options(config.processing);
+  if (in.model.bayer_rggb) return deblur_bayer_frame(in, options);
+  if (flat != nullptr)
+    if (auto problem = imaging::apply_flat_field(in.frame.electrons, *flat); !problem.empty())
+      return Out::failure({"optics.flat_field: " + problem});
+  auto frame = imaging::MotionFrame::make(std::move(in.frame.electrons), in.model.direction);
+  if (!frame.ok()) return Out::failure({frame.error()});
+  ModelFitConfig fit;
+  fit.encoder = config.optics.encoder;
+  fit.choose_latent = config.processing.choose_model;
+  fit.line_time_us = config.optics.line_time_us;
+  fit.slot_time_us = job.event.slot_time_us;
+  fit.blur_check_every = config.processing.blur_check_every;
+  fit.blur_tolerance = config.processing.blur_tolerance_pct / 100;
+  fit.fallback_blur_px = last_blur_px.load();
+  auto r = deblur_fitting_model(in.frame.saturated_share, frame.value(), in.model, options, fit,
+                                job.index);
+  if (!r.ok()) return Out::failure({r.error()});
+  if (r.value().estimated_blur_px > 0) last_blur_px.store(r.value().estimated_blur_px);
+  Deblurred out;
+  out.motion_latent = std::move(r.value().latent);
+  out.latent = frame.value().to_camera(out.motion_latent);
+  out.flags = std::move(r.value().flags);
+  out.log = std::move(r.value().log);
+  if (out.log.contains("model")) in.model.blur_px = out.log["model"]["blur_px"].get<double>();
+  return Out::success(std::move(out));
+}
+
+/// What the decode found on one frame.
+struct Decoded {
+  std::vector<reader::LabelRegion> paper;  ///< paper runs along the motion (motion frame)
+  reader::BarcodeReadout readout;
+  std::optional<std::size_t> windows;  ///< decode_area "labels": the windows read
+};
+
+/// Step "decode": the paper along the motion, then the codes in
+/// processing.decode_area (the paper runs widened, or the whole frame) with
+/// the session's reader options.
+Decoded decode(const Deblurred& image, imaging::Direction direction,
+               const ProcessingConfig& processing) {
+  Decoded out;
+  out.paper = reader::find_paper_runs(image.motion_latent);
+  reader::CodeReading reading =
+      reader::read_codes(image.latent, out.paper, direction, reader_options(processing));
+  out.readout = std::move(reading.readout);
+  out.windows = reading.windows;
+  return out;
+}
+
+/// Labels judged: each whole label region in view (not cut by the frame, not
+/// within the blur plus 4 px of the upstream edge, where the deblurred image
+/// has no support) is a sighting, read when a code lies on it (8 px slack),
+/// else NO-READ; codes off the judged regions are sightings of their own.
+void judge_labels(const Decoded& decoded, const imaging::Plane& latent,
+                  imaging::Direction direction, double blur_px, FrameOutcome& out) {
+  std::vector<reader::LabelRegion> regions = decoded.paper;
+  const double upstream = blur_px + 4;
+  std::erase_if(regions, [&](const reader::LabelRegion& r) { return r.cut || r.begin < upstream; });
+  const std::vector<reader::DecodedCode>& codes = decoded.readout.codes;
+  auto position = [&](const reader::DecodedCode& code) {
+    return imaging::position_along_motion(direction, code.centre_x, code.centre_y, latent.width,
+                                          latent.height);
+  };
   std::vector<bool> used(codes.size(), false);
-  nlohmann::json decoded = nlohmann::json::array();
-  for (std::size_t i = 0; i < codes.size(); ++i)
-    decoded.push_back({{"text", codes[i].text},
-                       {"format", codes[i].format},
-                       {"x", std::lround(codes[i].centre_x)},
-                       {"y", std::lround(codes[i].centre_y)}});
   for (const reader::LabelRegion& r : regions) {
     bool any = false;
     for (std::size_t i = 0; i < codes.size(); ++i) {
-      const double p = imaging::position_along_motion(
-          direction, codes[i].centre_x, codes[i].centre_y, latent.width, latent.height);
+      const double p = position(codes[i]);
       if (p >= r.begin - 8 && p <= r.end + 8 && !used[i]) {
         used[i] = true;
         any = true;
@@ -172,21 +203,30 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
   }
   for (std::size_t i = 0; i < codes.size(); ++i)
     if (!used[i])
-      out.sightings.push_back(
-          {imaging::position_along_motion(direction, codes[i].centre_x, codes[i].centre_y,
-                                          latent.width, latent.height),
-           true, codes[i].text, codes[i].format});
-  if (out.decode_failed) flags.push_back("no-read");
-  log["decoded"] = decoded;
-  log["labels_in_view"] = out.sightings.size();
-  log["times_ms"] = {{"convert", std::round(ms_between(t0, t1) * 100) / 100},
-                     {"deblur", std::round(ms_between(t1, t2) * 100) / 100},
-                     {"decode", std::round(ms_between(t2, t3) * 100) / 100}};
-  if (!job.frame.truth.empty()) log["truth"] = job.frame.truth;
-  log["flags"] = flags;
+      out.sightings.push_back({position(codes[i]), true, codes[i].text, codes[i].format});
+}
+
+nlohmann::json decoded_json(const std::vector<reader::DecodedCode>& codes) {
+  nlohmann::json decoded = nlohmann::json::array();
+  for (const reader::DecodedCode& code : codes)
+    decoded.push_back({{"text", code.text},
+                       {"format", code.format},
+                       {"x", std::lround(code.centre_x)},
+                       {"y", std::lround(code.centre_y)}});
+  return decoded;
+}
+
+double rounded_ms(std::int64_t from_ns, std::int64_t to_ns) {
+  return std::round(ms_between(from_ns, to_ns) * 100) / 100;
+}
+
+/// Step "record": the frame's log line, its descriptor, and the frame and its
+/// latent moved into the outcome (kept for its files and previews).
+void record(FrameJob& job, const imaging::CaptureModel& model, imaging::Plane latent,
+            FrameOutcome& out) {
   out.processed = true;
   out.latent = std::move(latent);
-  out.descriptor = imaging::to_descriptor(model.value());
+  out.descriptor = imaging::to_descriptor(model);
   out.descriptor["capture"] = {{"sequence", job.frame.sequence},
                                {"timestamp_ns", job.frame.timestamp_ns},
                                {"exposure_counter", job.event.frame_counter}};
@@ -194,6 +234,56 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
   if (!job.frame.truth_in_view.empty())
     out.descriptor["capture"]["truth_in_view"] = job.frame.truth_in_view;
   out.frame = std::move(job.frame);  // last: the lines above read it
+}
+
+/// `out` for a frame a step stopped: the error and its flag after `flags`.
+FrameOutcome stopped(FrameOutcome out, const StepFailure& failure, nlohmann::json flags) {
+  out.log["error"] = failure.error;
+  flags.push_back(failure.flag);
+  out.log["flags"] = flags;
+  return out;
+}
+
+}  // namespace
+
+FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
+                           std::atomic<double>& last_blur_px, const imaging::FlatField* flat) {
+  FrameOutcome out = start_outcome(job);
+  const std::int64_t t0 = now_ns();
+  out.log = log_head(job, config);
+  nlohmann::json flags = nlohmann::json::array();
+
+  auto converted = convert(job, config);
+  if (!converted.ok()) return stopped(std::move(out), converted.error(), flags);
+  out.log["blur_px"] = std::round(converted.value().model.blur_px * 100) / 100;
+  const std::int64_t t1 = now_ns();
+
+  auto deblurred = deblur(converted.value(), job, config, last_blur_px, flat);
+  const std::int64_t t2 = now_ns();
+  if (!deblurred.ok()) return stopped(std::move(out), deblurred.error(), flags);
+  for (const auto& flag : deblurred.value().flags) flags.push_back(flag);
+  out.log.update(deblurred.value().log);
+
+  const imaging::CaptureModel& model = converted.value().model;
+  const Decoded decoded = decode(deblurred.value(), model.direction, config.processing);
+  if (decoded.windows) out.log["decode_windows"] = *decoded.windows;
+  if (!decoded.readout.decoder_fault.empty()) {
+    // ZXing failed an internal assertion on this image: nothing read, the session goes on.
+    out.log["decoder_fault"] = decoded.readout.decoder_fault;
+    flags.push_back("decoder-fault");
+  }
+  const std::int64_t t3 = now_ns();
+
+  judge_labels(decoded, deblurred.value().latent, model.direction, model.blur_px, out);
+  if (out.decode_failed) flags.push_back("no-read");
+  out.log["decoded"] = decoded_json(decoded.readout.codes);
+  out.log["labels_in_view"] = out.sightings.size();
+  out.log["times_ms"] = {{"convert", rounded_ms(t0, t1)},
+                         {"deblur", rounded_ms(t1, t2)},
+                         {"decode", rounded_ms(t2, t3)}};
+  if (!job.frame.truth.empty()) out.log["truth"] = job.frame.truth;
+  out.log["flags"] = flags;
+  record(job, model, std::move(deblurred.value().latent), out);
   return out;
 }
 

@@ -125,29 +125,13 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   server.close();
 
   // The summary: summary.json, report.html.
-  SessionCounts counts;
+  SessionCounts counts =
+      count_session(pipeline, matching, inbox, camera_counters, capture_end, folder, server);
   counts.camera = camera->name();
   counts.controller = link.description;
   counts.scheme_light = scheme_light;
   counts.format = format;
-  counts.frames_captured = pipeline.frames_captured;
-  counts.frames_processed = pipeline.frames_processed;
-  counts.frames_dropped = pipeline.frames_dropped;
-  counts.frames_failed = pipeline.processing_errors;
-  counts.frames_without_event = matching.frames_without_event();
-  counts.events_without_frame = matching.events_without_frame();
-  counts.events_received = inbox.received();
-  counts.events_missing_by_counter = inbox.missing();
-  counts.camera_frames_lost = camera_counters.frames_dropped;
-  counts.clocks = matching.clocks();
-  counts.stopped_by = capture_end.stopped_by;
-  counts.capture_error = capture_end.error;
   counts.duration_s = duration_s;
-  counts.rotation = folder.rotation();
-  counts.lines_sent = server.lines_sent();
-  counts.tcp_port = server.port();
-  counts.clients_dropped = server.clients_dropped();
-  counts.serial_lines_lost = server.serial_lines_lost();
   outcome.summary = session_summary(config, counts, results.results());
   folder.close();
   if (auto p = folder.write_file("summary.json", outcome.summary.dump(2) + "\n"); !p.empty())

@@ -15,6 +15,7 @@
 #include "flutterscan/common/result.hpp"
 #include "imaging/deblur.hpp"
 #include "reader/barcode_reader.hpp"
+#include "reader/reader_options.hpp"
 
 namespace flutterscan::session {
 
@@ -85,16 +86,22 @@ struct ProcessingConfig {
   /// With an encoder: refine each frame's blur within +-this percentage of the
   /// encoder's (imaging/motion_refinement.hpp); 0 = use the encoder's blur exactly.
   double blur_tolerance_pct = 10;
+  // The reader's options (reader_options(): reader/reader_options.hpp, whose defaults these are).
   /// ZXing format names read on each fused frame, comma-separated (fewer is faster).
-  std::string symbologies = reader::kDefaultSymbologies;
+  std::string symbologies = reader::ReaderOptions{}.symbologies;
   /// Also look for 1-D codes turned by 90 degrees; a line whose labels always
   /// pass the same way up can turn it off and decode in about half the time.
-  bool try_rotate = true;
+  bool try_rotate = reader::ReaderOptions{}.try_rotate;
   /// Look for codes on the label paper only (bright runs along the motion, the
   /// frame's edges included) or on the whole frame; "frame" for codes printed
   /// straight on a substrate no brighter than the belt.
-  reader::DecodeArea decode_area = reader::DecodeArea::kLabels;
+  reader::DecodeArea decode_area = reader::ReaderOptions{}.area;
 };
+
+/// \brief The reader's options of `processing`: symbologies, try_rotate and decode_area.
+inline reader::ReaderOptions reader_options(const ProcessingConfig& processing) {
+  return {processing.symbologies, processing.try_rotate, processing.decode_area};
+}
 
 struct OutputConfig {
   std::string dir = "sessions";

@@ -9,6 +9,31 @@
 
 namespace flutterscan::session {
 
+SessionCounts count_session(const Pipeline& pipeline, const MatchingStage& matching,
+                            const EventInbox& inbox, const capture::CameraCounters& camera,
+                            const CaptureEnd& capture_end, const SessionFolder& folder,
+                            const ResultsServer& server) {
+  SessionCounts counts;
+  counts.frames_captured = pipeline.frames_captured;
+  counts.frames_processed = pipeline.frames_processed;
+  counts.frames_dropped = pipeline.frames_dropped;
+  counts.frames_failed = pipeline.processing_errors;
+  counts.frames_without_event = matching.frames_without_event();
+  counts.events_without_frame = matching.events_without_frame();
+  counts.events_received = inbox.received();
+  counts.events_missing_by_counter = inbox.missing();
+  counts.camera_frames_lost = camera.frames_dropped;
+  counts.clocks = matching.clocks();
+  counts.stopped_by = capture_end.stopped_by;
+  counts.capture_error = capture_end.error;
+  counts.rotation = folder.rotation();
+  counts.lines_sent = server.lines_sent();
+  counts.tcp_port = server.port();
+  counts.clients_dropped = server.clients_dropped();
+  counts.serial_lines_lost = server.serial_lines_lost();
+  return counts;
+}
+
 double percentile(std::vector<double> values, double p) {
   if (values.empty()) return 0;
   std::sort(values.begin(), values.end());

@@ -10,8 +10,12 @@
 #include <vector>
 
 #include "capture/camera_source.hpp"
+#include "session/capture_stage.hpp"
 #include "session/frame_matcher.hpp"
 #include "session/light_probe.hpp"
+#include "session/matching_stage.hpp"
+#include "session/pipeline.hpp"
+#include "session/results_server.hpp"
 #include "session/results_stage.hpp"
 #include "session/session_config.hpp"
 #include "session/session_folder.hpp"
@@ -46,6 +50,16 @@ struct SessionCounts {
   std::uint64_t clients_dropped = 0;
   std::uint64_t serial_lines_lost = 0;
 };
+
+/// \brief What the stages counted once the session has ended: the frames of
+/// `pipeline`, the matches and clocks of `matching`, the events of `inbox`,
+/// the frames the camera lost (`camera`), why capture ended, the folder's
+/// rotation and the lines of the result outputs (`server`). The line's names,
+/// the scheme's light, the format and the duration are the caller's to fill in.
+SessionCounts count_session(const Pipeline& pipeline, const MatchingStage& matching,
+                            const EventInbox& inbox, const capture::CameraCounters& camera,
+                            const CaptureEnd& capture_end, const SessionFolder& folder,
+                            const ResultsServer& server);
 
 /// \brief The `p`th percentile (0-100) of `values`, linear between ranks; 0 when empty.
 double percentile(std::vector<double> values, double p);

@@ -30,6 +30,8 @@
 #include "imaging/motion_frame.hpp"
 #include "imaging/motion_refinement.hpp"
 #include "reader/barcode_reader.hpp"
+#include "reader/code_reading.hpp"
+#include "reader/reader_options.hpp"
 #include "session/session.hpp"
 
 namespace {
@@ -184,9 +186,10 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
     const imaging::Plane& latent = deblurred.value().latent;
     const double ratio = imaging::residual_ratio(electrons, latent, model.value(), height / 32);
     lap("guards");
-    const auto windows = reader::decode_windows(reader::find_paper_runs(latent), latent.width,
-                                                latent.height, imaging::Direction::kPlusX);
-    const auto readout = reader::read_barcodes(latent, reader::kDefaultSymbologies, true, windows);
+    // The session's reader options (label paper only); the frame moves along +x.
+    const auto readout = reader::read_codes(latent, reader::find_paper_runs(latent),
+                                            imaging::Direction::kPlusX, reader::ReaderOptions{})
+                             .readout;
     lap("decode");
     if (r == 0)
       std::cout << "stage frame: blur " << model.value().blur_px << " px refined to "

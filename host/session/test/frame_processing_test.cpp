@@ -100,5 +100,47 @@ TEST(FrameProcessing, AnEventThatDoesNotFitTheCodeIsLoggedNotProcessed) {
   EXPECT_TRUE(out.sightings.empty());
 }
 
+/// `frame` (RGB16) as the raw RGGB mosaic (16-bit) a Bayer camera would give,
+/// mirrored along x first when `mirror` is set.
+void to_bayer_mosaic(capture::Frame& frame, bool mirror) {
+  const int w = frame.format.width, h = frame.format.height;
+  const std::size_t stride = frame.format.row_bytes != 0 ? frame.format.row_bytes : w * 6u;
+  std::vector<std::uint8_t> mosaic(static_cast<std::size_t>(w) * h * 2);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const int channel = (y % 2) + (x % 2);  // R at (even, even), G, G, B at (odd, odd)
+      const int from = mirror ? w - 1 - x : x;
+      const std::size_t in = y * stride + static_cast<std::size_t>(from) * 6 + channel * 2;
+      const std::size_t out = (static_cast<std::size_t>(y) * w + x) * 2;
+      mosaic[out] = frame.data[in];
+      mosaic[out + 1] = frame.data[in + 1];
+    }
+  frame.data = std::move(mosaic);
+  frame.format.pixel_format = capture::PixelFormat::kBayerRggb16;
+  frame.format.row_bytes = static_cast<std::size_t>(w) * 2;
+}
+
+TEST(FrameProcessing, ARawBayerFrameIsDeblurredOnItsPlanesAndReadInEitherDirection) {
+  for (const bool mirror : {false, true}) {
+    SessionConfig config = small_config();
+    config.optics.direction = mirror ? "-x" : "+x";
+    ASSERT_EQ(check_config(config), "");
+    FrameJob job = job_with_a_label(config);
+    ASSERT_FALSE(job.frame.truth.empty());
+    const std::vector<std::string> truth = job.frame.truth;
+    to_bayer_mosaic(job.frame, mirror);
+    std::atomic<double> last_blur_px{config.optics.nominal_blur_px};
+    const FrameOutcome out = process_frame(job, config, last_blur_px, nullptr);
+    ASSERT_TRUE(out.processed) << out.log.dump();
+    EXPECT_EQ(out.latent.width, 640);
+    EXPECT_EQ(out.latent.height, 240);
+    for (const auto& value : truth)
+      EXPECT_TRUE(std::any_of(out.sightings.begin(), out.sightings.end(),
+                              [&](const Sighting& s) { return s.decoded && s.value == value; }))
+          << value << (mirror ? " (-x)" : " (+x)") << " not read: " << out.log.dump();
+    EXPECT_GT(out.log["decode_windows"].get<int>(), 0) << out.log.dump();
+  }
+}
+
 }  // namespace
 }  // namespace flutterscan::session

@@ -23,6 +23,36 @@ TEST(SessionSummary, PercentilesInterpolateBetweenRanks) {
   EXPECT_DOUBLE_EQ(percentile({10, 20}, 99), 19.9);
 }
 
+TEST(SessionSummary, CountsWhatEachStageCounted) {
+  Pipeline pipeline(4);
+  pipeline.frames_captured = 10;
+  pipeline.frames_processed = 7;
+  pipeline.frames_dropped = 2;
+  pipeline.processing_errors = 1;
+  const MatchingStage matching(500, OpticsConfig{});
+  const EventInbox inbox;
+  capture::CameraCounters camera;
+  camera.frames_dropped = 3;
+  CaptureEnd end;
+  end.stopped_by = "signal";
+  end.error = "camera went away";
+  const SessionFolder folder;
+  const ResultsServer server;
+  const SessionCounts counts =
+      count_session(pipeline, matching, inbox, camera, end, folder, server);
+  EXPECT_EQ(counts.frames_captured, 10u);
+  EXPECT_EQ(counts.frames_processed, 7u);
+  EXPECT_EQ(counts.frames_dropped, 2u);
+  EXPECT_EQ(counts.frames_failed, 1u);
+  EXPECT_EQ(counts.frames_without_event, 0u);
+  EXPECT_EQ(counts.events_received, 0u);
+  EXPECT_EQ(counts.camera_frames_lost, 3u);
+  EXPECT_EQ(counts.stopped_by, "signal");
+  EXPECT_EQ(counts.capture_error, "camera went away");
+  EXPECT_EQ(counts.lines_sent, 0u);
+  EXPECT_EQ(counts.tcp_port, server.port());
+}
+
 TEST(SessionSummary, ReportsTheStagesCountsAndJudgesTheGroundTruth) {
   SessionConfig config;
   ASSERT_EQ(check_config(config), "");

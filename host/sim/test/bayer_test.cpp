@@ -259,5 +259,26 @@ TEST(Bayer, OddSizedMosaicKeepsItsSize) {
   EXPECT_EQ(raw.value().latent.height, scene.height);
 }
 
+TEST(Bayer, TheLatentComesInTheMotionFrameToo) {
+  // Odd and even sizes in every direction, both modes: motion_latent is the
+  // camera-oriented latent in the motion frame, sample for sample.
+  for (Direction d : {Direction::kPlusX, Direction::kMinusX, Direction::kPlusY, Direction::kMinusY})
+    for (const int odd : {0, 1}) {
+      const CaptureModel m = bench_like_capture(d);
+      const Plane scene = imaging::from_motion_frame(bars(256 + odd, 32 + odd, 9), d);
+      const Plane mosaic = record_both(scene, m, 4).mosaic;
+      for (BayerMode mode : {BayerMode::kRawPlanes, BayerMode::kDemosaicFirst}) {
+        const auto r = imaging::deblur_bayer(mosaic, m, {}, mode);
+        ASSERT_TRUE(r.ok()) << imaging::direction_name(d);
+        const Plane& motion = r.value().motion_latent;
+        EXPECT_EQ(motion.width, 256 + odd) << imaging::direction_name(d);
+        EXPECT_EQ(motion.height, 32 + odd) << imaging::direction_name(d);
+        EXPECT_EQ(motion.pixels, imaging::to_motion_frame(r.value().latent, d).pixels)
+            << imaging::direction_name(d) << " " << imaging::bayer_mode_name(mode) << " odd "
+            << odd;
+      }
+    }
+}
+
 }  // namespace
 }  // namespace flutterscan::sim

@@ -195,6 +195,21 @@ enum class SyncMode : std::uint8_t {
   kFreeRun = 2,  ///< sequences every frame period, no camera signal
 };
 
+/// \brief The sync mode as people read it (GetStatus's `sync_mode` byte, the
+/// words of docs/protocol.md): "slave", "master", "free-run", or "unknown" for
+/// a number the protocol does not define.
+constexpr const char* sync_mode_name(std::uint8_t mode) {
+  switch (static_cast<SyncMode>(mode)) {
+    case SyncMode::kSlave:
+      return "slave";
+    case SyncMode::kMaster:
+      return "master";
+    case SyncMode::kFreeRun:
+      return "free-run";
+  }
+  return "unknown";
+}
+
 /// \brief Where the slot time comes from.
 enum class SlotTimeSource : std::uint8_t {
   kFixed = 0,           ///< the slot time set by SetTiming

@@ -97,18 +97,6 @@ bool parse_i32(std::string_view text, std::int32_t& out) {
   return true;
 }
 
-std::string_view mode_name(std::uint8_t mode) {
-  switch (static_cast<protocol::SyncMode>(mode)) {
-    case protocol::SyncMode::kSlave:
-      return "slave";
-    case protocol::SyncMode::kMaster:
-      return "master";
-    case protocol::SyncMode::kFreeRun:
-      return "free-run";
-  }
-  return "unknown";
-}
-
 /// The payload of a reply as a T (zeroed if it is not one).
 template <protocol::WireStruct T>
 T reply_payload(std::span<const std::uint8_t> report) {
@@ -230,7 +218,7 @@ void Console::cmd_status() {
   const auto s = reply_payload<protocol::StatusReply>(reply);
   Line out;
   out << "status state " << protocol::controller_state_name(s.state) << " mode "
-      << mode_name(s.sync_mode) << " code ";
+      << protocol::sync_mode_name(s.sync_mode) << " code ";
   if (s.active_code_id == protocol::kNoCode)
     out << "none";
   else

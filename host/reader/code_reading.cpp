@@ -1,0 +1,22 @@
+#include "reader/code_reading.hpp"
+
+#include <vector>
+
+namespace flutterscan::reader {
+
+CodeReading read_codes(const imaging::Plane& latent, std::span<const LabelRegion> paper,
+                       imaging::Direction direction, const ReaderOptions& options) {
+  CodeReading out;
+  if (options.area == DecodeArea::kFrame) {
+    out.readout = read_barcodes(latent, options.symbologies, options.try_rotate);
+    return out;
+  }
+  const std::vector<DecodeWindow> windows =
+      decode_windows(paper, latent.width, latent.height, direction);
+  out.windows = windows.size();
+  if (!windows.empty())
+    out.readout = read_barcodes(latent, options.symbologies, options.try_rotate, windows);
+  return out;
+}
+
+}  // namespace flutterscan::reader

@@ -1,0 +1,33 @@
+#pragma once
+// The reader's options as one bundle: what every caller reads codes with (the
+// session's workers, `flutterscan deblur --decode`, the accuracy sweep, the
+// stability study and the session bench). The defaults are the session's
+// (processing.symbologies, try_rotate, decode_area); a caller that wants
+// otherwise says so, as the benches and `deblur --decode` do by reading the
+// whole frame (whole_frame_options()).
+
+#include <string>
+
+#include "reader/barcode_reader.hpp"
+
+namespace flutterscan::reader {
+
+/// \brief How codes are read on a fused latent.
+struct ReaderOptions {
+  /// ZXing format names, comma-separated (check_symbologies()); fewer is faster.
+  std::string symbologies = kDefaultSymbologies;
+  /// Also look for 1-D codes turned by 90 degrees (about twice the decode time).
+  bool try_rotate = true;
+  /// The label paper only (windows around the paper runs) or the whole frame.
+  DecodeArea area = DecodeArea::kLabels;
+};
+
+/// \brief The default options, reading the whole frame: what the benches and
+/// `deblur --decode` (unless `--decode-area labels`) read with.
+inline ReaderOptions whole_frame_options() {
+  ReaderOptions options;
+  options.area = DecodeArea::kFrame;
+  return options;
+}
+
+}  // namespace flutterscan::reader

@@ -1,0 +1,78 @@
+// Reading with the options bundle: the session's defaults (label paper only),
+// the whole frame when a caller says so, and the windows found along the
+// motion whatever its direction.
+#include "reader/code_reading.hpp"
+
+#include <ZXing/BitMatrix.h>
+#include <ZXing/MultiFormatWriter.h>
+#include <gtest/gtest.h>
+
+#include <string>
+#include <vector>
+
+#include "imaging/motion_frame.hpp"
+
+namespace flutterscan::reader {
+namespace {
+
+/// A 900 x 200 belt (0.35) with one Code 128 "FS-READ" at column `start`: on
+/// white label paper (0.9), or printed straight on the belt when `on_paper` is false.
+imaging::Plane belt_with_code(int start, bool on_paper) {
+  imaging::Plane belt(900, 200, 0.35f);
+  const ZXing::BitMatrix bars = ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code128)
+                                    .setMargin(10)
+                                    .encode(L"FS-READ", 300, 120);
+  const float ground = on_paper ? 0.9f : 0.35f;
+  for (int y = 0; y < 160; ++y)
+    for (int x = 0; x < 320; ++x) {
+      const int bx = x - 10, by = y - 20;
+      const bool bar =
+          bx >= 0 && by >= 0 && bx < bars.width() && by < bars.height() && bars.get(bx, by);
+      belt.at(start + x, 20 + y) = bar ? 0.02f : ground;
+    }
+  return belt;
+}
+
+TEST(CodeReading, TheDefaultsAreTheSessionsAndTheWholeFrameDiffersOnlyInArea) {
+  const ReaderOptions session;
+  EXPECT_EQ(session.symbologies, kDefaultSymbologies);
+  EXPECT_TRUE(session.try_rotate);
+  EXPECT_EQ(session.area, DecodeArea::kLabels);
+  const ReaderOptions whole = whole_frame_options();
+  EXPECT_EQ(whole.symbologies, session.symbologies);
+  EXPECT_EQ(whole.try_rotate, session.try_rotate);
+  EXPECT_EQ(whole.area, DecodeArea::kFrame);
+}
+
+TEST(CodeReading, OnlyTheWholeFrameReadsACodeWithoutPaper) {
+  const imaging::Plane belt = belt_with_code(300, false);
+  const auto paper = find_paper_runs(belt);
+  EXPECT_TRUE(paper.empty());
+  const CodeReading labels = read_codes(belt, paper, imaging::Direction::kPlusX, ReaderOptions{});
+  ASSERT_TRUE(labels.windows);
+  EXPECT_EQ(*labels.windows, 0u);
+  EXPECT_TRUE(labels.readout.codes.empty());
+  const CodeReading frame =
+      read_codes(belt, paper, imaging::Direction::kPlusX, whole_frame_options());
+  EXPECT_FALSE(frame.windows);
+  EXPECT_EQ(code_texts(frame.readout), std::vector<std::string>{"FS-READ"});
+}
+
+TEST(CodeReading, LabelWindowsFollowTheMotionAndKeepTheFramesPositions) {
+  // The label at column 100 of a -x frame: 100 + 320 .. from the right in the motion frame.
+  const imaging::Plane camera = belt_with_code(100, true);
+  const imaging::Direction d = imaging::Direction::kMinusX;
+  const auto paper = find_paper_runs(imaging::to_motion_frame(camera, d));
+  ASSERT_EQ(paper.size(), 1u);
+  const CodeReading labels = read_codes(camera, paper, d, ReaderOptions{});
+  ASSERT_TRUE(labels.windows);
+  EXPECT_EQ(*labels.windows, 1u);
+  ASSERT_EQ(code_texts(labels.readout), std::vector<std::string>{"FS-READ"});
+  const CodeReading frame = read_codes(camera, paper, d, whole_frame_options());
+  ASSERT_EQ(frame.readout.codes.size(), 1u);
+  EXPECT_NEAR(labels.readout.codes[0].centre_x, frame.readout.codes[0].centre_x, 1.0);
+  EXPECT_LT(labels.readout.codes[0].centre_x, 450);  // the camera's column, not the motion frame's
+}
+
+}  // namespace
+}  // namespace flutterscan::reader
