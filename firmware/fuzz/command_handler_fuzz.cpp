@@ -450,6 +450,9 @@ class Harness {
         dfu_download(in);
         check_dfu();
         break;
+      case Op::kEp0Packets:
+        ep0_packets(in);
+        break;
       case Op::kCount:
         break;
     }
@@ -479,6 +482,74 @@ class Harness {
     FUZZ_CHECK(usb.ep0_protocol_errors() == errors_before);
     FUZZ_CHECK(r.data.size() <= packet.length);
     if (!packet.is_in()) FUZZ_CHECK(r.data.empty());
+  }
+
+  /// Where the packet-level transfer of one device stands, as the host saw it.
+  struct Ep0Transfer {
+    bool in = false;           ///< the last SETUP's direction
+    std::uint16_t length = 0;  ///< its wLength
+    std::size_t in_bytes = 0;  ///< IN data received since it
+    bool in_ended = false;     ///< a short (or zero-length) IN packet ended the data stage
+  };
+
+  /// Endpoint-0 transactions one at a time on the application or the DFU device.
+  void ep0_packets(Reader& in) {
+    const bool to_dfu = (in.u8() & 1) != 0;
+    fw::sim::SimUsbController& usb = to_dfu ? dfu().usb : *usb_;
+    Ep0Transfer& t = to_dfu ? dfu_ep0_ : app_ep0_;
+    const int count = 1 + in.u8() % 24;
+    for (int i = 0; i < count && !in.empty(); ++i) {
+      switch (in.u8() % 3) {
+        case 0: {
+          std::array<std::uint8_t, 8> setup{};
+          const auto bytes = in.take(8);
+          std::copy(bytes.begin(), bytes.end(), setup.begin());
+          const auto packet = fw::usb::SetupPacket::parse(setup);
+          t = Ep0Transfer{packet.is_in(), packet.length, 0, false};
+          usb.setup_packet(setup);
+          if (g_trace)
+            std::fprintf(stderr, "%s SETUP packet %02x %02x %04x %04x %04x -> stage %d\n",
+                         to_dfu ? "dfu" : "app", packet.request_type, packet.request, packet.value,
+                         packet.index, packet.length, static_cast<int>(usb.ep0_stage()));
+          break;
+        }
+        case 1: {
+          const std::size_t length = in.u8() % (fw::usb::kEp0MaxPacket + 1);
+          const auto bytes = in.take(length);
+          const fw::sim::Ep0Handshake h = usb.ep0_out_packet(bytes);
+          if (g_trace)
+            std::fprintf(stderr, "%s OUT packet %zu bytes -> %d\n", to_dfu ? "dfu" : "app",
+                         bytes.size(), static_cast<int>(h));
+          break;
+        }
+        default: {
+          const fw::sim::Ep0InPacket p = usb.ep0_in_packet();
+          if (g_trace)
+            std::fprintf(stderr, "%s IN packet -> %d, %zu bytes\n", to_dfu ? "dfu" : "app",
+                         static_cast<int>(p.handshake), p.data.size());
+          FUZZ_CHECK(p.data.size() <= fw::usb::kEp0MaxPacket);
+          if (p.handshake != fw::sim::Ep0Handshake::kAck) FUZZ_CHECK(p.data.empty());
+          if (p.handshake == fw::sim::Ep0Handshake::kAck &&
+              usb.ep0_stage() != fw::sim::Ep0Stage::kIdle) {
+            // A data-stage packet: only for an IN request, never past wLength
+            // or after the packet that ended the stage.
+            FUZZ_CHECK(t.in);
+            FUZZ_CHECK(!t.in_ended);
+            t.in_bytes += p.data.size();
+            FUZZ_CHECK(t.in_bytes <= t.length);
+            if (p.data.size() < fw::usb::kEp0MaxPacket) t.in_ended = true;
+          }
+          break;
+        }
+      }
+      if (to_dfu) {
+        // check_dfu's own GETSTATUS would abort a transfer in progress.
+        const fw::sim::Ep0Stage stage = usb.ep0_stage();
+        check_dfu(stage == fw::sim::Ep0Stage::kIdle || stage == fw::sim::Ep0Stage::kStalled);
+      } else {
+        usb_main_loop();
+      }
+    }
   }
 
   void hid_out(std::span<const std::uint8_t> report) {
@@ -637,15 +708,19 @@ class Harness {
     }
   }
 
-  void check_dfu() {
+  /// The DFU device's invariants; `request_status`: GETSTATUS too (a control
+  /// transfer of its own, which aborts a packet-level one in progress).
+  void check_dfu(bool request_status = true) {
     DfuDevice& d = dfu();
     for (int sector = 0; sector < 2; ++sector) {
       FUZZ_CHECK(d.flash.erase_count(sector) == 0);
       FUZZ_CHECK(d.flash.program_count(sector) == 0);
     }
     FUZZ_CHECK(d.usb.ep0_protocol_errors() == 0);
-    const auto status = dfu_request(fw::usb::DfuRequest::kGetStatus, 0);
-    if (!status.stalled) FUZZ_CHECK(status.data.size() == 6 && status.data[4] <= 10);
+    if (request_status) {
+      const auto status = dfu_request(fw::usb::DfuRequest::kGetStatus, 0);
+      if (!status.stalled) FUZZ_CHECK(status.data.size() == 6 && status.data[4] <= 10);
+    }
     if (d.boot.leave_requested()) {
       const auto region = d.flash.read(flutterscan::kStm32f405AppRegion.load_address,
                                        flutterscan::kStm32f405AppRegion.max_size);
@@ -1126,6 +1201,8 @@ class Harness {
   /// (command, sequence) of every request the HID OUT endpoint accepted and not yet answered.
   std::deque<std::array<std::uint8_t, 2>> pending_replies_;
   std::unique_ptr<DfuDevice> dfu_;
+  Ep0Transfer app_ep0_;
+  Ep0Transfer dfu_ep0_;
   Interposer interposer_;
   std::uint8_t sequence_ = 0;
   /// Event sequences unwrapped: the newest seen (-1: none since boot), and the
@@ -1133,7 +1210,7 @@ class Harness {
   std::int64_t event_top_ = -1;
   std::int64_t next_direct_event_ = 0;
   std::int64_t next_usb_event_ = 0;
-  std::bitset<256> events_seen_;              ///< event sequences seen in the last 128
+  std::bitset<256> events_seen_;  ///< event sequences seen in the last 128
   int strobe_pulses_ = 0;
   std::size_t seen_writes_ = 0;
   std::array<LedRun, flutterscan::kMaxLeds> runs_{};

@@ -12,7 +12,9 @@
 // SimUsbController: the application's (HID + DFU runtime around the same
 // Controller) and, for the kDfu* ops, a bootloader's (DFU mode over a SimFlash).
 // kRawReport/kReport still go straight into the CommandHandler, where their
-// replies are checked in full.
+// replies are checked in full. kEp0Packets plays control transfers one
+// endpoint-0 transaction at a time (per-packet data stages, the status stage,
+// a SETUP interrupting a data stage, SETUPs back to back).
 
 #include <array>
 #include <cstdint>
@@ -54,7 +56,12 @@ enum class Op : std::uint8_t {
   kDfuSetup = 18,      ///< as kSetup, to the bootloader's DFU mode device
   kDfuDownload = 19,   ///< seed byte, size u16, byte: bit 0 wrong board, bit 1 bad CRC,
                        ///< bit 2 skip a block, bit 3 no GETSTATUS; dfu-util's download
-  kCount = 20,
+  kEp0Packets = 20,    ///< byte: bit 0 the bootloader's DFU mode device (else the
+                       ///< application's); count (1 + byte % 24) endpoint-0 transactions
+                       ///< of the packet-level path, each a kind byte % 3: 0 SETUP (8
+                       ///< bytes), 1 OUT packet (length byte % 65, then that many bytes),
+                       ///< 2 IN packet. A transfer may span ops; any SETUP aborts it.
+  kCount = 21,
 };
 
 inline constexpr std::uint8_t kOpCount = static_cast<std::uint8_t>(Op::kCount);

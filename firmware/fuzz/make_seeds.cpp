@@ -307,5 +307,48 @@ int main(int argc, char** argv) {
     w.op(Op::kDfuDownload).u8(3).u16(5000).u8(4);
     ok &= write(dir, "dfu_sessions", w);
   }
+  {  // Endpoint 0 packet by packet (kEp0Packets): the application's configuration
+     // descriptor, SET_CONFIGURATION, back-to-back SETUPs; then in DFU mode an
+     // UPLOAD read in 64-byte packets, a DNLOAD block whose OUT data stage a
+     // SETUP interrupts, and a whole block of 16 packets with its status stage.
+    auto setup = [](InputWriter& w, std::uint8_t type, std::uint8_t request, std::uint16_t value,
+                    std::uint16_t index, std::uint16_t length) {
+      w.u8(0).u8(type).u8(request).u16(value).u16(index).u16(length);
+    };
+    auto in = [](InputWriter& w, int n) {
+      for (int i = 0; i < n; ++i) w.u8(2);
+    };
+    auto out = [](InputWriter& w, std::uint8_t length, std::uint8_t fill) {
+      w.u8(1).u8(length);
+      for (int i = 0; i < length; ++i) w.u8(static_cast<std::uint8_t>(fill + i));
+    };
+    InputWriter w(kBoard3);
+    w.op(Op::kBusReset);
+    w.op(Op::kEp0Packets).u8(0).u8(9 - 1);  // count - 1
+    setup(w, 0x00, 5, 3, 0, 0);             // SET_ADDRESS 3
+    in(w, 1);                               // its status stage
+    setup(w, 0x80, 6, 0x0200, 0, 255);
+    in(w, 2);
+    out(w, 0, 0);  // status stage
+    setup(w, 0x80, 6, 0x0100, 0, 18);
+    setup(w, 0x00, 9, 1, 0, 0);  // right behind it: SET_CONFIGURATION 1
+    in(w, 1);
+    w.op(Op::kEp0Packets).u8(1).u8(18 - 1);
+    setup(w, 0xA1, 2, 0, 0, 200);  // UPLOAD, 4 packets
+    in(w, 4);
+    out(w, 0, 0);
+    setup(w, 0x21, 6, 0, 0, 0);  // ABORT
+    in(w, 1);
+    setup(w, 0x21, 1, 0, 0, 1024);  // DNLOAD block 0 ...
+    for (int i = 0; i < 5; ++i) out(w, 64, static_cast<std::uint8_t>(i));
+    setup(w, 0xA1, 3, 0, 0, 6);  // ... interrupted by GETSTATUS
+    in(w, 1);
+    out(w, 0, 0);
+    setup(w, 0x21, 1, 0, 0, 1024);  // ... and now whole
+    w.op(Op::kEp0Packets).u8(1).u8(17 - 1);
+    for (int i = 0; i < 16; ++i) out(w, 64, static_cast<std::uint8_t>(i));
+    in(w, 1);
+    ok &= write(dir, "ep0_packets", w);
+  }
   return ok ? 0 : 1;
 }

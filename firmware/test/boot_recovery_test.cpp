@@ -137,12 +137,72 @@ TEST(BootRecovery, UnconfirmedStartsEndInDfuMode) {
 }
 
 TEST(BootRecovery, APowerOnRecordOrACorruptOneCountsNothing) {
-  EXPECT_EQ(unconfirmed_starts(BootRecord{0, 0, 0}), 0u);
-  EXPECT_EQ(unconfirmed_starts(BootRecord{kBootRecordMagic, 5, 0}), 0u);
+  EXPECT_EQ(unconfirmed_starts(BootRecord{0, 0, 0, 0, 0}), 0u);
+  EXPECT_EQ(unconfirmed_starts(BootRecord{kBootRecordMagic, 5, 0, 0, 0}), 0u);
   EXPECT_EQ(unconfirmed_starts(make_boot_record(2)), 2u);
   BootRecord flipped = make_boot_record(1);
   flipped.unconfirmed_starts ^= 4;
   EXPECT_EQ(unconfirmed_starts(flipped), 0u);
+  // Every field is under the check word.
+  for (int field = 0; field < 4; ++field) {
+    BootRecord r = make_boot_record(1, 2, 0x24000000);
+    ASSERT_EQ(watchdog_resets(r), 2u);
+    ASSERT_EQ(reset_flags(r), 0x24000000u);
+    std::uint32_t* words[] = {&r.magic, &r.unconfirmed_starts, &r.watchdog_resets, &r.reset_flags};
+    *words[field] ^= 0x100;
+    EXPECT_FALSE(boot_record_valid(r)) << field;
+    EXPECT_EQ(watchdog_resets(r), 0u) << field;
+    EXPECT_EQ(reset_flags(r), 0u) << field;
+  }
+}
+
+// The review of issue 15: an image that confirms itself and then hangs
+// (watchdog resets) looped forever, since confirmation cleared the only count
+// and the bootloader never read RCC_CSR's IWDGRSTF.
+TEST(BootRecovery, AnImageThatConfirmsThenHangsEndsInDfuModeAfterThreeWatchdogResets) {
+  BootInputs in;
+  in.image = BootImageCheck::kOk;
+  BootRecord record{};  // power-on
+  std::vector<BootTarget> targets;
+  for (int reset = 0; reset < 6; ++reset) {
+    in.watchdog_reset = reset > 0;  // the first boot is the power-on, every later one the watchdog
+    in.unconfirmed_starts = unconfirmed_starts(record);
+    in.watchdog_resets = watchdog_resets(record);
+    const BootDecision d = decide_boot(in);
+    targets.push_back(d.target);
+    record = make_boot_record(d.unconfirmed_starts, d.watchdog_resets);
+    // The application confirms itself (a host command), then hangs.
+    if (d.target == BootTarget::kApplication) record = confirm_boot_record(record);
+    EXPECT_EQ(unconfirmed_starts(record), 0u);
+  }
+  EXPECT_EQ(targets, (std::vector<BootTarget>{BootTarget::kApplication, BootTarget::kApplication,
+                                              BootTarget::kApplication, BootTarget::kDfuMode,
+                                              BootTarget::kDfuMode, BootTarget::kDfuMode}));
+  EXPECT_EQ(watchdog_resets(record), kMaxWatchdogResets + 1);  // saturated, never wraps
+}
+
+TEST(BootRecovery, ConfirmationKeepsTheWatchdogCountAndAnyOtherResetClearsIt) {
+  const BootRecord confirmed = confirm_boot_record(make_boot_record(2, 2, 0x24000000));
+  EXPECT_EQ(unconfirmed_starts(confirmed), 0u);
+  EXPECT_EQ(watchdog_resets(confirmed), 2u);
+  EXPECT_EQ(reset_flags(confirmed), 0x24000000u);
+  EXPECT_EQ(watchdog_resets(confirm_boot_record(BootRecord{})), 0u);  // power-on SRAM
+  BootInputs in;
+  in.image = BootImageCheck::kOk;
+  in.watchdog_resets = 2;
+  in.watchdog_reset = true;  // a third in a row
+  EXPECT_EQ(decide_boot(in).target, BootTarget::kDfuMode);
+  EXPECT_EQ(decide_boot(in).watchdog_resets, 3u);
+  in.watchdog_reset = false;  // a pin or software reset in between: the count starts again
+  const BootDecision d = decide_boot(in);
+  EXPECT_EQ(d.target, BootTarget::kApplication);
+  EXPECT_EQ(d.watchdog_resets, 0u);
+  in.watchdog_resets = 1;  // a second watchdog reset in a row: still tried
+  in.watchdog_reset = true;
+  EXPECT_EQ(decide_boot(in).target, BootTarget::kApplication);
+  EXPECT_EQ(decide_boot(in).watchdog_resets, 2u);
+  in.watchdog_resets = 0xFFFFFFFF;  // a record's worst value: no wrap back to 0
+  EXPECT_EQ(decide_boot(in).target, BootTarget::kDfuMode);
 }
 
 TEST(BootRecovery, TheRecoveryPinAndTheHandOffWordKeepDfuMode) {
@@ -162,16 +222,32 @@ TEST(BootRecovery, TheRecoveryPinAndTheHandOffWordKeepDfuMode) {
 TEST(BootRecovery, TheApplicationConfirmsOnlyAfterUsbStaysConfigured) {
   BootConfirmation c;
   const std::uint64_t ms = 1000;
-  EXPECT_FALSE(c.poll(false, 0));
-  EXPECT_FALSE(c.poll(false, 60'000 * ms));  // running without USB: not confirmed
-  EXPECT_FALSE(c.poll(true, 60'000 * ms));
-  EXPECT_FALSE(c.poll(true, 62'000 * ms));
-  EXPECT_FALSE(c.poll(false, 62'500 * ms));  // the host dropped it: start again
-  EXPECT_FALSE(c.poll(true, 63'000 * ms));
-  EXPECT_FALSE(c.poll(true, 65'999 * ms));
-  EXPECT_TRUE(c.poll(true, 66'000 * ms));
+  EXPECT_FALSE(c.poll(false, 0, 0));
+  EXPECT_FALSE(c.poll(false, 0, 60'000 * ms));  // running without USB: not confirmed
+  EXPECT_FALSE(c.poll(true, 0, 60'000 * ms));
+  EXPECT_FALSE(c.poll(true, 0, 62'000 * ms));
+  EXPECT_FALSE(c.poll(false, 0, 62'500 * ms));  // the host dropped it: start again
+  EXPECT_FALSE(c.poll(true, 0, 63'000 * ms));
+  EXPECT_FALSE(c.poll(true, 0, 65'999 * ms));
+  EXPECT_TRUE(c.poll(true, 0, 66'000 * ms));
   EXPECT_TRUE(c.confirmed());
-  EXPECT_FALSE(c.poll(true, 67'000 * ms));  // once
+  EXPECT_FALSE(c.poll(true, 0, 67'000 * ms));  // once
+}
+
+// Issue 15 asks that a host command (or a timeout) confirm the image; before
+// the review only the 3 s timeout did. A GetInfo/GetStatus answered over
+// configured USB now confirms at once.
+TEST(BootRecovery, AHostQueryOverConfiguredUsbConfirmsAtOnce) {
+  const std::uint64_t ms = 1000;
+  BootConfirmation c;
+  EXPECT_FALSE(c.poll(false, 1, 0));  // answered without configured USB: not a host's
+  EXPECT_FALSE(c.poll(true, 1, 10 * ms));
+  EXPECT_FALSE(c.poll(true, 1, 20 * ms));  // the same count: nothing new
+  EXPECT_TRUE(c.poll(true, 2, 30 * ms));   // one more query over configured USB
+  EXPECT_TRUE(c.confirmed());
+  EXPECT_FALSE(c.poll(true, 3, 40 * ms));  // once
+  BootConfirmation fresh;
+  EXPECT_TRUE(fresh.poll(true, 1, 0));  // the first pass after it is configured
 }
 
 }  // namespace
@@ -212,14 +288,59 @@ TEST(BootRecoveryBoard, AnApplicationThatKeepsUsbConfiguredConfirmsItself) {
   board.port().run_for(1'000'000);
   board.poll();
   EXPECT_EQ(board.unconfirmed_starts(), 0u);  // 3 s configured: confirmed
-  for (int i = 0; i < 5; ++i) {  // later watchdog resets of a working image: it keeps running
-    board.watchdog_reset();
-    EXPECT_EQ(board.mode(), sim::BoardMode::kApplication);
-    enumerate_or_fail(board);
-    board.port().run_for(3'000'000);
-    board.poll();
-  }
+  board.reset();                              // a power cycle: confirmed again, running
+  EXPECT_EQ(board.mode(), sim::BoardMode::kApplication);
+  enumerate_or_fail(board);
+  board.port().run_for(3'000'000);
+  board.poll();
   EXPECT_EQ(board.unconfirmed_starts(), 0u);
+}
+
+// The review of issue 15: an image that confirms itself on every start and then
+// hangs (watchdog resets) was started for ever (before the fix this board ran
+// the application after each of five such resets). Now the third watchdog reset
+// in a row keeps DFU mode, confirmation or not, and a download brings it back.
+TEST(BootRecoveryBoard, AnImageThatConfirmsThenHangsEndsInDfuModeAfterThreeWatchdogResets) {
+  sim::SimBoard board(sim::SimBoardConfig{}, good_image());
+  std::vector<sim::BoardMode> modes;
+  for (int i = 0; i < 4; ++i) {
+    if (board.mode() == sim::BoardMode::kApplication) {
+      enumerate_or_fail(board);
+      board.port().run_for(3'000'000);
+      board.poll();
+      EXPECT_EQ(board.unconfirmed_starts(), 0u) << i;  // confirmed
+    }
+    board.watchdog_reset();  // then hung
+    modes.push_back(board.mode());
+    EXPECT_EQ(board.watchdog_resets(), static_cast<std::uint32_t>(i + 1)) << i;
+  }
+  EXPECT_EQ(modes, (std::vector<sim::BoardMode>{
+                       sim::BoardMode::kApplication, sim::BoardMode::kApplication,
+                       sim::BoardMode::kBootloader, sim::BoardMode::kBootloader}));
+  enumerate_or_fail(board);
+  const auto image = sim::make_application_image(kBoardIdStm32f405, 2, 0, 0, 6000, 5);
+  EXPECT_EQ(dfu_download(board, image).final_status.state, DfuState::kDfuIdle);
+  board.bus_reset();  // the deliberate leave clears both counts
+  EXPECT_EQ(board.mode(), sim::BoardMode::kApplication);
+  EXPECT_EQ(board.watchdog_resets(), 0u);
+}
+
+TEST(BootRecoveryBoard, AGetInfoOrGetStatusOverUsbConfirmsAtOnceOtherCommandsDoNot) {
+  for (const auto query : {proto::Command::kGetInfo, proto::Command::kGetStatus}) {
+    sim::SimBoard board(sim::SimBoardConfig{}, good_image());
+    enumerate_or_fail(board);
+    ASSERT_EQ(board.unconfirmed_starts(), 1u);
+    ASSERT_EQ(send_request(board, proto::Command::kDisarm, 1), OutResult::kAck);
+    ASSERT_TRUE(read_report(board).has_value());
+    EXPECT_EQ(board.unconfirmed_starts(), 1u);  // not a query
+    const std::uint64_t t = board.port().now_us();
+    ASSERT_EQ(send_request(board, query, 2), OutResult::kAck);
+    EXPECT_EQ(board.port().now_us(), t);  // no time passed: no timeout
+    EXPECT_EQ(board.unconfirmed_starts(), 0u) << static_cast<int>(query);
+    const auto reply = read_report(board);
+    ASSERT_TRUE(reply.has_value());
+    EXPECT_EQ((*reply)[0], static_cast<std::uint8_t>(query));
+  }
 }
 
 TEST(BootRecoveryBoard, ThePowerOnResetAndTheRecoveryPin) {

@@ -292,6 +292,17 @@ void BoardHost::power_cycle(bool dfu_requested) {
   event(std::string("reset: ") + mode_text(board_.mode()) + " mode");
 }
 
+int BoardHost::hang_before_usb(int max_resets) {
+  std::lock_guard lock(mutex_);
+  int resets = 0;
+  while (board_.mode() == firmware::sim::BoardMode::kApplication && resets < max_resets) {
+    board_.watchdog_reset();
+    ++resets;
+    event(std::string("watchdog reset: ") + mode_text(board_.mode()) + " mode");
+  }
+  return resets;
+}
+
 std::optional<int> BoardHost::wanted_generation() {
   std::lock_guard lock(mutex_);
   if (!plugged_in_) return std::nullopt;

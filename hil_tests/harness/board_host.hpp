@@ -76,6 +76,10 @@ class BoardHost final : public DevicePort {
   // Service loop (main thread) -----------------------------------------------------
   /// \brief Resets the board (power cycle; `dfu_requested`: the application's hand-off).
   void power_cycle(bool dfu_requested);
+  /// \brief The image in flash hangs before it brings USB up (it never
+  /// confirms itself): the watchdog resets the chip until the bootloader keeps
+  /// DFU mode (boot_decision.hpp), at most `max_resets` times. Returns the resets.
+  int hang_before_usb(int max_resets);
   /// \brief Runs virtual time up to real time, playing scheduled stimuli.
   void tick();
   /// \brief What the bus should hold now: nullopt if nothing (unplugged) or the

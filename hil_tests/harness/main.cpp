@@ -85,6 +85,7 @@ int main(int argc, char** argv) {
                         std::to_string(FLUTTERSCAN_VERSION_PATCH);
   bool empty_flash = false;
   bool dfu_at_start = false;
+  bool hangs_before_usb = false;
   double timeout_s = 60;
   std::vector<std::string> command;
   app.add_option("--record", record_path, "Write the board's records here as JSON");
@@ -95,6 +96,9 @@ int main(int argc, char** argv) {
   app.add_flag("--empty-flash", empty_flash,
                "No application in flash: the board stays in DFU mode");
   app.add_flag("--dfu", dfu_at_start, "Power on in DFU mode (as if the application asked for it)");
+  app.add_flag("--hangs-before-usb", hangs_before_usb,
+               "The image in flash hangs before USB (never confirms): watchdog resets at power-on "
+               "until the bootloader keeps DFU mode");
   app.add_option("--serial", serial, "The chip's unique ID as 24 hex digits (the serial number)");
   app.add_option("--strobes", scenario.strobes_after_arm,
                  "Strobe pulses after the first successful Arm reply");
@@ -156,6 +160,7 @@ int main(int argc, char** argv) {
 
   hil::BoardHost host(config, image, scenario);
   if (dfu_at_start) host.power_cycle(true);
+  if (hangs_before_usb) host.hang_before_usb(10);
   hil::MockUsbBus bus(host);
   if (!bus.ok()) {
     std::cerr << "hil_harness: SKIP: umockdev could not create a testbed here\n";

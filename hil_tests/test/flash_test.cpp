@@ -116,6 +116,36 @@ TEST(HilFlash, InterruptedFlashLeavesDfuModeAndASecondFlashSucceeds) {
   EXPECT_EQ(run.record.at("final").at("writes_below_app_region"), 0);
 }
 
+// Issue 15: an image that never confirms itself (it hangs before USB, so the
+// watchdog resets it) brings the board back to DFU mode by itself after three
+// starts, and `flutterscan flash` then recovers it without a detach.
+TEST(HilFlash, AnImageThatNeverConfirmsEndsInDfuModeAndFlutterscanFlashRecoversIt) {
+  const auto dir = make_work_dir("cli_flash_recover");
+  const auto image = make_image(dir, "app020.bin");
+  const auto run = run_harness({"--hangs-before-usb", "--timeout-s", "90"},
+                               {FLUTTERSCAN_BINARY, "flash", image}, dir);
+  if (run.exit_code == 77) GTEST_SKIP() << run.output;
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  std::vector<std::string> resets;
+  for (const auto& e : run.record.at("events")) {
+    const std::string what = e.at("what");
+    if (what.rfind("watchdog reset: ", 0) == 0) resets.push_back(what);
+  }
+  EXPECT_EQ(resets, (std::vector<std::string>{"watchdog reset: application mode",
+                                              "watchdog reset: application mode",
+                                              "watchdog reset: bootloader mode"}))
+      << run.record.at("events").dump();
+  const auto& e = run.record.at("enumerations");
+  ASSERT_GE(e.size(), 2u) << e.dump();
+  EXPECT_EQ(e.front().at("mode"), "bootloader");  // the host first sees DFU mode
+  EXPECT_EQ(e.back().at("mode"), "application");
+  const auto& final = run.record.at("final");
+  EXPECT_EQ(final.at("mode"), "application") << run.output;
+  EXPECT_EQ(final.at("bcd_device"), 0x0020) << run.output;
+  EXPECT_EQ(final.at("writes_below_app_region"), 0);
+  EXPECT_EQ(count_requests(run.record, "DNLOAD"), static_cast<int>(kImageSize / 1024) + 1);
+}
+
 TEST(HilFlash, FlutterscanFlashWithoutAFileFlashesTheBuiltProductImage) {
   // `flutterscan flash` with no file flashes the fw-stm32f405 image built with
   // it; the board (running 0.0.9) ends up holding exactly that image's bytes.

@@ -73,7 +73,7 @@ extern "C" void OTG_FS_IRQHandler() {
     reg::at(reg::iwdg::kKr) = reg::iwdg::kKeyReload;
     if (usb->leave_requested()) {
       // The host flashed or detached on purpose: the application gets its
-      // kMaxUnconfirmedStarts tries again.
+      // kMaxUnconfirmedStarts tries again, and the watchdog count starts at 0.
       const fw::BootRecord record = fw::make_boot_record(0);
       std::memcpy(reinterpret_cast<void*>(stm::kBootRecordAddress), &record, sizeof record);
       g_otg_fs.disconnect();

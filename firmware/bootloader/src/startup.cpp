@@ -4,7 +4,9 @@
 // decides (boot_decision.hpp): the application runs if it did not ask for DFU
 // mode (the hand-off word at kBootRequestAddress), the recovery pin (PB2) is
 // not held high, fewer than kMaxUnconfirmedStarts starts in a row went
-// unconfirmed (the BootRecord after the hand-off word) and the image passes
+// unconfirmed and fewer than kMaxWatchdogResets resets in a row were watchdog
+// resets (RCC_CSR; both counts in the BootRecord after the hand-off word; the
+// reset flags cleared with RMVF and handed over in the record) and the image passes
 // check_boot_image (header, CRC, load address, vector table at 0x200, SP, PC);
 // otherwise the C runtime starts and bootloader_main() serves DFU. The jump
 // leaves the chip as reset left it, except VTOR and MSP (GPIOB's clock and
@@ -38,6 +40,10 @@ void __cxa_pure_virtual() {
 [[noreturn]] void bootloader_main();
 
 namespace {
+
+static_assert(sizeof(flutterscan::firmware::BootRecord) + 4 <=
+                  flutterscan::firmware::stm32f4::kBootRequestReserved,
+              "the hand-off word and the BootRecord fit below both images' SRAM");
 
 using Handler = void (*)();
 namespace fw = flutterscan::firmware;
@@ -121,14 +127,22 @@ void Reset_Handler() {
   // read of FLASH_OPTCR on every later one). A failure changes nothing here:
   // the firmware never erases or programs sector 0 either way.
   (void)protect_bootloader_sector();
+  // Why the chip reset (RM0090 7.3.21): the flags stay set until RMVF, so they
+  // are cleared here, every time, and the next reset shows only its own; the
+  // application gets them from the record (its reset cause).
+  const std::uint32_t csr = stm::reg::read(stm::reg::rcc::kCsr);
+  stm::reg::set_bits(stm::reg::rcc::kCsr, stm::reg::rcc::kCsrRmvf);
+  in.watchdog_reset = (csr & (stm::reg::rcc::kCsrIwdgRstf | stm::reg::rcc::kCsrWwdgRstf)) != 0;
   fw::BootRecord record;
   std::memcpy(&record, reinterpret_cast<const void*>(stm::kBootRecordAddress), sizeof record);
   in.unconfirmed_starts = fw::unconfirmed_starts(record);
+  in.watchdog_resets = fw::watchdog_resets(record);
   const auto region = std::span<const std::uint8_t>(
       reinterpret_cast<const std::uint8_t*>(stm::kAppBase), stm::kAppMaxSize);
   in.image = fw::check_boot_image(region, flutterscan::kStm32f405AppRegion);
   const fw::BootDecision decision = fw::decide_boot(in);
-  record = fw::make_boot_record(decision.unconfirmed_starts);
+  record = fw::make_boot_record(decision.unconfirmed_starts, decision.watchdog_resets,
+                                csr & stm::reg::rcc::kCsrResetFlags);
   std::memcpy(reinterpret_cast<void*>(stm::kBootRecordAddress), &record, sizeof record);
   if (decision.target == fw::BootTarget::kApplication) start_application();
 

@@ -54,6 +54,7 @@ std::size_t CommandHandler::handle(std::span<const std::uint8_t> request,
   switch (static_cast<Command>(header.command)) {
     case Command::kGetInfo:
       return empty_then([&] {
+        count_query();
         return protocol::encode_message(header.command, header.sequence, Status::kOk,
                                         controller_.info(), reply);
       });
@@ -84,6 +85,7 @@ std::size_t CommandHandler::handle(std::span<const std::uint8_t> request,
       return empty_then([&] { return status_only(controller_.disarm()); });
     case Command::kGetStatus:
       return empty_then([&] {
+        count_query();
         return protocol::encode_message(header.command, header.sequence, Status::kOk,
                                         controller_.status(), reply);
       });

@@ -26,6 +26,22 @@
 namespace flutterscan::firmware::emu {
 namespace {
 
+/// The BootRecord in no-init SRAM after the hand-off word (stm32f4_board.hpp).
+constexpr std::uint32_t kBootRecordAt = 0x20000004;
+constexpr std::uint32_t kRccCsr = kRccBase + 0x74;
+
+BootRecord read_record(Chip& chip) {
+  return {chip.read_word(kBootRecordAt), chip.read_word(kBootRecordAt + 4),
+          chip.read_word(kBootRecordAt + 8), chip.read_word(kBootRecordAt + 12),
+          chip.read_word(kBootRecordAt + 16)};
+}
+
+void write_record(Chip& chip, const BootRecord& r) {
+  const std::uint32_t words[] = {r.magic, r.unconfirmed_starts, r.watchdog_resets, r.reset_flags,
+                                 r.check};
+  for (std::uint32_t i = 0; i < 5; ++i) chip.write_word(kBootRecordAt + 4 * i, words[i]);
+}
+
 class BootloaderEmu : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -67,12 +83,11 @@ TEST_F(BootloaderEmu, AGoodImageIsStartedThroughItsVectorTable) {
   EXPECT_EQ(chip.io(kRccBase + kRccAhb1Enr), 0x00100000u);
   EXPECT_EQ(chip.io(kGpioBBase + kGpioPupdr), 0x00000100u);
   // This start is on trial: one unconfirmed start in the record.
-  BootRecord record{};
-  record.magic = chip.read_word(0x20000004);
-  record.unconfirmed_starts = chip.read_word(0x20000008);
-  record.check = chip.read_word(0x2000000C);
+  const BootRecord record = read_record(chip);
   EXPECT_EQ(unconfirmed_starts(record), 1u);
-  EXPECT_EQ(chip.read_word(0x20000000), 0u);  // the hand-off word
+  EXPECT_EQ(watchdog_resets(record), 0u);
+  EXPECT_EQ(reset_flags(record), 0x0E000000u);  // a power-on's flags, handed over
+  EXPECT_EQ(chip.read_word(0x20000000), 0u);    // the hand-off word
 }
 
 // Sector 0 (the bootloader) write-protected in the option bytes by the
@@ -147,12 +162,50 @@ TEST_F(BootloaderEmu, TheHandOffWordTheRecoveryPinAndUnconfirmedStartsKeepDfuMod
   for (std::uint32_t starts : {2u, 3u}) {
     Chip chip;
     flash(chip, image_);
-    const BootRecord r = make_boot_record(starts);
-    chip.write_word(0x20000004, r.magic);
-    chip.write_word(0x20000008, r.unconfirmed_starts);
-    chip.write_word(0x2000000C, r.check);
+    write_record(chip, make_boot_record(starts));
     EXPECT_EQ(chip.run(), starts < kMaxUnconfirmedStarts ? "application" : "dfu") << starts;
   }
+}
+
+// The review of issue 15: the bootloader never read RCC_CSR, so an image that
+// confirmed itself and then hung (watchdog resets) was started for ever. Now
+// each reset's IWDGRSTF is counted in the record (confirmation keeps that
+// count), the flags are cleared with RMVF and handed over in the record, and
+// the third watchdog reset in a row stays in DFU mode. SRAM survives a
+// watchdog reset: each chip starts with the record the one before left.
+TEST_F(BootloaderEmu, ThreeWatchdogResetsInARowStayInDfuModeConfirmedOrNot) {
+  constexpr std::uint32_t kIwdgRstf = 1u << 29;
+  constexpr std::uint32_t kPinRstf = 1u << 26;  // NRST is driven by the watchdog reset too
+  constexpr std::uint32_t kRmvf = 1u << 24;
+  BootRecord record{};  // power-on
+  std::vector<std::string> stops;
+  for (std::uint32_t reset = 0; reset < 4; ++reset) {
+    SCOPED_TRACE(reset);
+    Chip chip;
+    flash(chip, image_);
+    if (reset > 0) {
+      chip.set_reset_flags(kIwdgRstf | kPinRstf);
+      write_record(chip, record);
+    }
+    stops.push_back(chip.run());
+    record = read_record(chip);
+    EXPECT_EQ(watchdog_resets(record), reset);
+    EXPECT_EQ(reset_flags(record), reset > 0 ? kIwdgRstf | kPinRstf : 0x0E000000u);
+    const auto csr = chip.writes_to(kRccCsr);
+    EXPECT_TRUE(std::any_of(csr.begin(), csr.end(), [](std::uint32_t v) { return v & kRmvf; }));
+    EXPECT_EQ(chip.io(kRccCsr) & 0xFE000000u, 0u);  // cleared: the next reset shows its own
+    // The application confirms itself (a host command), then hangs.
+    if (stops.back() == "application") record = confirm_boot_record(record);
+  }
+  EXPECT_EQ(stops, (std::vector<std::string>{"application", "application", "application", "dfu"}));
+  // A reset that is not the watchdog's (the reset button) after two in a row: tried again.
+  Chip chip;
+  flash(chip, image_);
+  chip.set_reset_flags(kPinRstf);
+  write_record(chip, confirm_boot_record(make_boot_record(1, 2, kIwdgRstf | kPinRstf)));
+  EXPECT_EQ(chip.run(), "application");
+  EXPECT_EQ(watchdog_resets(read_record(chip)), 0u);
+  EXPECT_EQ(unconfirmed_starts(read_record(chip)), 1u);
 }
 
 // Reset -> bootloader -> image check -> application: the application's own

@@ -129,6 +129,11 @@ void Chip::set_option_bytes(std::uint32_t optcr) {
   regs_[kFlashOptcr] = optcr | kOptcrOptLock;
 }
 
+void Chip::set_reset_flags(std::uint32_t flags) {
+  std::uint32_t& csr = regs_[kRccBase + 0x74];
+  csr = (csr & 0x01FFFFFFu) | (flags & 0xFE000000u);
+}
+
 std::string Chip::run() {
   const std::uint32_t sp = read_word(kFlashBase);
   const std::uint32_t pc = read_word(kFlashBase + 4);

@@ -134,6 +134,9 @@ class Chip {
   int option_programs() const { return option_programs_; }
   /// Sets the option bytes the chip comes out of reset with (FLASH_OPTCR).
   void set_option_bytes(std::uint32_t optcr);
+  /// Sets the reset flags RCC_CSR comes out of reset with (bits 31:25; the
+  /// model's default is a power-on: PORRSTF, PINRSTF, BORRSTF).
+  void set_reset_flags(std::uint32_t flags);
 
   bool recovery_pin_high = false;
 

@@ -95,10 +95,12 @@ void SimBoard::boot(bool dfu_requested, ResetCause cause) {
   BootInputs in;
   in.dfu_requested = dfu_requested;
   in.boot_pin_held = recovery_pin_;
+  in.watchdog_reset = cause == ResetCause::kWatchdog;  // RCC_CSR IWDGRSTF on the chip
   in.unconfirmed_starts = firmware::unconfirmed_starts(boot_record_);
+  in.watchdog_resets = firmware::watchdog_resets(boot_record_);
   in.image = check_boot_image(region_bytes, config_.region);
   const BootDecision decision = decide_boot(in);
-  boot_record_ = make_boot_record(decision.unconfirmed_starts);
+  boot_record_ = make_boot_record(decision.unconfirmed_starts, decision.watchdog_resets);
   if (decision.target == BootTarget::kApplication) {
     const ImageHeader h = read_image_header(region_bytes);
     BoardConfig board = config_.board;
@@ -140,9 +142,11 @@ void SimBoard::watchdog_reset() {
 void SimBoard::poll() {
   if (!application_) return;
   application_->poll();
-  // The application's main loop (stm32f4 main.cpp): USB configured long enough.
-  if (confirmation_.poll(application_->device().configured(), port_.now_us()))
-    boot_record_ = make_boot_record(0);
+  // The application's main loop (stm32f4 main.cpp): a host query answered over
+  // configured USB, or USB configured long enough.
+  if (confirmation_.poll(application_->device().configured(), handler_->queries_answered(),
+                         port_.now_us()))
+    boot_record_ = confirm_boot_record(boot_record_);  // the watchdog count stays
 }
 
 void SimBoard::after_host_call() {

@@ -23,6 +23,7 @@ ControlResult SimUsbController::control_transfer(std::span<const std::uint8_t, 8
     return result;
   }
   const usb::SetupPacket setup = usb::SetupPacket::parse(setup_bytes);
+  ep0_stage_ = Ep0Stage::kIdle;  // this SETUP aborts a packet-level transfer too
   ep0_answer_ = Ep0Answer::kNone;
   ep0_answers_ = 0;
   ep0_in_.clear();
@@ -94,6 +95,7 @@ std::optional<std::vector<std::uint8_t>> SimUsbController::interrupt_in(std::uin
 
 void SimUsbController::bus_reset() {
   address_ = 0;
+  ep0_stage_ = Ep0Stage::kIdle;
   endpoints_.clear();
   if (device_ != nullptr) device_->on_bus_reset();
 }
@@ -171,6 +173,7 @@ void SimUsbController::answer(Ep0Answer answer) {
 void SimUsbController::ep0_transmit(std::span<const std::uint8_t> data, bool zero_length_end) {
   ep0_zero_length_end_ = zero_length_end;
   ep0_in_.assign(data.begin(), data.end());
+  ep0_in_view_ = data;
   answer(Ep0Answer::kTransmit);
 }
 

@@ -108,10 +108,14 @@ extern "C" void OTG_FS_IRQHandler() {
       if (port->take_fault()) controller->on_port_fault();
       g_otg_fs.poll();  // USB events -> device core, HID interface, DFU runtime
       usb->poll();      // commands, replies, events; Controller::poll: watchdog, bootloader
-      // USB configured long enough: this image works; the bootloader's count
-      // of unconfirmed starts (boot_decision.hpp) goes back to 0.
-      if (confirmation.poll(usb->device().configured(), port->now_us())) {
-        const BootRecord record = make_boot_record(0);
+      // A host query answered over configured USB, or USB configured long
+      // enough: this image works; the bootloader's count of unconfirmed starts
+      // (boot_decision.hpp) goes back to 0.
+      if (confirmation.poll(usb->device().configured(), handler->queries_answered(),
+                            port->now_us())) {
+        BootRecord record;
+        std::memcpy(&record, reinterpret_cast<const void*>(kBootRecordAddress), sizeof record);
+        record = confirm_boot_record(record);  // the watchdog count stays
         std::memcpy(reinterpret_cast<void*>(kBootRecordAddress), &record, sizeof record);
       }
     }

@@ -2,6 +2,7 @@
 
 #include <cstring>
 
+#include "flutterscan/firmware/boot_decision.hpp"
 #include "flutterscan/firmware/stm32f4/registers.hpp"
 #include "flutterscan/firmware/stm32f4/stm32f4_board.hpp"
 #include "flutterscan/firmware/stm32f4/system.hpp"
@@ -64,7 +65,12 @@ Stm32f4Port::Stm32f4Port(const LedPinMap& pins, const ClockTree& clocks)
 }
 
 void Stm32f4Port::init() {
-  const std::uint32_t csr = at(rcc::kCsr);
+  // The bootloader read the reset flags and cleared them (RMVF); it hands them
+  // over in the BootRecord (boot_decision.hpp). Started without it (a
+  // debugger), the record is stale or invalid and RCC_CSR still has them.
+  BootRecord record;
+  std::memcpy(&record, reinterpret_cast<const void*>(kBootRecordAddress), sizeof record);
+  const std::uint32_t csr = at(rcc::kCsr) | reset_flags(record);
   reset_cause_ = reset_cause_from_csr(csr);
   set_bits(rcc::kCsr, rcc::kCsrRmvf);
 

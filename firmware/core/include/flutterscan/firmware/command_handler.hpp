@@ -28,9 +28,20 @@ class CommandHandler {
   /// its size, or 0 if no event is waiting or `report` is too small.
   std::size_t next_event_report(std::span<std::uint8_t> report);
 
+  /// \brief GetInfo and GetStatus requests answered with kOk since this
+  /// handler was made (saturating): the queries a host session starts with,
+  /// which the application takes as "a host says it works"
+  /// (boot_decision.hpp, BootConfirmation).
+  std::uint32_t queries_answered() const { return queries_answered_; }
+
  private:
+  void count_query() {
+    if (queries_answered_ != UINT32_MAX) ++queries_answered_;
+  }
+
   Controller& controller_;
   std::uint8_t event_sequence_ = 0;
+  std::uint32_t queries_answered_ = 0;
 };
 
 }  // namespace flutterscan::firmware

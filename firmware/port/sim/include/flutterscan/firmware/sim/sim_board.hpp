@@ -125,13 +125,15 @@ class SimBoard {
   /// the application had asked for the bootloader). Calls the callback too.
   void reset(bool dfu_requested = false);
   /// \brief A watchdog reset: SRAM (the BootRecord) survives, the bootloader
-  /// decides as on the chip (boot_decision.hpp: 3 unconfirmed starts in a row
-  /// keep it in DFU mode). Calls the callback too.
+  /// decides as on the chip (boot_decision.hpp: 3 unconfirmed starts, or 3
+  /// watchdog resets, in a row keep it in DFU mode). Calls the callback too.
   void watchdog_reset();
   /// \brief The recovery pin (PB2) held high from now on (or released).
   void set_recovery_pin(bool held) { recovery_pin_ = held; }
   /// \brief Application starts since the last confirmation (the BootRecord).
   std::uint32_t unconfirmed_starts() const { return firmware::unconfirmed_starts(boot_record_); }
+  /// \brief Watchdog resets in a row (the BootRecord; confirmation keeps it).
+  std::uint32_t watchdog_resets() const { return firmware::watchdog_resets(boot_record_); }
 
   // Host side (usbdevfs) ----------------------------------------------------------
   ControlResult control_transfer(std::span<const std::uint8_t, 8> setup,

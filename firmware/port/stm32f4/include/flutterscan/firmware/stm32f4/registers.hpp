@@ -166,6 +166,8 @@ inline constexpr std::uint32_t kCsrSftRstf = 1u << 28;
 inline constexpr std::uint32_t kCsrIwdgRstf = 1u << 29;
 inline constexpr std::uint32_t kCsrWwdgRstf = 1u << 30;
 inline constexpr std::uint32_t kCsrLpwrRstf = 1u << 31;
+/// Every reset flag, BORRSTF..LPWRRSTF (bits 31:25).
+inline constexpr std::uint32_t kCsrResetFlags = 0xFE000000;
 }  // namespace rcc
 
 // RM0090 5.4: power control (VOS: regulator scale 1 for HCLK above 144 MHz).

@@ -110,10 +110,11 @@ inline constexpr std::array<int, 2> kConfigSectors{kConfigSector, 11};
 // .data/.bss covers (both linker scripts start SRAM above it). The app writes
 // kBootRequestMagic there and resets; the bootloader stays in DFU if it finds it.
 inline constexpr std::uint32_t kBootRequestAddress = 0x20000000;
-inline constexpr std::uint32_t kBootRequestReserved = 16;  ///< bytes kept free there
+inline constexpr std::uint32_t kBootRequestReserved = 32;  ///< bytes kept free there
 inline constexpr std::uint32_t kBootRequestMagic = 0xB007DF11;
-/// The BootRecord (boot_decision.hpp: unconfirmed application starts) right
-/// after the hand-off word, inside the same reserved 16 bytes.
+/// The BootRecord (boot_decision.hpp: unconfirmed application starts, watchdog
+/// resets in a row, the reset flags) right after the hand-off word, inside the
+/// same reserved 32 bytes (both linker scripts start SRAM at 0x20000020).
 inline constexpr std::uint32_t kBootRecordAddress = kBootRequestAddress + 4;
 /// Recovery pin: PB2 (BOOT1, unused by the ROM while BOOT0 is low), 10 kOhm to
 /// ground on the board; a jumper to 3.3 V at reset keeps the bootloader in DFU mode.
