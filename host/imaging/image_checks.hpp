@@ -16,8 +16,9 @@ namespace flutterscan::imaging {
 std::string image_problem(const Image& image);
 
 /// \brief Why the model's light scale cannot be computed with (crosstalk entries
-/// beyond kMaxCrosstalk or, other than 0, below kMinCrosstalk, LED or ambient electrons beyond kMaxModelElectrons: the
-/// PSFs' spectra, squared in float, would overflow to inf and NaN); empty if fine.
+/// beyond kMaxCrosstalk or, other than 0, below kMinCrosstalk, LED or ambient electrons beyond
+/// kMaxModelElectrons: the PSFs' spectra, squared in float, would overflow to inf and NaN); empty
+/// if fine.
 std::string model_scale_problem(const CaptureModel& model);
 
 /// \brief Why a blur of `blur_px` does not fit `along` pixels along the motion
