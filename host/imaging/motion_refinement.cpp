@@ -5,7 +5,6 @@
 #include <cmath>
 #include <complex>
 #include <limits>
-#include <memory>
 #include <numeric>
 #include <vector>
 
@@ -104,18 +103,6 @@ std::pair<std::size_t, std::size_t> edge_stretch(const Plane& plane, const std::
   return {lo, hi};
 }
 
-/// A row FFT of length n, planned once per thread and length (planning, even
-/// estimated, cost a tenth of a refinement); the last few lengths kept.
-const RowFft& row_fft_of_length(int n) {
-  thread_local std::vector<std::unique_ptr<RowFft>> plans;
-  auto it =
-      std::find_if(plans.begin(), plans.end(), [n](const auto& p) { return p->length() == n; });
-  if (it != plans.end()) return **it;
-  if (plans.size() >= 4) plans.erase(plans.begin());
-  plans.push_back(std::make_unique<RowFft>(n));
-  return *plans.back();
-}
-
 /// The residual of every candidate motion as quadratic forms in its taps
 /// (motion_refinement.hpp): G_ab per block of rows and pair of channels, built
 /// up as rows are added.
@@ -126,7 +113,7 @@ class ResidualForms {
       : taps_(taps),
         channels_(channels),
         valid_(width - (taps - 1)),
-        fft_(row_fft_of_length(row_fft_length(width + taps))) {
+        fft_(thread_row_fft(row_fft_length(width + taps))) {
     const auto p = static_cast<std::size_t>(taps);
     const std::size_t slots = kBlocks * pairs();
     // One aligned buffer per spectrum: FFTW's plans want the alignment they were made with.

@@ -105,6 +105,16 @@ RowFft::RowFft(int n, PlanEffort effort) : n_(n) {
   make(effort == PlanEffort::kMeasure ? FFTW_MEASURE : FFTW_ESTIMATE);
 }
 
+const RowFft& thread_row_fft(int n) {
+  thread_local std::vector<std::unique_ptr<RowFft>> plans;
+  auto it =
+      std::find_if(plans.begin(), plans.end(), [n](const auto& p) { return p->length() == n; });
+  if (it != plans.end()) return **it;
+  if (plans.size() >= 4) plans.erase(plans.begin());
+  plans.push_back(std::make_unique<RowFft>(n));
+  return *plans.back();
+}
+
 void measure_row_ffts(int width, int longest_psf) {
   int measured = 0;
   for (int taps = 1; taps <= longest_psf; ++taps) {

@@ -76,6 +76,12 @@ class RowFft {
   fftwf_plan inverse_ = nullptr;
 };
 
+/// \brief A RowFft of length n (estimated plan) kept for this thread, as
+/// real_dft_bins() keeps its plans: the last few lengths the thread used, so a
+/// search called per frame does not plan again (the reference stays valid until
+/// the thread asks for four other lengths).
+const RowFft& thread_row_fft(int n);
+
 /// \brief Measures FFTW plans (PlanEffort::kMeasure) for rows of `width`
 /// samples and PSFs up to `longest_psf` taps: every padded length row_fft_length()
 /// gives in that range (usually one or two). FFTW keeps them for the process.
