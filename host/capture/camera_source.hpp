@@ -14,6 +14,7 @@
 // naming the setting; a backend that cannot even read it back adds a warning
 // (CameraSource::warnings) naming it.
 
+#include <array>
 #include <chrono>
 #include <cstddef>
 #include <cstdint>
@@ -62,6 +63,18 @@ struct FrameFormat {
   std::size_t row_bytes = 0;  ///< stride of Frame::data (0 = width * bytes_per_pixel)
 };
 
+/// \brief A label's symbol as the simulator placed it in a frame: what a read of
+/// it should report (the read record's ground truth).
+struct TruthLabel {
+  std::string value;
+  std::string symbology_id;  ///< ISO/IEC 15424, e.g. "]C0"
+  /// Top-left, top-right, bottom-right, bottom-left of the symbol where it was
+  /// at the exposure's first slot (the deblurred latent's geometry), frame
+  /// pixels, pixel-centre coordinates.
+  std::array<std::array<double, 2>, 4> corners{};
+  double module_px = 0;
+};
+
 /// \brief One captured frame, owned (backends copy out of their DMA buffers).
 struct Frame {
   std::uint64_t sequence = 0;     ///< the camera's frame counter (V4L2 sequence, GenICam frame id)
@@ -79,6 +92,8 @@ struct Frame {
   /// Ground-truth values of every label at least partly in view (sim only): a
   /// value read that is none of these is wrong.
   std::vector<std::string> truth_in_view;
+  /// Where the labels of `truth` lie (sim only).
+  std::vector<TruthLabel> truth_labels;
 };
 
 /// \brief Where exposures start.

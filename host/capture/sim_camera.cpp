@@ -331,6 +331,7 @@ class SimCamera final : public CameraSource {
       out.frame.data = stored.data;
       out.frame.truth = stored.truth;
       out.frame.truth_in_view = stored.truth_in_view;
+      out.frame.truth_labels = stored.truth_labels;
       out.frame.descriptor_json = stored.descriptor_json;
       return out;
     }
@@ -374,6 +375,7 @@ class SimCamera final : public CameraSource {
     imaging::Plane window(o_.width + pad, o_.height);
     frame.truth.clear();
     frame.truth_in_view.clear();
+    frame.truth_labels.clear();
     if (reflectance_ >= 0)
       render_target(window, pad);
     else if (!render_labels(window, frame, pad, travel, blur, error))
@@ -411,8 +413,19 @@ class SimCamera final : public CameraSource {
     // edge (whose latent depends on belt outside the frame).
     for (std::uint64_t i = 0;; ++i) {
       const double left = -(static_cast<double>(i) + 1) * pitch + travel;
-      if (left + o_.tile_width + blur <= o_.width && left >= blur)
+      if (left + o_.tile_width + blur <= o_.width && left >= blur) {
         frame.truth.push_back(content_of(sim_label_scene(i)));
+        std::lock_guard lock(tiles_mutex_);
+        if (const auto placed = placements_.find(i); placed != placements_.end()) {
+          TruthLabel t;
+          t.value = frame.truth.back();
+          t.symbology_id = placed->second.symbology_id;
+          t.module_px = placed->second.module_px;
+          for (int c = 0; c < 4; ++c)
+            t.corners[c] = {placed->second.corners[c][0] + left, placed->second.corners[c][1]};
+          frame.truth_labels.push_back(std::move(t));
+        }
+      }
       if (left < o_.width && left + o_.tile_width + blur > 0)
         frame.truth_in_view.push_back(content_of(sim_label_scene(i)));
       if (left + o_.tile_width < 0) break;
@@ -460,6 +473,7 @@ class SimCamera final : public CameraSource {
     if (found != tiles_.end()) return found->second;
     // Keep the cache small: tiles far behind the belt are gone for good.
     while (tiles_.size() > 8) tiles_.erase(tiles_.begin());
+    while (placements_.size() > 8) placements_.erase(placements_.begin());
     auto spec = sim::parse_scene(sim_label_scene(index));
     if (!spec.ok()) {
       error = "camera sim: label " + std::to_string(index) + ": " + spec.error();
@@ -478,6 +492,8 @@ class SimCamera final : public CameraSource {
     }
     auto tile = std::make_shared<const imaging::Plane>(std::move(rendered.value()));
     tiles_.emplace(index, tile);
+    if (auto placed = sim::symbol_placement(spec.value()); placed.ok())
+      placements_.emplace(index, std::move(placed.value()));
     return tile;
   }
 
@@ -498,6 +514,7 @@ class SimCamera final : public CameraSource {
   bool running_ = false;
   std::mutex tiles_mutex_;
   std::map<std::uint64_t, std::shared_ptr<const imaging::Plane>> tiles_;
+  std::map<std::uint64_t, sim::SymbolPlacement> placements_;  ///< with tiles_, by label
   std::deque<std::future<Rendered>> in_flight_;
   std::vector<Frame> ring_;
 };

@@ -42,24 +42,29 @@ void to_luminance(const imaging::Plane& latent, int x0, int y0, int x1, int y1,
   }
 }
 
-DecodedCode decoded_code(const ZXing::Result& result, int offset_x, int offset_y) {
+/// The code ZXing read in a window at (offset_x, offset_y) of `latent`, measured on the latent.
+DecodedCode decoded_code(const ZXing::Result& result, int offset_x, int offset_y,
+                         const imaging::Plane& latent) {
   DecodedCode code;
   code.text = result.text();
   code.format = ZXing::ToString(result.format());
+  code.symbology_id = result.symbologyIdentifier();
+  code.ec_level = result.ecLevel();
+  code.orientation_deg = result.orientation();
   const auto& p = result.position();
+  CodeCorners corners;
+  for (int i = 0; i < 4; ++i) corners[i] = {p[i].x + 0.0 + offset_x, p[i].y + 0.0 + offset_y};
+  code.quality = measure_code(latent, code.format, corners);
   double sx = 0, sy = 0;
-  code.min_x = p[0].x;
-  code.max_x = p[0].x;
-  for (int i = 0; i < 4; ++i) {
-    sx += p[i].x;
-    sy += p[i].y;
-    code.min_x = std::min<double>(code.min_x, p[i].x);
-    code.max_x = std::max<double>(code.max_x, p[i].x);
+  code.min_x = code.max_x = code.quality.corners[0].x;
+  for (const CodePoint& c : code.quality.corners) {
+    sx += c.x;
+    sy += c.y;
+    code.min_x = std::min(code.min_x, c.x);
+    code.max_x = std::max(code.max_x, c.x);
   }
-  code.centre_x = sx / 4 + offset_x;
-  code.centre_y = sy / 4 + offset_y;
-  code.min_x += offset_x;
-  code.max_x += offset_x;
+  code.centre_x = sx / 4;
+  code.centre_y = sy / 4;
   return code;
 }
 
@@ -101,7 +106,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
     }
     for (const ZXing::Result& result : results) {
       if (!result.isValid()) continue;
-      DecodedCode code = decoded_code(result, x0, y0);
+      DecodedCode code = decoded_code(result, x0, y0, latent);
       if (!already_read(out.codes, code)) out.codes.push_back(std::move(code));
     }
   }

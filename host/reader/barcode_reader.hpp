@@ -17,16 +17,25 @@
 
 #include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
+#include "reader/code_measure.hpp"
 
 namespace flutterscan::reader {
 
 /// \brief One decoded barcode.
 struct DecodedCode {
   std::string text;
-  std::string format;   ///< ZXing's name: "Code128", "EAN-13", "QRCode", "DataMatrix", ...
-  double centre_x = 0;  ///< pixel column of the symbol's centre
+  std::string format;  ///< ZXing's name: "Code128", "EAN-13", "QRCode", "DataMatrix", ...
+  /// The ISO/IEC 15424 symbology identifier ZXing gives: "]C0" (Code 128), "]E0" (EAN-13),
+  /// "]Q1" (QR model 2), "]d1" (Data Matrix ECC 200), ...
+  std::string symbology_id;
+  std::string ec_level;     ///< matrix codes: the error-correction level ZXing reports, if any
+  int orientation_deg = 0;  ///< ZXing's: the symbol's reading direction, degrees
+  double centre_x = 0;      ///< pixel column of the symbol's centre
   double centre_y = 0;
   double min_x = 0, max_x = 0;  ///< extent along x
+  /// Where it lies (corners refined on the image for linear codes), its module
+  /// size and its indicative print quality (measure_code()).
+  CodeQuality quality;
 };
 
 /// \brief The symbologies read unless `processing.symbologies` names others.

@@ -185,6 +185,16 @@ void judge_labels(const Decoded& decoded, const imaging::Plane& latent,
     return imaging::position_along_motion(direction, code.centre_x, code.centre_y, latent.width,
                                           latent.height);
   };
+  auto read = [&](const reader::DecodedCode& code) {
+    Sighting s;
+    s.position_px = position(code);
+    s.across_px = imaging::moves_along_x(direction) ? code.centre_y : code.centre_x;
+    s.decoded = true;
+    s.value = code.text;
+    s.format = code.format;
+    s.code = code;
+    return s;
+  };
   std::vector<bool> used(codes.size(), false);
   for (const reader::LabelRegion& r : regions) {
     bool any = false;
@@ -193,27 +203,88 @@ void judge_labels(const Decoded& decoded, const imaging::Plane& latent,
       if (p >= r.begin - 8 && p <= r.end + 8 && !used[i]) {
         used[i] = true;
         any = true;
-        out.sightings.push_back({p, true, codes[i].text, codes[i].format});
+        out.sightings.push_back(read(codes[i]));
       }
     }
     if (!any) {
-      out.sightings.push_back({0.5 * (r.begin + r.end), false, "", ""});
+      Sighting s;
+      s.position_px = 0.5 * (r.begin + r.end);
+      s.across_px = 0.5 * (imaging::moves_along_x(direction) ? latent.height : latent.width);
+      out.sightings.push_back(std::move(s));
       out.decode_failed = true;
     }
   }
   for (std::size_t i = 0; i < codes.size(); ++i)
-    if (!used[i])
-      out.sightings.push_back({position(codes[i]), true, codes[i].text, codes[i].format});
+    if (!used[i]) out.sightings.push_back(read(codes[i]));
+}
+
+/// Every read against the label of its value the simulator placed (sim frames).
+std::vector<ReadTruthCheck> check_reads(const std::vector<reader::DecodedCode>& codes,
+                                        const std::vector<capture::TruthLabel>& truth) {
+  std::vector<ReadTruthCheck> checks;
+  if (truth.empty()) return checks;
+  for (const reader::DecodedCode& code : codes) {
+    ReadTruthCheck check;
+    check.value = code.text;
+    const auto label = std::find_if(truth.begin(), truth.end(), [&](const capture::TruthLabel& t) {
+      return t.value == code.text;
+    });
+    if (label != truth.end()) {
+      check.found = true;
+      for (int i = 0; i < 4; ++i)
+        check.corner_error_px = std::max(
+            {check.corner_error_px, std::abs(code.quality.corners[i].x - label->corners[i][0]),
+             std::abs(code.quality.corners[i].y - label->corners[i][1])});
+      check.module_error = std::abs(code.quality.module_px - label->module_px) / label->module_px;
+      check.symbology_id_matches = code.symbology_id == label->symbology_id;
+    }
+    checks.push_back(std::move(check));
+  }
+  return checks;
+}
+
+/// A number rounded to `decimals` for the log and the record.
+double rounded(double value, int decimals) {
+  const double scale = std::pow(10.0, decimals);
+  return std::round(value * scale) / scale;
 }
 
 nlohmann::json decoded_json(const std::vector<reader::DecodedCode>& codes) {
   nlohmann::json decoded = nlohmann::json::array();
-  for (const reader::DecodedCode& code : codes)
+  for (const reader::DecodedCode& code : codes) {
+    nlohmann::json corners = nlohmann::json::array();
+    for (const reader::CodePoint& c : code.quality.corners)
+      corners.push_back({rounded(c.x, 1), rounded(c.y, 1)});
     decoded.push_back({{"text", code.text},
                        {"format", code.format},
+                       {"symbology_id", code.symbology_id},
                        {"x", std::lround(code.centre_x)},
-                       {"y", std::lround(code.centre_y)}});
+                       {"y", std::lround(code.centre_y)},
+                       {"corners", corners},
+                       {"module_px", rounded(code.quality.module_px, 2)},
+                       {"grade", std::string(1, code.quality.grade)}});
+  }
   return decoded;
+}
+
+/// The frame part of every sighting's record: trigger, blur, decode time.
+void stamp_sightings(const FrameJob& job, const nlohmann::json& log, double blur_px,
+                     double decode_ms, FrameOutcome& out) {
+  SightingFrame frame;
+  frame.sequence = job.frame.sequence;
+  frame.camera_ns = job.frame.timestamp_ns;
+  frame.exposure_counter = job.event.frame_counter;
+  frame.encoder_delta = job.event.encoder_delta;
+  frame.travel_px = job.travel_px;
+  frame.blur_px = blur_px;
+  if (const auto motion = log.find("motion"); motion != log.end() && motion->is_object()) {
+    if (motion->contains("encoder_blur_px"))
+      frame.encoder_blur_px = (*motion)["encoder_blur_px"].get<double>();
+    if (motion->contains("refined_blur_px"))
+      frame.refined_blur_px = (*motion)["refined_blur_px"].get<double>();
+  }
+  frame.decode_ms = decode_ms;
+  for (Sighting& s : out.sightings) s.frame = frame;
 }
 
 double rounded_ms(std::int64_t from_ns, std::int64_t to_ns) {
@@ -275,6 +346,7 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
   const std::int64_t t3 = now_ns();
 
   judge_labels(decoded, deblurred.value().latent, model.direction, model.blur_px, out);
+  stamp_sightings(job, out.log, model.blur_px, ms_between(t2, t3), out);
   if (out.decode_failed) flags.push_back("no-read");
   out.log["decoded"] = decoded_json(decoded.readout.codes);
   out.log["labels_in_view"] = out.sightings.size();
@@ -282,6 +354,17 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
                          {"deblur", rounded_ms(t1, t2)},
                          {"decode", rounded_ms(t2, t3)}};
   if (!job.frame.truth.empty()) out.log["truth"] = job.frame.truth;
+  out.truth_checks = check_reads(decoded.readout.codes, job.frame.truth_labels);
+  if (!out.truth_checks.empty()) {
+    nlohmann::json checks = nlohmann::json::array();
+    for (const ReadTruthCheck& c : out.truth_checks)
+      checks.push_back({{"value", c.value},
+                        {"found", c.found},
+                        {"corner_error_px", rounded(c.corner_error_px, 2)},
+                        {"module_error_pct", rounded(100 * c.module_error, 1)},
+                        {"symbology_id_matches", c.symbology_id_matches}});
+    out.log["truth_check"] = checks;
+  }
   out.log["flags"] = flags;
   record(job, model, std::move(deblurred.value().latent), out);
   return out;

@@ -38,6 +38,11 @@ void ObjectTracker::observe(std::uint64_t frame_index, std::uint64_t sequence, d
       ++r.frames_decoded;
       ++r.values[s.value];
       if (r.format.empty()) r.format = s.format;
+      auto [kept, fresh] = best->best_read.try_emplace(s.value, s);
+      if (!fresh && s.code.quality.grade_value > kept->second.code.quality.grade_value)
+        kept->second = s;
+    } else {
+      r.best = s;  // the last sighting, until something reads
     }
     best->last_index = frame_index;
   }
@@ -51,6 +56,7 @@ ObjectResult ObjectTracker::finished(Active& active) {
       best = count;
       r.value = value;
     }
+  if (r.read()) r.best = active.best_read.at(r.value);
   return r;
 }
 

@@ -11,17 +11,39 @@
 
 #include <cstdint>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "reader/barcode_reader.hpp"
+
 namespace flutterscan::session {
+
+/// \brief The frame a sighting was made in: when, on which trigger, with what
+/// blur, how long its decode took and where its files were kept.
+struct SightingFrame {
+  std::uint64_t sequence = 0;  ///< the camera's frame number
+  std::int64_t camera_ns = 0;  ///< the camera's timestamp
+  std::int64_t utc_ms = 0;     ///< host wall clock (UTC) when the frame arrived, ms since 1970
+  std::uint32_t exposure_counter = 0;     ///< the controller's exposure event
+  std::int32_t encoder_delta = 0;         ///< encoder counts during the exposure
+  double travel_px = 0;                   ///< belt travel at the trigger since the session began
+  double blur_px = 0;                     ///< the blur the deblur used
+  std::optional<double> encoder_blur_px;  ///< motion refinement: the encoder's blur
+  std::optional<double> refined_blur_px;  ///< and the blur refined on the frame
+  double decode_ms = 0;                   ///< the frame's decode step
+  std::string kept_frame;  ///< "frames/fNNNNNNNN.png" when the frame's files were kept
+};
 
 /// \brief A label seen in one frame.
 struct Sighting {
   double position_px = 0;  ///< centre along the motion in the frame (mirrored for -x / -y)
+  double across_px = 0;    ///< centre across the motion in the frame
   bool decoded = false;
-  std::string value;   ///< when decoded
-  std::string format;  ///< when decoded
+  std::string value;         ///< when decoded
+  std::string format;        ///< when decoded
+  reader::DecodedCode code;  ///< when decoded: identifier, corners, module size, quality
+  SightingFrame frame;
 };
 
 /// \brief One object's result.
@@ -34,6 +56,9 @@ struct ObjectResult {
   std::string value;  ///< most frequent value; empty = NO-READ
   std::string format;
   std::map<std::string, int> values;  ///< every value read and how often (a conflict if > 1)
+  /// The sighting the record reports: of `value`, the one with the best grade
+  /// (the first of equal grades); for a NO-READ, the last sighting.
+  Sighting best;
   /// \brief frames_decoded / frames_seen.
   double decode_rate() const { return frames_seen > 0 ? double(frames_decoded) / frames_seen : 0; }
   bool read() const { return !value.empty(); }
@@ -57,6 +82,7 @@ class ObjectTracker {
   struct Active {
     ObjectResult result;
     std::uint64_t last_index = 0;
+    std::map<std::string, Sighting> best_read;  ///< by value
   };
   static ObjectResult finished(Active& active);
 

@@ -33,6 +33,16 @@ struct FrameJob {
   std::string match_note;  ///< the matcher's note (a re-derived offset), if any
 };
 
+/// \brief A read checked against the simulator's truth (sim frames only): the
+/// record's corners, module size and symbology identifier against the label's.
+struct ReadTruthCheck {
+  std::string value;
+  bool found = false;          ///< a label of this value lies whole in the frame
+  double corner_error_px = 0;  ///< the worst of the four corners, either axis
+  double module_error = 0;     ///< |measured - true| / true
+  bool symbology_id_matches = false;
+};
+
 /// \brief What the results thread gets for every frame index, processed or not.
 struct FrameOutcome {
   std::uint64_t index = 0;
@@ -50,6 +60,7 @@ struct FrameOutcome {
   nlohmann::json descriptor;
   std::vector<std::string> truth;
   std::vector<std::string> truth_in_view;
+  std::vector<ReadTruthCheck> truth_checks;  ///< one per read, on sim frames
 };
 
 /// \brief The queues between the stages and the frame counters they keep.

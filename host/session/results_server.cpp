@@ -1,5 +1,7 @@
 #include "session/results_server.hpp"
 
+#include "session/read_record.hpp"
+
 #include <arpa/inet.h>
 #include <fcntl.h>
 #include <netinet/in.h>
@@ -47,26 +49,6 @@ speed_t baud_constant(int baud) {
 }
 
 }  // namespace
-
-std::string result_line(const ObjectResult& o) {
-  nlohmann::json line = {{"object", o.id},
-                         {"belt_px", std::round(o.belt_px * 10) / 10},
-                         {"first_frame", o.first_frame},
-                         {"last_frame", o.last_frame},
-                         {"frames", o.frames_seen},
-                         {"decoded_frames", o.frames_decoded},
-                         {"status", o.read() ? "READ" : "NO-READ"}};
-  if (o.read()) {
-    line["value"] = o.value;
-    line["format"] = o.format;
-  }
-  if (o.values.size() > 1) {
-    nlohmann::json all = nlohmann::json::object();
-    for (const auto& [value, count] : o.values) all[value] = count;
-    line["conflicting_values"] = all;
-  }
-  return line.dump();
-}
 
 ResultsServer::~ResultsServer() {
   close();

@@ -2,7 +2,8 @@
 // Results out, as a line on a belt uses them (docs/session.md, "Results
 // protocol"): one JSON object per line, UTF-8, '\n'-terminated, over TCP
 // (every connected client gets every line; the first line a client gets is
-// the greeting {"protocol":"flutterscan-results","version":1}) and optionally
+// the greeting {"protocol":"flutterscan-results","version":2}; read_record.hpp
+// makes the lines) and optionally
 // a serial port. Sending never blocks the pipeline: a client whose socket
 // buffer is full is disconnected and counted; a serial port that cannot take
 // a line loses it and counts it.
@@ -14,14 +15,7 @@
 #include <thread>
 #include <vector>
 
-#include "session/object_tracker.hpp"
-
 namespace flutterscan::session {
-
-inline constexpr int kResultsProtocolVersion = 1;
-
-/// \brief The protocol line of one object.
-std::string result_line(const ObjectResult& object);
 
 class ResultsServer {
  public:

@@ -1,11 +1,13 @@
 #include "session/results_stage.hpp"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <utility>
 
 #include "capture/frame_pixels.hpp"
 #include "session/frame_preview.hpp"
+#include "session/read_record.hpp"
 #include "session/session_clock.hpp"
 
 namespace flutterscan::session {
@@ -72,12 +74,17 @@ void ResultsStage::handle_processed(FrameOutcome& f) {
   }
   results_.processed_at_s.push_back(ms_between(start_ns_, done) * 1e-3);
   ++pipeline_.frames_processed;
-  tracker_.observe(f.index, f.sequence, f.travel_px, f.sightings);
-  publish(tracker_.take_finished());
   for (const auto& t : f.truth) results_.truth_seen.insert(t);
   for (const auto& t : f.truth_in_view) results_.truth_in_view.insert(t);
+  count_truth_checks(f.truth_checks);
+  bool low_grade = false;
+  for (const Sighting& s : f.sightings)
+    if (s.decoded) {
+      ++results_.reads_by_grade[std::string(1, s.code.quality.grade)];
+      low_grade = low_grade || s.code.quality.grade_value < kLowGradeValue;
+    }
   const bool keep = static_cast<int>(results_.frames_saved) < config_.output.keep_first_frames ||
-                    (f.decode_failed && config_.output.keep_failed_frames);
+                    ((f.decode_failed || low_grade) && config_.output.keep_failed_frames);
   // The report shows the first frames with a read label, and failures.
   const bool read_something = std::any_of(f.sightings.begin(), f.sightings.end(),
                                           [](const Sighting& x) { return x.decoded; });
@@ -86,6 +93,7 @@ void ResultsStage::handle_processed(FrameOutcome& f) {
   // The frame's DN planes again (it converted without them), for these frames only.
   const auto dn = keep || preview ? capture::frame_to_dn(f.frame)
                                   : Result<imaging::Image, std::string>::success({});
+  std::string kept_frame;
   if (keep && !dn.ok()) {
     if (results_.save_error.empty()) results_.save_error = dn.error();
   } else if (keep) {
@@ -94,14 +102,42 @@ void ResultsStage::handle_processed(FrameOutcome& f) {
     } else {
       ++results_.frames_saved;
       f.log["files_saved"] = true;
+      kept_frame = SessionFolder::frame_file(f.sequence);
     }
   }
+  // The record's wall-clock time: now, less the time since the frame arrived.
+  const std::int64_t utc_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
+                                  std::chrono::system_clock::now().time_since_epoch())
+                                  .count() -
+                              (done - f.arrival_ns) / 1'000'000;
+  for (Sighting& s : f.sightings) {
+    s.frame.utc_ms = utc_ms;
+    s.frame.kept_frame = kept_frame;
+  }
+  tracker_.observe(f.index, f.sequence, f.travel_px, f.sightings);
+  publish(tracker_.take_finished());
   if (preview && dn.ok()) {
     Preview p = make_preview(f.sequence, dn.value(), f.latent);
     p.caption = "frame " + std::to_string(f.sequence) +
                 (f.decode_failed ? ": a label without a read" : ": labels read");
     results_.previews.push_back(std::move(p));
     (f.decode_failed ? previews_failed_ : previews_read_) += 1;
+  }
+}
+
+void ResultsStage::count_truth_checks(const std::vector<ReadTruthCheck>& checks) {
+  ReadRecordTruth& t = results_.read_record_truth;
+  for (const ReadTruthCheck& c : checks) {
+    if (!c.found) {
+      ++t.reads_without_label;
+      continue;
+    }
+    ++t.reads_checked;
+    t.corners_within_2px += c.corner_error_px <= 2 ? 1 : 0;
+    t.modules_within_10pct += c.module_error <= 0.1 ? 1 : 0;
+    t.symbology_ids_matching += c.symbology_id_matches ? 1 : 0;
+    t.worst_corner_error_px = std::max(t.worst_corner_error_px, c.corner_error_px);
+    t.worst_module_error = std::max(t.worst_module_error, c.module_error);
   }
 }
 

@@ -24,6 +24,19 @@
 
 namespace flutterscan::session {
 
+/// \brief The read record against the simulator's truth (sim sessions): how
+/// many reads had their label found, and how many of those were within the
+/// targets (corners within 2 px, module size within 10%, identifier equal).
+struct ReadRecordTruth {
+  std::uint64_t reads_checked = 0;  ///< reads of a label whole in the frame
+  std::uint64_t reads_without_label = 0;
+  std::uint64_t corners_within_2px = 0;
+  std::uint64_t modules_within_10pct = 0;
+  std::uint64_t symbology_ids_matching = 0;
+  double worst_corner_error_px = 0;
+  double worst_module_error = 0;
+};
+
 /// \brief What the results stage gathered for the summary and the report.
 struct SessionResults {
   std::vector<ObjectResult> objects;   ///< in the order they were published
@@ -40,7 +53,14 @@ struct SessionResults {
   /// its refined blur, and how many frames had no edges to refine it on.
   std::vector<double> refined_minus_encoder_px;
   std::uint64_t frames_without_motion_edges = 0;
+  ReadRecordTruth read_record_truth;
+  /// Reads by indicative grade ("A" .. "F"), every frame.
+  std::map<std::string, std::uint64_t> reads_by_grade;
 };
+
+/// \brief Reads graded below this (D or F) keep their frame's files, as
+/// NO-READs do (output.keep_failed_frames).
+inline constexpr double kLowGradeValue = 1.5;
 
 class ResultsStage {
  public:
@@ -66,6 +86,7 @@ class ResultsStage {
   void handle(FrameOutcome& f);
   void handle_processed(FrameOutcome& f);
   void publish(std::vector<ObjectResult> finished);
+  void count_truth_checks(const std::vector<ReadTruthCheck>& checks);
   Progress progress(std::int64_t now) const;
 
   const SessionConfig& config_;

@@ -50,13 +50,21 @@ void SessionFolder::log(const nlohmann::json& line) {
   log_.flush();
 }
 
+std::string SessionFolder::frame_stem(std::uint64_t sequence) {
+  char stem[32];
+  std::snprintf(stem, sizeof stem, "f%08llu", static_cast<unsigned long long>(sequence));
+  return stem;
+}
+
+std::string SessionFolder::frame_file(std::uint64_t sequence) {
+  return "frames/" + frame_stem(sequence) + ".png";
+}
+
 std::string SessionFolder::save_frame(std::uint64_t sequence, const imaging::Image& dn,
                                       const nlohmann::json& descriptor,
                                       const imaging::Plane* fused) {
   const fs::path frames = fs::path(path_) / "frames";
-  char stem_text[32];
-  std::snprintf(stem_text, sizeof stem_text, "f%08llu", static_cast<unsigned long long>(sequence));
-  const std::string stem = stem_text;
+  const std::string stem = frame_stem(sequence);
   Saved saved{sequence, {}, 0};
   auto account = [&](const fs::path& file) {
     std::error_code ec;

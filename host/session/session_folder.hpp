@@ -39,6 +39,10 @@ class SessionFolder {
   /// rotates. Error names the file.
   std::string save_frame(std::uint64_t sequence, const imaging::Image& dn,
                          const nlohmann::json& descriptor, const imaging::Plane* fused);
+  /// \brief "fNNNNNNNN": the stem of frame `sequence`'s files.
+  static std::string frame_stem(std::uint64_t sequence);
+  /// \brief "frames/fNNNNNNNN.png": the raw frame's path in the folder.
+  static std::string frame_file(std::uint64_t sequence);
   /// \brief Writes `name` in the folder atomically.
   std::string write_file(const std::string& name, const std::string& text) const;
   RotationStats rotation() const;

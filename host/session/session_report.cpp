@@ -8,6 +8,7 @@
 
 #include "codes/spectrum.hpp"
 #include "plot/line_chart.hpp"
+#include "session/read_record.hpp"
 
 namespace flutterscan::session {
 namespace {
@@ -186,14 +187,25 @@ std::string write_report(const std::string& folder, const ReportInputs& in) {
          << "<br>deblurred and fused</div></div>\n";
   }
 
+  // The table shows each object's read record (read_record.hpp), as the result lines carry it.
   html << "<h2>Decodes per object</h2><table><tr><th>object</th><th>belt px</th><th>frames</th>"
-       << "<th>decoded</th><th>rate</th><th>status</th><th>format</th><th>value</th></tr>\n";
+       << "<th>decoded</th><th>rate</th><th>status</th><th>format</th><th>identifier</th>"
+       << "<th>value</th><th>module px</th><th>grade (indicative)</th><th>time (UTC)</th>"
+       << "<th>kept frame</th></tr>\n";
   for (const auto& o : in.objects) {
+    const nlohmann::json r = read_record(o);
     html << "<tr" << (o.read() ? "" : " class=\"noread\"") << "><td>" << o.id << "</td><td>"
          << std::lround(o.belt_px) << "</td><td>" << o.frames_seen << "</td><td>"
          << o.frames_decoded << "</td><td>" << std::lround(100 * o.decode_rate()) << "%</td><td>"
-         << (o.read() ? "READ" : "NO-READ") << "</td><td>" << escape(o.format)
-         << "</td><td style=\"text-align:left\">" << escape(o.value) << "</td></tr>\n";
+         << (o.read() ? "READ" : "NO-READ") << "</td><td>" << escape(o.format) << "</td><td>"
+         << escape(r.value("symbology_id", "")) << "</td><td style=\"text-align:left\">"
+         << escape(o.value) << "</td><td>"
+         << (r.contains("module_px") ? escape(r["module_px"].dump()) : "") << "</td><td>"
+         << (r.contains("quality") && r["quality"].contains("grade")
+                 ? escape(r["quality"]["grade"].get<std::string>())
+                 : "")
+         << "</td><td>" << escape(r.value("time", "")) << "</td><td>"
+         << escape(r.value("frame_file", "")) << "</td></tr>\n";
   }
   html << "</table>\n<h2>Charts</h2>\n";
   for (const auto& c : made)

@@ -5,6 +5,7 @@
 #include <set>
 
 #include "imaging/deblur.hpp"
+#include "session/read_record.hpp"
 #include "session/results_server.hpp"
 
 namespace flutterscan::session {
@@ -128,9 +129,19 @@ nlohmann::json session_summary(const SessionConfig& config, const SessionCounts&
                          {"labels_read", results.truth_seen.size() - missed.size()},
                          {"missed", missed},
                          {"wrong_values", wrong}};
+    const ReadRecordTruth& r = results.read_record_truth;
+    s["ground_truth"]["read_record"] = {
+        {"reads_checked", r.reads_checked},
+        {"reads_without_label", r.reads_without_label},
+        {"corners_within_2px", r.corners_within_2px},
+        {"modules_within_10pct", r.modules_within_10pct},
+        {"symbology_ids_matching", r.symbology_ids_matching},
+        {"worst_corner_error_px", std::round(r.worst_corner_error_px * 100) / 100},
+        {"worst_module_error_pct", std::round(r.worst_module_error * 1000) / 10}};
   }
+  s["reads_by_grade"] = results.reads_by_grade;
   nlohmann::json object_list = nlohmann::json::array();
-  for (const auto& o : objects) object_list.push_back(nlohmann::json::parse(result_line(o)));
+  for (const auto& o : objects) object_list.push_back(read_record(o));
   s["object_results"] = object_list;
   if (!counts.capture_error.empty()) s["error"] = counts.capture_error;
   if (!results.save_error.empty()) s["save_error"] = results.save_error;

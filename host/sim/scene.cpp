@@ -370,41 +370,59 @@ void fill_rect(imaging::Plane& image, const LabelRect& rect, float value) {
   }
 }
 
-PlaneResult render_barcode(const SceneSpec& spec) {
-  auto grid_result = encode_symbol(spec.kind, spec.content);
-  if (!grid_result) return PlaneResult::failure(grid_result.error());
-  const ModuleGrid& grid = grid_result.value();
-  const double m = spec.module_px;
-  const double symbol_w = grid.cols * m;
-  const bool linear = spec.kind == SceneKind::kCode128 || spec.kind == SceneKind::kEan13;
+/// Where a barcode's symbol and label go in the image.
+struct BarcodeLayout {
+  ModuleGrid grid;
+  bool linear = false;
+  LabelRect label;
+  double x0 = 0, y0 = 0;              ///< the symbol's top-left corner (pixel edges), px
+  double symbol_w = 0, symbol_h = 0;  ///< px
+};
 
-  double quiet_x = 0, quiet_y = 0, symbol_h = 0;  // px
-  if (linear) {
+Result<BarcodeLayout, std::string> barcode_layout(const SceneSpec& spec) {
+  using LayoutResult = Result<BarcodeLayout, std::string>;
+  auto grid_result = encode_symbol(spec.kind, spec.content);
+  if (!grid_result) return LayoutResult::failure(grid_result.error());
+  BarcodeLayout layout;
+  layout.grid = std::move(grid_result.value());
+  const double m = spec.module_px;
+  layout.symbol_w = layout.grid.cols * m;
+  layout.linear = spec.kind == SceneKind::kCode128 || spec.kind == SceneKind::kEan13;
+
+  double quiet_x = 0, quiet_y = 0;  // px
+  if (layout.linear) {
     quiet_x = (spec.kind == SceneKind::kEan13 ? kEan13QuietModules : kCode128QuietModules) * m;
     quiet_y = kLinearVerticalQuietModules * m;
     // As tall as wanted if the image has room, never below the least height.
     const double room = spec.height - 2.0 * kMinBeltPx - 2.0 * quiet_y;
-    symbol_h = std::floor(std::min(kBarHeightWanted * symbol_w, room));
-    symbol_h = std::max(symbol_h, std::ceil(kBarHeightLeast * symbol_w));
+    layout.symbol_h = std::floor(std::min(kBarHeightWanted * layout.symbol_w, room));
+    layout.symbol_h = std::max(layout.symbol_h, std::ceil(kBarHeightLeast * layout.symbol_w));
   } else {
     quiet_x = quiet_y =
         (spec.kind == SceneKind::kQr ? kQrQuietModules : kDataMatrixQuietModules) * m;
-    symbol_h = grid.rows * m;
+    layout.symbol_h = layout.grid.rows * m;
   }
-  const int label_w = whole_px(symbol_w + 2 * quiet_x);
-  const int label_h = whole_px(symbol_h + 2 * quiet_y);
+  const int label_w = whole_px(layout.symbol_w + 2 * quiet_x);
+  const int label_h = whole_px(layout.symbol_h + 2 * quiet_y);
   auto rect = place_label(spec, label_w, label_h, describe(spec));
-  if (!rect) return PlaneResult::failure(rect.error());
-  const LabelRect& label = rect.value();
-
-  imaging::Plane image(spec.width, spec.height, static_cast<float>(spec.belt));
-  fill_rect(image, label, static_cast<float>(spec.paper));
+  if (!rect) return LayoutResult::failure(rect.error());
+  layout.label = rect.value();
   // Centred in the label: with whole-pixel modules the symbol's edges fall on
   // pixel edges; with fractional ones the edge pixels are area averages.
-  const double x0 = label.x + (label.w - symbol_w) / 2.0;
-  const double y0 = label.y + (label.h - symbol_h) / 2.0;
-  const double cell_h = linear ? symbol_h : m;
-  paint_grid(image, grid, x0, y0, m, cell_h, spec.paper, spec.ink);
+  layout.x0 = layout.label.x + (layout.label.w - layout.symbol_w) / 2.0;
+  layout.y0 = layout.label.y + (layout.label.h - layout.symbol_h) / 2.0;
+  return LayoutResult::success(std::move(layout));
+}
+
+PlaneResult render_barcode(const SceneSpec& spec) {
+  auto layout_result = barcode_layout(spec);
+  if (!layout_result) return PlaneResult::failure(layout_result.error());
+  const BarcodeLayout& layout = layout_result.value();
+  imaging::Plane image(spec.width, spec.height, static_cast<float>(spec.belt));
+  fill_rect(image, layout.label, static_cast<float>(spec.paper));
+  const double cell_h = layout.linear ? layout.symbol_h : spec.module_px;
+  paint_grid(image, layout.grid, layout.x0, layout.y0, spec.module_px, cell_h, spec.paper,
+             spec.ink);
   return PlaneResult::success(std::move(image));
 }
 
@@ -594,6 +612,33 @@ PlaneResult render_scene(const SceneSpec& camera_spec, int supersample) {
   PlaneResult label = spec.kind == SceneKind::kText ? render_text(spec) : render_barcode(spec);
   if (!label.ok()) return label;
   return PlaneResult::success(weather_print(std::move(label.value()), camera_spec, supersample));
+}
+
+Result<SymbolPlacement, std::string> symbol_placement(const SceneSpec& spec) {
+  using PlacementResult = Result<SymbolPlacement, std::string>;
+  if (std::string problem = spec_problem(spec); !problem.empty())
+    return PlacementResult::failure(problem);
+  if (std::string problem = content_problem(spec.kind, spec.content); !problem.empty())
+    return PlacementResult::failure(problem);
+  const char* id = spec.kind == SceneKind::kCode128      ? "]C0"
+                   : spec.kind == SceneKind::kEan13      ? "]E0"
+                   : spec.kind == SceneKind::kQr         ? "]Q1"
+                   : spec.kind == SceneKind::kDataMatrix ? "]d1"
+                                                         : nullptr;
+  if (id == nullptr)
+    return PlacementResult::failure(std::string(scene_kind_name(spec.kind)) +
+                                    " scenes hold no barcode");
+  auto layout = barcode_layout(spec);
+  if (!layout) return PlacementResult::failure(layout.error());
+  SymbolPlacement p;
+  // Pixel edges to pixel centres: pixel x covers [x, x + 1) and its centre is x.
+  const double left = layout.value().x0 - 0.5, top = layout.value().y0 - 0.5;
+  const double right = left + layout.value().symbol_w, bottom = top + layout.value().symbol_h;
+  p.corners = {{{left, top}, {right, top}, {right, bottom}, {left, bottom}}};
+  p.module_px = spec.module_px;
+  p.modules = layout.value().grid.cols;
+  p.symbology_id = id;
+  return PlacementResult::success(std::move(p));
 }
 
 }  // namespace flutterscan::sim

@@ -20,6 +20,7 @@
 // are sRGB-encoded (linearised, then Rec. 709 luminance), float files linear;
 // it fills the whole frame (resized to width x height), with no label or belt.
 
+#include <array>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -81,5 +82,21 @@ Result<SceneSpec, std::string> parse_scene(const std::string& text);
 /// label that does not fit (the message gives the image size needed), an image
 /// file that cannot be read.
 Result<imaging::Plane, std::string> render_scene(const SceneSpec& spec, int supersample = 1);
+
+/// \brief Where a barcode scene's symbol lies in the image render_scene()
+/// makes at supersample 1: what a reader should find there.
+struct SymbolPlacement {
+  /// Top-left, top-right, bottom-right, bottom-left of the symbol (its outer
+  /// module edges; for linear codes, first bar to last and the bars' height),
+  /// in pixel-centre coordinates: pixel (x, y)'s centre is (x, y).
+  std::array<std::array<double, 2>, 4> corners{};
+  double module_px = 0;
+  int modules = 0;           ///< along the code (linear) or per row (matrix)
+  std::string symbology_id;  ///< ISO/IEC 15424: "]C0", "]E0", "]Q1", "]d1"
+};
+
+/// \brief The symbol's placement in a barcode scene (code128, ean13, qr,
+/// datamatrix); other kinds and specs render_scene() refuses are errors.
+Result<SymbolPlacement, std::string> symbol_placement(const SceneSpec& spec);
 
 }  // namespace flutterscan::sim

@@ -20,7 +20,12 @@ FrameOutcome processed(std::uint64_t index, double travel_px, double position_px
   o.travel_px = travel_px;
   o.arrival_ns = 1;
   o.log = {{"index", index}, {"model", {{"chosen", "global"}}}, {"flags", nlohmann::json::array()}};
-  o.sightings.push_back({position_px, !value.empty(), value, value.empty() ? "" : "Code128"});
+  Sighting s;
+  s.position_px = position_px;
+  s.decoded = !value.empty();
+  s.value = value;
+  s.format = value.empty() ? "" : "Code128";
+  o.sightings.push_back(s);
   o.decode_failed = value.empty();
   if (value.empty()) o.log["flags"].push_back("no-read");
   o.truth = {"ABC"};

@@ -50,11 +50,24 @@ TEST(SimSession, EveryLabelReadEqualsItsGroundTruthAtNominalNoise) {
   EXPECT_LT(std::abs(motion["refined_minus_encoder_px_p50"].get<double>()), 0.05) << motion.dump();
   EXPECT_LT(std::abs(motion["refined_minus_encoder_px_p5"].get<double>()), 0.2) << motion.dump();
   EXPECT_LT(std::abs(motion["refined_minus_encoder_px_p95"].get<double>()), 0.2) << motion.dump();
-  // Every object read, each as one object over several frames.
+  // Every object read, each as one object over several frames, with its read record.
   for (const auto& o : s["object_results"]) {
     EXPECT_EQ(o["status"], "READ") << o.dump();
     EXPECT_EQ(o.value("conflicting_values", nlohmann::json()).is_null(), true) << o.dump();
+    EXPECT_EQ(o["time"].get<std::string>().size(), 24u) << o.dump();  // 2026-11-25T17:05:29.123Z
+    EXPECT_TRUE(o["trigger"].contains("exposure_counter")) << o.dump();
+    EXPECT_EQ(o["corners"].size(), 4u) << o.dump();
+    EXPECT_GT(o["module_px"].get<double>(), 0) << o.dump();
+    EXPECT_EQ(o["quality"]["indicative"], true) << o.dump();
+    EXPECT_GT(o["decode_ms"].get<double>(), 0) << o.dump();
   }
+  // The record against the sim's truth: every read of a label whole in the frame has its
+  // corners within 2 px, its module size within 10% and the label's symbology identifier.
+  const auto& record = s["ground_truth"]["read_record"];
+  EXPECT_GE(record["reads_checked"].get<int>(), 20) << record.dump();
+  EXPECT_EQ(record["corners_within_2px"], record["reads_checked"]) << record.dump();
+  EXPECT_EQ(record["modules_within_10pct"], record["reads_checked"]) << record.dump();
+  EXPECT_EQ(record["symbology_ids_matching"], record["reads_checked"]) << record.dump();
   // The folder: one log line per frame, the first frames' files, summary, report.
   int bad = 0;
   const auto lines = read_jsonl(out / "session.jsonl", bad);
@@ -196,13 +209,22 @@ TEST(SimSession, ATcpClientReadsOneLinePerObject) {
   ASSERT_GE(received.size(), 2u);
   const auto greeting = nlohmann::json::parse(received[0]);
   EXPECT_EQ(greeting["protocol"], "flutterscan-results");
-  EXPECT_EQ(greeting["version"], 1);
+  EXPECT_EQ(greeting["version"], 2);
   const auto& objects = outcome.summary["object_results"];
   ASSERT_EQ(received.size() - 1, objects.size());
   for (std::size_t i = 1; i < received.size(); ++i) {
     const auto line = nlohmann::json::parse(received[i]);
     EXPECT_EQ(line, objects[i - 1]);
+    // A version 1 client finds every field it knows, with its type.
+    EXPECT_TRUE(line["object"].is_number_unsigned());
+    EXPECT_TRUE(line["belt_px"].is_number());
+    EXPECT_TRUE(line["first_frame"].is_number_unsigned() &&
+                line["last_frame"].is_number_unsigned());
+    EXPECT_TRUE(line["frames"].is_number_integer() && line["decoded_frames"].is_number_integer());
     EXPECT_TRUE(line["status"] == "READ" || line["status"] == "NO-READ");
+    if (line["status"] == "READ") {
+      EXPECT_TRUE(line["value"].is_string() && line["format"].is_string()) << line.dump();
+    }
   }
 }
 

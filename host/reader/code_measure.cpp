@@ -1,0 +1,415 @@
+#include "reader/code_measure.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <complex>
+#include <numbers>
+#include <optional>
+#include <vector>
+
+namespace flutterscan::reader {
+
+namespace {
+
+CodePoint operator+(CodePoint a, CodePoint b) {
+  return {a.x + b.x, a.y + b.y};
+}
+CodePoint operator-(CodePoint a, CodePoint b) {
+  return {a.x - b.x, a.y - b.y};
+}
+CodePoint operator*(double s, CodePoint a) {
+  return {s * a.x, s * a.y};
+}
+double length(CodePoint a) {
+  return std::hypot(a.x, a.y);
+}
+CodePoint midpoint(CodePoint a, CodePoint b) {
+  return 0.5 * (a + b);
+}
+
+/// Bilinear reflectance at (x, y); nullopt outside the image.
+std::optional<double> sample(const imaging::Plane& latent, CodePoint p) {
+  if (!(p.x >= 0 && p.y >= 0 && p.x <= latent.width - 1 && p.y <= latent.height - 1))
+    return std::nullopt;
+  const int x0 = std::min(static_cast<int>(p.x), latent.width - 2 < 0 ? 0 : latent.width - 2);
+  const int y0 = std::min(static_cast<int>(p.y), latent.height - 2 < 0 ? 0 : latent.height - 2);
+  const int x1 = std::min(x0 + 1, latent.width - 1), y1 = std::min(y0 + 1, latent.height - 1);
+  const double fx = p.x - x0, fy = p.y - y0;
+  const double top = latent.at(x0, y0) * (1 - fx) + latent.at(x1, y0) * fx;
+  const double bottom = latent.at(x0, y1) * (1 - fx) + latent.at(x1, y1) * fx;
+  return std::clamp(top * (1 - fy) + bottom * fy, 0.0, 1.0);
+}
+
+/// ISO/IEC 15416's grade thresholds (4 = A ... 0 = F) for a parameter that is
+/// better higher (`at_least`) or lower (`at_most`), given the A, B, C and D limits.
+double grade_at_least(double v, double a, double b, double c, double d) {
+  return v >= a ? 4 : v >= b ? 3 : v >= c ? 2 : v >= d ? 1 : 0;
+}
+double grade_at_most(double v, double a, double b, double c, double d) {
+  return v <= a ? 4 : v <= b ? 3 : v <= c ? 2 : v <= d ? 1 : 0;
+}
+double contrast_grade(double sc) {
+  return grade_at_least(sc, 0.70, 0.55, 0.40, 0.20);
+}
+
+// ---- linear codes --------------------------------------------------------
+
+/// The scan line of a linear code: reflectance along `axis` through `origin`,
+/// t from t0 in steps of `step` px.
+struct ScanLine {
+  CodePoint origin;
+  CodePoint axis;    ///< unit, along the code (left to right)
+  CodePoint across;  ///< unit, along the bars (top to bottom)
+};
+
+/// Samples of the line at offset `s` across, t in [t0, t1] every `step`; stops
+/// short (fewer samples) where the line leaves the image.
+std::vector<double> profile(const imaging::Plane& latent, const ScanLine& line, double s, double t0,
+                            double t1, double step) {
+  std::vector<double> out;
+  for (double t = t0; t <= t1 + 1e-9; t += step) {
+    const auto v = sample(latent, line.origin + t * line.axis + s * line.across);
+    if (!v) break;
+    out.push_back(*v);
+  }
+  return out;
+}
+
+/// Where a profile (samples every `step` from `t0`) crosses `threshold`
+/// between samples i - 1 and i, linearly interpolated.
+double crossing(const std::vector<double>& p, std::size_t i, double threshold, double t0,
+                double step) {
+  const double a = p[i - 1], b = p[i];
+  const double f = a == b ? 0.5 : (threshold - a) / (b - a);
+  return t0 + (static_cast<double>(i - 1) + std::clamp(f, 0.0, 1.0)) * step;
+}
+
+/// One element of a scan reflectance profile: bar (below the threshold) or space.
+struct Element {
+  bool bar = false;
+  double begin = 0, end = 0;  ///< t of its edges
+  double extreme = 0;         ///< lowest reflectance of a bar, highest of a space
+  double nonuniformity = 0;   ///< ERN: highest inner peak - lowest valley within it
+};
+
+/// The elements of profile `p` (samples every `step` from `t0`) at `threshold`.
+std::vector<Element> elements(const std::vector<double>& p, double threshold, double t0,
+                              double step) {
+  std::vector<Element> out;
+  if (p.empty()) return out;
+  std::size_t start = 0;
+  double begin = t0;
+  for (std::size_t i = 1; i <= p.size(); ++i) {
+    const bool ends = i == p.size() || (p[i] < threshold) != (p[start] < threshold);
+    if (!ends) continue;
+    Element e;
+    e.bar = p[start] < threshold;
+    e.begin = begin;
+    e.end = i == p.size() ? t0 + static_cast<double>(i - 1) * step
+                          : crossing(p, i, threshold, t0, step);
+    double lo = p[start], hi = p[start];
+    for (std::size_t k = start; k < i; ++k) lo = std::min(lo, p[k]), hi = std::max(hi, p[k]);
+    e.extreme = e.bar ? lo : hi;
+    // Inner peaks of a bar (valleys of a space) against its extreme.
+    for (std::size_t k = start + 1; k + 1 < i; ++k) {
+      const bool peak = p[k] > p[k - 1] && p[k] >= p[k + 1];
+      const bool valley = p[k] < p[k - 1] && p[k] <= p[k + 1];
+      if (e.bar && peak) e.nonuniformity = std::max(e.nonuniformity, p[k] - lo);
+      if (!e.bar && valley) e.nonuniformity = std::max(e.nonuniformity, hi - p[k]);
+    }
+    out.push_back(e);
+    start = i;
+    begin = e.end;
+  }
+  return out;
+}
+
+/// Modules of a linear symbol of `format` with `count` elements (bars and
+/// spaces, first bar to last), where the symbology fixes it; 0 otherwise.
+int structured_modules(const std::string& format, std::size_t count) {
+  const auto n = static_cast<int>(count);
+  if (format == "Code128" && n >= 13 && (n - 7) % 6 == 0) return 11 * ((n - 7) / 6) + 13;
+  if ((format == "EAN-13" || format == "UPC-A") && n == 59) return 95;
+  if (format == "EAN-8" && n == 43) return 67;
+  if (format == "UPC-E" && n == 33) return 51;
+  return 0;
+}
+
+/// The graded parameters of one scan.
+struct ScanGrade {
+  double r_min = 0, r_max = 0, sc = 0, ec_min = 0, modulation = 0, defects = 0, grade = 0;
+};
+
+/// One scan at offset `s` across: the profile from the quiet zone before the
+/// first bar to the one after the last (at most `quiet` px each side, less
+/// where the label's paper ends), graded. `expected` elements first bar to last:
+/// a scan that finds another count cannot decode the symbol the others read.
+ScanGrade grade_scan(const imaging::Plane& latent, const ScanLine& line, double s, double t_begin,
+                     double t_end, double quiet, double paper_threshold, std::size_t expected) {
+  constexpr double kStep = 0.5;
+  // The quiet zones: out from the symbol while the label's paper lasts.
+  auto quiet_extent = [&](double from, double direction) {
+    double q = 0;
+    while (q + kStep <= quiet) {
+      const auto v = sample(
+          latent, line.origin + (from + direction * (q + kStep)) * line.axis + s * line.across);
+      if (!v || *v < paper_threshold) break;
+      q += kStep;
+    }
+    return q;
+  };
+  const double t0 = t_begin - quiet_extent(t_begin - 1.5, -1) - 1.5;
+  const double t1 = t_end + quiet_extent(t_end + 1.5, +1) + 1.5;
+  const std::vector<double> p = profile(latent, line, s, t0, t1, kStep);
+  ScanGrade g;
+  if (p.size() < 4) return g;
+  g.r_min = *std::min_element(p.begin(), p.end());
+  g.r_max = *std::max_element(p.begin(), p.end());
+  g.sc = g.r_max - g.r_min;
+  if (g.sc <= 0) return g;
+  const std::vector<Element> es = elements(p, g.r_min + g.sc / 2, t0, kStep);
+  g.ec_min = g.sc;
+  double ern = 0;
+  std::size_t bars_and_spaces = 0;  // first bar to last
+  for (std::size_t i = 0; i < es.size(); ++i) {
+    if (i + 1 < es.size())
+      g.ec_min = std::min(g.ec_min, std::abs(es[i].extreme - es[i + 1].extreme));
+    ern = std::max(ern, es[i].nonuniformity);
+  }
+  if (es.size() >= 3)
+    bars_and_spaces = es.size() - (es.front().bar ? 0 : 1) - (es.back().bar ? 0 : 1);
+  g.modulation = g.ec_min / g.sc;
+  g.defects = ern / g.sc;
+  const bool decodes = bars_and_spaces == expected;
+  g.grade = std::min({contrast_grade(g.sc), g.ec_min >= 0.15 ? 4.0 : 0.0,
+                      grade_at_least(g.modulation, 0.70, 0.60, 0.50, 0.40),
+                      grade_at_most(g.defects, 0.15, 0.20, 0.25, 0.30),
+                      g.r_min <= 0.5 * g.r_max ? 4.0 : 0.0, decodes ? 4.0 : 0.0});
+  return g;
+}
+
+/// How far (px) across from the scan line the bars go in `direction` (+1 or
+/// -1): where the profile's projection on the centre's falls to half.
+double bar_extent(const imaging::Plane& latent, const ScanLine& line, double t_begin, double t_end,
+                  double direction, double limit) {
+  constexpr double kStep = 0.5;
+  const std::vector<double> ref = profile(latent, line, 0, t_begin, t_end, 1.0);
+  double mean = 0;
+  for (double v : ref) mean += v;
+  mean /= static_cast<double>(ref.size());
+  double norm = 0;
+  for (double v : ref) norm += (v - mean) * (v - mean);
+  if (norm <= 0) return 0;
+  double previous = 1;
+  for (double s = kStep; s <= limit; s += kStep) {
+    const std::vector<double> p = profile(latent, line, direction * s, t_begin, t_end, 1.0);
+    double amplitude = 0;
+    if (p.size() == ref.size()) {
+      double pm = 0;
+      for (double v : p) pm += v;
+      pm /= static_cast<double>(p.size());
+      for (std::size_t i = 0; i < p.size(); ++i) amplitude += (p[i] - pm) * (ref[i] - mean);
+      amplitude /= norm;
+    }
+    if (amplitude < 0.5) {
+      const double f = previous == amplitude ? 0.5 : (previous - 0.5) / (previous - amplitude);
+      return s - kStep + std::clamp(f, 0.0, 1.0) * kStep;
+    }
+    previous = amplitude;
+  }
+  return limit;
+}
+
+CodeQuality measure_linear(const imaging::Plane& latent, const std::string& format,
+                           const CodeCorners& corners) {
+  CodeQuality q;
+  q.corners = corners;
+  const CodePoint left = midpoint(corners[0], corners[3]), right = midpoint(corners[1], corners[2]);
+  const double span = length(right - left);
+  if (span < 8) {
+    q.problem = "the code is shorter than 8 px";
+    return q;
+  }
+  ScanLine line;
+  line.axis = (1 / span) * (right - left);
+  line.across = {-line.axis.y, line.axis.x};
+  line.origin = midpoint(left, right);
+  // The bars along the decoded line: first bar's leading edge to last bar's trailing edge.
+  constexpr double kStep = 0.5, kMargin = 4;
+  const double t0 = -span / 2 - kMargin;
+  const std::vector<double> centre = profile(latent, line, 0, t0, span / 2 + kMargin, kStep);
+  if (centre.size() < 8) {
+    q.problem = "the code runs off the image";
+    return q;
+  }
+  const double lo = *std::min_element(centre.begin(), centre.end());
+  const double hi = *std::max_element(centre.begin(), centre.end());
+  const double threshold = (lo + hi) / 2;
+  std::vector<Element> es = elements(centre, threshold, t0, kStep);
+  while (!es.empty() && !es.front().bar) es.erase(es.begin());
+  while (!es.empty() && !es.back().bar) es.pop_back();
+  if (es.size() < 3 || hi - lo < 0.05) {
+    q.problem = "no bars along the decoded line";
+    return q;
+  }
+  const double t_begin = es.front().begin, t_end = es.back().end;
+  q.modules = structured_modules(format, es.size());
+  if (q.modules > 0) {
+    q.module_px = (t_end - t_begin) / q.modules;
+  } else {
+    // Symbologies of narrow and wide elements: the narrow ones' mean width.
+    std::vector<double> widths;
+    for (const Element& e : es) widths.push_back(e.end - e.begin);
+    std::sort(widths.begin(), widths.end());
+    const double narrow_limit = 1.5 * widths[widths.size() / 10];
+    double sum = 0;
+    int n = 0;
+    for (double w : widths)
+      if (w <= narrow_limit) sum += w, ++n;
+    q.module_px = sum / n;
+    q.modules = static_cast<int>(std::lround((t_end - t_begin) / q.module_px));
+  }
+  // The bars' ends across: where the centre's profile fades out either side.
+  const double up = bar_extent(latent, line, t_begin, t_end, -1, 2 * span);
+  const double down = bar_extent(latent, line, t_begin, t_end, +1, 2 * span);
+  auto at = [&](double t, double s) { return line.origin + t * line.axis + s * line.across; };
+  q.corners = {at(t_begin, -up), at(t_end, -up), at(t_end, down), at(t_begin, down)};
+  // Ten scans over 10%-90% of the bar height.
+  const double height = up + down;
+  const double paper = threshold;  // beyond the quiet zone the belt is darker than this
+  constexpr int kScans = 10;
+  double sum_grade = 0;
+  for (int i = 0; i < kScans; ++i) {
+    const double s = -up + height * (0.1 + 0.8 * (i + 0.5) / kScans);
+    const ScanGrade g =
+        grade_scan(latent, line, s, t_begin, t_end, 10 * q.module_px, paper, es.size());
+    q.r_min += g.r_min / kScans;
+    q.r_max += g.r_max / kScans;
+    q.symbol_contrast += g.sc / kScans;
+    q.edge_contrast += g.ec_min / kScans;
+    q.modulation += g.modulation / kScans;
+    q.defects += g.defects / kScans;
+    sum_grade += g.grade;
+  }
+  q.scans = kScans;
+  q.grade_value = sum_grade / kScans;
+  q.grade = grade_letter(q.grade_value);
+  q.measured = true;
+  return q;
+}
+
+// ---- matrix codes --------------------------------------------------------
+
+/// The point at (u, v) in [0, 1]^2 of the quadrilateral `c` (bilinear).
+CodePoint in_quad(const CodeCorners& c, double u, double v) {
+  return (1 - u) * (1 - v) * c[0] + u * (1 - v) * c[1] + u * v * c[2] + (1 - u) * v * c[3];
+}
+
+/// Cycles over `g` of its strongest periodic component among `lowest` .. size/2.
+int strongest_cycles(const std::vector<double>& g, int lowest) {
+  const auto n = static_cast<int>(g.size());
+  double mean = 0;
+  for (double v : g) mean += v;
+  mean /= n;
+  int best = 0;
+  double best_power = 0;
+  for (int k = lowest; k <= n / 2; ++k) {
+    std::complex<double> sum = 0;
+    for (int i = 0; i < n; ++i)
+      sum += (g[i] - mean) * std::polar(1.0, -2 * std::numbers::pi * k * i / n);
+    if (std::norm(sum) > best_power) best_power = std::norm(sum), best = k;
+  }
+  return best;
+}
+
+CodeQuality measure_matrix(const imaging::Plane& latent, const CodeCorners& c) {
+  CodeQuality q;
+  q.corners = c;
+  const double width = 0.5 * (length(c[1] - c[0]) + length(c[2] - c[3]));
+  const double height = 0.5 * (length(c[3] - c[0]) + length(c[2] - c[1]));
+  const int samples = static_cast<int>(std::ceil(std::max(width, height)));
+  if (samples < 16) {
+    q.problem = "the symbol is smaller than 16 px";
+    return q;
+  }
+  // The symbol resampled square; the edges between modules fall on its module grid.
+  std::vector<double> patch(static_cast<std::size_t>(samples) * samples);
+  for (int j = 0; j < samples; ++j)
+    for (int i = 0; i < samples; ++i) {
+      const auto v = sample(latent, in_quad(c, (i + 0.5) / samples, (j + 0.5) / samples));
+      if (!v) {
+        q.problem = "the symbol runs off the image";
+        return q;
+      }
+      patch[static_cast<std::size_t>(j) * samples + i] = *v;
+    }
+  std::vector<double> gx(samples - 1, 0.0), gy(samples - 1, 0.0);
+  for (int j = 0; j < samples; ++j)
+    for (int i = 0; i + 1 < samples; ++i) {
+      gx[i] += std::abs(patch[j * samples + i + 1] - patch[j * samples + i]);
+      gy[i] += std::abs(patch[(i + 1) * samples + j] - patch[i * samples + j]);
+    }
+  constexpr int kFewestModules = 8;  // no matrix symbology has fewer per side
+  const int cols = strongest_cycles(gx, kFewestModules);
+  const int rows = strongest_cycles(gy, kFewestModules);
+  if (cols == 0 || rows == 0) {
+    q.problem = "no module grid inside the symbol";
+    return q;
+  }
+  q.modules = cols;
+  q.module_px = width / cols;
+  // The reflectance at each module's centre.
+  std::vector<double> centres;
+  for (int r = 0; r < rows; ++r)
+    for (int k = 0; k < cols; ++k)
+      centres.push_back(*sample(latent, in_quad(c, (k + 0.5) / cols, (r + 0.5) / rows)));
+  const auto [lo, hi] = std::minmax_element(centres.begin(), centres.end());
+  q.r_min = *lo;
+  q.r_max = *hi;
+  q.symbol_contrast = q.r_max - q.r_min;
+  if (q.symbol_contrast > 0) {
+    const double threshold = (q.r_max + q.r_min) / 2;
+    std::vector<double> modulation;
+    for (double v : centres)
+      modulation.push_back(std::abs(v - threshold) / (q.symbol_contrast / 2));
+    std::nth_element(modulation.begin(), modulation.begin() + modulation.size() / 20,
+                     modulation.end());
+    q.modulation = modulation[modulation.size() / 20];
+  }
+  q.axial_nonuniformity =
+      std::abs(q.module_px - height / rows) / (0.5 * (q.module_px + height / rows));
+  q.scans = 1;
+  q.grade_value = std::min({contrast_grade(q.symbol_contrast),
+                            grade_at_least(q.modulation, 0.50, 0.40, 0.30, 0.20),
+                            grade_at_most(q.axial_nonuniformity, 0.06, 0.08, 0.10, 0.12)});
+  q.grade = grade_letter(q.grade_value);
+  q.measured = true;
+  return q;
+}
+
+}  // namespace
+
+bool is_linear_format(const std::string& format) {
+  for (const char* f : {"Code128", "Code39", "Code93", "Codabar", "EAN-8", "EAN-13", "ITF", "UPC-A",
+                        "UPC-E", "DataBar", "DataBarExpanded"})
+    if (format == f) return true;
+  return false;
+}
+
+char grade_letter(double value) {
+  return value >= 3.5 ? 'A' : value >= 2.5 ? 'B' : value >= 1.5 ? 'C' : value >= 0.5 ? 'D' : 'F';
+}
+
+CodeQuality measure_code(const imaging::Plane& latent, const std::string& format,
+                         const CodeCorners& corners) {
+  if (latent.width < 2 || latent.height < 2) {
+    CodeQuality q;
+    q.corners = corners;
+    q.problem = "the image is empty";
+    return q;
+  }
+  return is_linear_format(format) ? measure_linear(latent, format, corners)
+                                  : measure_matrix(latent, corners);
+}
+
+}  // namespace flutterscan::reader
