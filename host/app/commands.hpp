@@ -32,5 +32,7 @@ void add_scan(CLI::App& app);
 void add_demo(CLI::App& app);
 /// \brief `flutterscan cameras` (cameras.cpp).
 void add_cameras(CLI::App& app);
+/// \brief `flutterscan replay` (replay.cpp).
+void add_replay(CLI::App& app);
 
 }  // namespace flutterscan::app

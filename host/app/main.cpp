@@ -22,6 +22,7 @@ int main(int argc, char** argv) {
   add_scan(app);
   add_demo(app);
   add_cameras(app);
+  add_replay(app);
   add_devices(app);
   add_device_command(app);
   add_flash(app);
