@@ -46,7 +46,7 @@ TEST(SpeedSearch, BacksOffWhereOneLabelInFiftyFails) {
   const auto r = highest_reading_speed(reads, options);
   EXPECT_TRUE(r.verified);
   EXPECT_LE(r.speed, 1.8);
-  EXPECT_GT(r.speed, 1.8 * 0.97 * 0.97 / (1 + options.precision));
+  EXPECT_GT(r.speed, 1.8 * options.back_off * options.back_off / (1 + options.precision));
 }
 
 TEST(SpeedSearch, ReportsNothingAndEverything) {

@@ -26,8 +26,8 @@ struct SpeedSearchOptions {
   double precision = 0.03;  ///< bisection stops when high / low <= 1 + precision
   int step_labels = 20;     ///< labels per bracketing and bisection step
   int final_labels = 300;   ///< labels that must all read at the reported speed
-  double back_off = 0.97;   ///< verification failed: speed times this, verify again
-  int max_back_offs = 8;
+  double back_off = 0.9;    ///< verification failed: speed times this, verify again
+  int max_back_offs = 6;
 };
 
 struct SpeedSearchResult {
