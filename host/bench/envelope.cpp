@@ -51,10 +51,17 @@ struct Point {
   std::vector<std::pair<int, double>> strobe_tries;  // k, unverified speed
 };
 
+/// The formula: the lower of the noise limit (joint Wiener's margin) and the
+/// decoder's resolution limit for the lit stretch of `scheme`.
 double formula_for(const CaptureScheme& scheme, const bench::LineSetup& line, double light,
-                   double module, double max_speed) {
-  return bench::formula_speed([&](double v) { return bench::line_capture(scheme, line, light, v); },
-                              module, 0.01, max_speed);
+                   sim::SceneKind kind, double module, double max_speed) {
+  const double noise_limit =
+      bench::formula_speed([&](double v) { return bench::line_capture(scheme, line, light, v); },
+                           module, 0.01, max_speed);
+  const double resolution_limit =
+      bench::lit_motion_speed(bench::lit_motion_modules(kind), module, line.mm_per_px,
+                              bench::lit_run_slots(scheme) * line.slot_ms);
+  return std::min(noise_limit, resolution_limit);
 }
 
 }  // namespace
@@ -185,7 +192,7 @@ int main(int argc, char** argv) {
       if (p.coded) {
         const auto scheme = bench::coded_scheme();
         p.scheme = scheme.name;
-        p.formula = formula_for(scheme, line, p.light, module, max_speed);
+        p.formula = formula_for(scheme, line, p.light, symbol.kind, module, max_speed);
         options.start = p.formula > 0 ? p.formula : 0.5;
         p.measured = search_scheme(scheme, 0, options);
       } else {
@@ -196,7 +203,7 @@ int main(int argc, char** argv) {
         std::uint64_t offset = 0;
         for (int k : kStrobeSlots) {
           const auto scheme = bench::strobe_scheme(k);
-          const double f = formula_for(scheme, line, p.light, module, max_speed);
+          const double f = formula_for(scheme, line, p.light, symbol.kind, module, max_speed);
           p.formula = std::max(p.formula, f);
           auto quick = options;
           quick.final_labels = 0;

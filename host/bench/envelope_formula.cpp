@@ -98,4 +98,12 @@ double formula_speed(const std::function<imaging::CaptureModel(double)>& model_a
   return pass;
 }
 
+double lit_motion_modules(sim::SceneKind kind) {
+  return kind == sim::SceneKind::kCode128 || kind == sim::SceneKind::kEan13 ? 1.0 : 2.0;
+}
+
+double lit_motion_speed(double modules, double module_px, double mm_per_px, double lit_ms) {
+  return modules * module_px * mm_per_px / lit_ms;
+}
+
 }  // namespace flutterscan::bench

@@ -19,12 +19,18 @@
 // coded exposure, the whole pulse of a strobe) is a box of that many pixels in
 // every channel alike, whose zero at w_m (a box of 2m pixels) no code fills; so
 // at high light the limit is v = 2 m p / t (p mm per pixel, t the lit stretch),
-// and at low light sigma moves it lower. Belt jitter, the encoder's error and
-// the reader's own tolerances are not in it: the measurement has them.
+// and at low light sigma moves it lower. That is the noise limit. The formula is
+// the lower of it and the decoder's resolution limit, lit_motion_speed() with
+// lit_motion_modules(): one module during the lit stretch for Code 128, whose
+// decoder measures widths (chosen after the first run: the 2-module limit
+// over-predicted Code 128 by about 1.7 and Data Matrix by about 1.1). Belt
+// jitter, the encoder's error and the reader's other tolerances are not in it:
+// the measurement has them.
 
 #include <functional>
 
 #include "imaging/capture_model.hpp"
+#include "sim/scene.hpp"
 
 namespace flutterscan::bench {
 
@@ -64,5 +70,21 @@ double normalized_sinc(double x);
 double formula_speed(const std::function<imaging::CaptureModel(double)>& model_at, double module_px,
                      double low, double high, double precision = 0.005,
                      double z = kReadMarginSigmas);
+
+/// \brief How far the belt may move while the light is on without a break (one
+/// slot of a coded exposure, the pulse of a strobe), in modules, for a decoder
+/// of `kind`'s kind. Code 128's decoder measures every bar's and space's width
+/// against its pattern table: a box blur of up to one module leaves every
+/// element a point at full contrast and its mid-level crossings at the true
+/// edges; beyond it the narrowest elements' widths depend on their neighbours
+/// (1 module). A Data Matrix is sampled at module centres: the sign of the
+/// finest alternation is enough, up to the box's zero (2 modules; the margin
+/// above says where noise ends it first).
+double lit_motion_modules(sim::SceneKind kind);
+
+/// \brief The speed that moves the belt `modules` modules of `module_px` pixels
+/// (`mm_per_px` mm each) in `lit_ms` milliseconds: the resolution limit
+/// modules x module_px x mm_per_px / lit_ms.
+double lit_motion_speed(double modules, double module_px, double mm_per_px, double lit_ms);
 
 }  // namespace flutterscan::bench

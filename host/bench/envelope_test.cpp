@@ -108,6 +108,14 @@ TEST(EnvelopeFormula, MoreLightAndBiggerModulesReadFaster) {
   EXPECT_NEAR(normalized_sinc(0.5), 2 / M_PI, 1e-12);
 }
 
+TEST(EnvelopeFormula, ResolutionLimitPerDecoder) {
+  EXPECT_EQ(lit_motion_modules(sim::SceneKind::kCode128), 1.0);
+  EXPECT_EQ(lit_motion_modules(sim::SceneKind::kDataMatrix), 2.0);
+  // 10 mil at 0.1 mm/px (2.54 px), one module in one 100 us slot: 2.54 m/s.
+  EXPECT_NEAR(lit_motion_speed(1, 2.54, 0.1, 0.1), 2.54, 1e-12);
+  EXPECT_NEAR(lit_motion_speed(2, 2.54, 0.1, 0.4), 1.27, 1e-12);
+}
+
 TEST(LineMotion, SlotsAddUpToTheBlurAndMoveForward) {
   const auto uniform = line_slot_boundaries(52, 104, 1, 0, 1);
   for (std::size_t t = 0; t < uniform.size(); ++t) EXPECT_NEAR(uniform[t], 2.0 * t, 1e-9);
