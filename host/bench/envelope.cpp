@@ -20,6 +20,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -339,6 +340,10 @@ int main(int argc, char** argv) {
                   "(joint Wiener), dashed: best white strobe",
                   line.mm_per_px, slot_us, line.slots, line.cap, line.read_noise);
     chart.notes.push_back(note);
+    std::snprintf(note, sizeof note,
+                  "every point: %d of %d labels read (a point no verification passed is left out)",
+                  search.final_labels, search.final_labels);
+    chart.notes.push_back(note);
     chart.y_min = 0;
     const plot::Rgb palette[] = {
         {0.85, 0.1, 0.1}, {0.1, 0.25, 0.85}, {0.1, 0.6, 0.15}, {0.8, 0.45, 0.0}, {0.55, 0.2, 0.7}};
@@ -354,7 +359,9 @@ int main(int argc, char** argv) {
           const auto& s = all_symbols[symbol_pick[p.symbol]];
           if (s.kind != kind || p.light != light[li] || p.coded != coded) continue;
           series.x.push_back(s.mil);
-          series.y.push_back(p.measured.speed);
+          // A speed no verification passed at is not a datasheet figure: the line breaks.
+          series.y.push_back(p.measured.verified ? p.measured.speed
+                                                 : std::numeric_limits<double>::quiet_NaN());
         }
         if (!series.x.empty()) chart.series.push_back(std::move(series));
       }
