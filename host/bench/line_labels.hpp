@@ -1,6 +1,6 @@
 #pragma once
 // Labels passing a line camera, one frame each, through the session's per-frame
-// path (docs/datasheet.md, "The line"): a label of one symbol at one module
+// path (docs/datasheet.md, "The line measured"): a label of one symbol at one module
 // size, on the belt, under continuous motion with belt jitter, a speed change
 // within the exposure and an encoder that tells the blur a little wrong;
 // recorded with EMVA 1288 noise; the encoder's blur refined on the frame as the
