@@ -1,0 +1,377 @@
+// The datasheet's speed envelope (docs/datasheet.md; `make bench` part
+// `envelope`): for each symbol and light level, the highest belt speed at which
+// every one of a few hundred labels reads, for the product's coded one-of-3
+// light and for a white strobe under the same light budget, each beside the
+// formula that predicts it (bench/envelope_formula.hpp).
+//
+//   envelope_bench [--out DIR] [--light 60,200,600] [--labels 300] [--step-labels 20]
+//                  [--mm-per-px 0.1] [--slot-us 100] [--read-noise 4] [--cap 3]
+//                  [--symbols 0,1,...] [--threads 2]
+//
+// Writes DIR/envelope.csv (every point), DIR/envelope-code128.png and
+// DIR/envelope-datamatrix.png (speed against module size, one line per light
+// level and scheme) and prints the datasheet's tables as Markdown.
+
+#include <malloc.h>
+#include <CLI/CLI.hpp>
+#include <algorithm>
+#include <atomic>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <limits>
+#include <mutex>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "bench/envelope_formula.hpp"
+#include "bench/envelope_setup.hpp"
+#include "bench/line_labels.hpp"
+#include "bench/speed_search.hpp"
+#include "plot/line_chart.hpp"
+
+namespace {
+
+using namespace flutterscan;
+using bench::CaptureScheme;
+
+constexpr int kContentsPerSymbol = 16;  // distinct label contents per symbol, drawn in turn
+const int kStrobeSlots[] = {1, 2, 4, 8};
+
+struct Point {
+  std::size_t symbol = 0;
+  double light = 0;  // e-/ms
+  bool coded = true;
+  // results
+  std::string scheme;  // "coded" or "strobe-k"
+  bench::SpeedSearchResult measured;
+  double formula = 0;  // m/s
+  double seconds = 0;
+  std::vector<std::pair<int, double>> strobe_tries;  // k, unverified speed
+};
+
+/// The formula: the lower of the noise limit (joint Wiener's margin) and the
+/// decoder's resolution limit for the lit stretch of `scheme`.
+double formula_for(const CaptureScheme& scheme, const bench::LineSetup& line, double light,
+                   sim::SceneKind kind, double module, double max_speed) {
+  const double noise_limit =
+      bench::formula_speed([&](double v) { return bench::line_capture(scheme, line, light, v); },
+                           module, 0.01, max_speed);
+  const double resolution_limit =
+      bench::lit_motion_speed(bench::lit_motion_modules(kind), module, line.mm_per_px,
+                              bench::lit_run_slots(scheme) * line.slot_ms);
+  return std::min(noise_limit, resolution_limit);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  std::string out_dir = "build/bench/envelope";
+  std::vector<double> light = {60, 200, 600};
+  std::vector<std::size_t> symbol_pick;
+  bench::LineSetup line;
+  double slot_us = line.slot_ms * 1000;
+  bench::SpeedSearchOptions search;
+  bench::LineMotion motion;
+  int threads = 2;
+  double max_blur_px = 1200;
+  CLI::App app{"Highest belt speed at which >= 99% of labels read, coded light and strobe"};
+  app.add_option("--out", out_dir, "output directory (CSV, charts)")->capture_default_str();
+  app.add_option("--light", light,
+                 "light levels: e- per ms per channel, white paper, LEDs continuous")
+      ->delimiter(',')
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--labels", search.final_labels, "labels that must all read at a reported speed")
+      ->check(CLI::Range(0, 100000))
+      ->capture_default_str();
+  app.add_option("--step-labels", search.step_labels, "labels per bisection step")
+      ->check(CLI::Range(1, 10000))
+      ->capture_default_str();
+  app.add_option("--precision", search.precision, "bisection stops at this relative width")
+      ->check(CLI::Range(0.001, 1.0))
+      ->capture_default_str();
+  app.add_option("--mm-per-px", line.mm_per_px, "one camera pixel on the belt, mm")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--slot-us", slot_us, "controller slot time, us (52 slots per exposure)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  app.add_option("--read-noise", line.read_noise, "camera read noise, e- rms")
+      ->check(CLI::NonNegativeNumber)
+      ->capture_default_str();
+  app.add_option("--cap", line.cap, "LED overdrive cap c")
+      ->check(CLI::Range(1.0, 100.0))
+      ->capture_default_str();
+  app.add_option("--jitter", motion.jitter_rms, "belt jitter per slot (rms, fraction of speed)")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  app.add_option("--speed-change", motion.speed_change, "end/start speed drawn from 1 +- this")
+      ->check(CLI::Range(0.0, 0.5))
+      ->capture_default_str();
+  app.add_option("--encoder-error", motion.encoder_error, "encoder blur drawn from 1 +- this")
+      ->check(CLI::Range(0.0, 0.09))
+      ->capture_default_str();
+  app.add_option("--symbols", symbol_pick, "indices into the symbol list (default all)")
+      ->delimiter(',');
+  app.add_option("--max-blur", max_blur_px, "speeds stop where the exposure's blur reaches this")
+      ->check(CLI::Range(10.0, 5000.0))
+      ->capture_default_str();
+  app.add_option("--threads", threads, "points measured at once")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& error) {
+    return app.exit(error) == 0 ? 0 : 2;
+  }
+  line.slot_ms = slot_us / 1000;
+  // Keep freed frames in the process, as the session does (session.cpp): every
+  // label allocates and frees its frame's planes, and memory handed back to the
+  // kernel returns as page faults.
+  mallopt(M_MMAP_THRESHOLD, 32 << 20);
+  mallopt(M_TRIM_THRESHOLD, 512 << 20);
+  const auto all_symbols = bench::datasheet_symbols();
+  if (symbol_pick.empty())
+    for (std::size_t i = 0; i < all_symbols.size(); ++i) symbol_pick.push_back(i);
+  for (std::size_t i : symbol_pick)
+    if (i >= all_symbols.size()) {
+      std::fprintf(stderr, "envelope_bench: no symbol %zu (0..%zu)\n", i, all_symbols.size() - 1);
+      return 2;
+    }
+  std::error_code ec;
+  std::filesystem::create_directories(out_dir, ec);
+  if (ec) {
+    std::fprintf(stderr, "envelope_bench: %s: %s\n", out_dir.c_str(), ec.message().c_str());
+    return 1;
+  }
+  const auto started = std::chrono::steady_clock::now();
+
+  // Labels, rendered once per symbol.
+  std::vector<bench::LabelLine> lines;
+  for (std::size_t i : symbol_pick) {
+    const auto& s = all_symbols[i];
+    lines.push_back(bench::LabelLine::make(s.kind, bench::module_px(s.mil, line),
+                                           kContentsPerSymbol, 1000 + i));
+    if (!lines.back().error().empty()) {
+      std::fprintf(stderr, "envelope_bench: %s: %s\n", s.name.c_str(),
+                   lines.back().error().c_str());
+      return 1;
+    }
+  }
+  const double max_speed = max_blur_px * line.mm_per_px / (line.slots * line.slot_ms);
+
+  std::vector<Point> points;
+  for (std::size_t s = 0; s < symbol_pick.size(); ++s)
+    for (double e : light)
+      for (bool coded : {true, false}) points.push_back({s, e, coded, "", {}, 0, 0, {}});
+
+  std::atomic<std::size_t> next{0};
+  std::mutex print_mutex;
+  auto worker = [&] {
+    for (std::size_t i; (i = next++) < points.size();) {
+      Point& p = points[i];
+      const auto t0 = std::chrono::steady_clock::now();
+      const auto& symbol = all_symbols[symbol_pick[p.symbol]];
+      const double module = bench::module_px(symbol.mil, line);
+      const bench::LabelLine& labels = lines[p.symbol];
+      // Each search draws fresh label numbers: `offset` keeps them apart.
+      const auto search_scheme = [&](const CaptureScheme& scheme, std::uint64_t offset,
+                                     bench::SpeedSearchOptions options) {
+        return bench::highest_reading_speed(
+            [&](double v, std::uint64_t label) {
+              return labels.reads(bench::line_capture(scheme, line, p.light, v), motion,
+                                  offset + label);
+            },
+            options);
+      };
+      bench::SpeedSearchOptions options = search;
+      options.max_speed = max_speed;
+      options.min_speed = 0.01;
+      if (p.coded) {
+        const auto scheme = bench::coded_scheme();
+        p.scheme = scheme.name;
+        p.formula = formula_for(scheme, line, p.light, symbol.kind, module, max_speed);
+        options.start = p.formula > 0 ? p.formula : 0.5;
+        p.measured = search_scheme(scheme, 0, options);
+      } else {
+        // The strobe's length is the line's choice: each length searched
+        // without verification, the fastest then searched again and verified.
+        double best = -1;
+        int best_k = 1;
+        std::uint64_t offset = 0;
+        for (int k : kStrobeSlots) {
+          const auto scheme = bench::strobe_scheme(k);
+          const double f = formula_for(scheme, line, p.light, symbol.kind, module, max_speed);
+          p.formula = std::max(p.formula, f);
+          auto quick = options;
+          quick.final_labels = 0;
+          quick.start = f > 0 ? f : 0.5;
+          const auto r = search_scheme(scheme, offset, quick);
+          offset += 1000000;
+          p.strobe_tries.emplace_back(k, r.speed);
+          if (r.speed > best) {
+            best = r.speed;
+            best_k = k;
+          }
+        }
+        const auto scheme = bench::strobe_scheme(best_k);
+        p.scheme = scheme.name;
+        options.start = best > 0 ? best : 0.5;
+        p.measured = search_scheme(scheme, offset, options);
+      }
+      p.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      const std::lock_guard lock(print_mutex);
+      std::fprintf(stderr, "  %-20s %5g e-/ms %-9s %6.3f m/s (formula %6.3f), %d labels, %.0f s\n",
+                   symbol.name.c_str(), p.light, p.scheme.c_str(), p.measured.speed, p.formula,
+                   p.measured.labels_tried, p.seconds);
+    }
+  };
+  {
+    std::vector<std::jthread> pool;
+    for (int t = 0; t < threads; ++t) pool.emplace_back(worker);
+  }
+  const double wall =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+
+  // CSV.
+  const std::string csv_path = out_dir + "/envelope.csv";
+  FILE* csv = std::fopen(csv_path.c_str(), "w");
+  if (!csv) {
+    std::fprintf(stderr, "envelope_bench: cannot write %s\n", csv_path.c_str());
+    return 1;
+  }
+  std::fprintf(csv,
+               "symbol,mil,module_px,electrons_per_ms,exposure_electrons,scheme,speed_m_s,"
+               "verified,labels_read,labels_tried,back_offs,at_max,formula_m_s,measured_over_"
+               "formula,exposure_blur_px,lit_motion_modules,seconds\n");
+  for (const Point& p : points) {
+    const auto& s = all_symbols[symbol_pick[p.symbol]];
+    const double module = bench::module_px(s.mil, line);
+    const auto scheme =
+        p.coded ? bench::coded_scheme() : bench::strobe_scheme(std::stoi(p.scheme.substr(7)));
+    const double blur = bench::exposure_blur_px(p.measured.speed, line);
+    std::fprintf(csv, "%s,%g,%.3f,%g,%.1f,%s,%.4f,%d,%d,%d,%d,%d,%.4f,%.3f,%.2f,%.3f,%.1f\n",
+                 s.name.c_str(), s.mil, module, p.light, bench::exposure_electrons(p.light, line),
+                 p.scheme.c_str(), p.measured.speed, p.measured.verified ? 1 : 0,
+                 p.measured.final_labels, p.measured.labels_tried, p.measured.back_offs,
+                 p.measured.at_max ? 1 : 0, p.formula,
+                 p.formula > 0 ? p.measured.speed / p.formula : 0.0, blur,
+                 blur * bench::lit_run_slots(scheme) / line.slots / module, p.seconds);
+  }
+  std::fclose(csv);
+
+  // Markdown: the table, then coded over strobe.
+  std::printf(
+      "Optics: %.3f mm per pixel on the belt; slot %g us, %d slots (exposure %.2f ms); "
+      "cap c = %g; read noise %g e-; jitter %g rms per slot, speed change +-%g%%, "
+      "encoder error +-%g%%; %d labels verified per speed\n\n",
+      line.mm_per_px, slot_us, line.slots, line.slots * line.slot_ms, line.cap, line.read_noise,
+      motion.jitter_rms, 100 * motion.speed_change, 100 * motion.encoder_error,
+      search.final_labels);
+  std::printf(
+      "| symbol | module (px) | light (e-/ms) | E (e-) | scheme | measured (m/s) | "
+      "formula (m/s) | measured / formula | labels read |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|\n");
+  for (const Point& p : points) {
+    const auto& s = all_symbols[symbol_pick[p.symbol]];
+    std::printf("| %s | %.2f | %g | %.0f | %s | %.2f%s | %.2f | %.2f | %d / %d%s |\n",
+                s.name.c_str(), bench::module_px(s.mil, line), p.light,
+                bench::exposure_electrons(p.light, line), p.scheme.c_str(), p.measured.speed,
+                p.measured.at_max ? "+" : "", p.formula,
+                p.formula > 0 ? p.measured.speed / p.formula : 0.0, p.measured.final_labels,
+                p.measured.verified ? p.measured.final_labels : search.final_labels,
+                p.measured.verified ? "" : " (not verified)");
+  }
+  std::printf(
+      "\n| symbol | light (e-/ms) | coded / strobe, measured | formula | strobe tries "
+      "(k: m/s, unverified) |\n|---|---|---|---|---|\n");
+  for (std::size_t i = 0; i + 1 < points.size(); i += 2) {
+    const Point& c = points[i];
+    const Point& s = points[i + 1];
+    std::string tries;
+    for (const auto& [k, v] : s.strobe_tries) {
+      char buf[48];
+      std::snprintf(buf, sizeof buf, "%s%d: %.2f", tries.empty() ? "" : ", ", k, v);
+      tries += buf;
+    }
+    std::printf("| %s | %g | %.2f | %.2f | %s |\n", all_symbols[symbol_pick[c.symbol]].name.c_str(),
+                c.light, s.measured.speed > 0 ? c.measured.speed / s.measured.speed : 0.0,
+                s.formula > 0 ? c.formula / s.formula : 0.0, tries.c_str());
+  }
+  // How far the formula is off: the median of measured / formula per scheme, and
+  // how many points lie within 15% of the formula, as it stands and times that median.
+  for (int coded = 1; coded >= 0; --coded) {
+    std::vector<double> ratios;
+    for (const Point& p : points)
+      if (p.coded == (coded == 1) && p.formula > 0 && p.measured.speed > 0)
+        ratios.push_back(p.measured.speed / p.formula);
+    if (ratios.empty()) continue;
+    std::sort(ratios.begin(), ratios.end());
+    const double median = ratios[ratios.size() / 2];
+    int within = 0, within_scaled = 0;
+    for (double r : ratios) {
+      within += std::abs(r - 1) <= 0.15;
+      within_scaled += std::abs(r / median - 1) <= 0.15;
+    }
+    std::printf(
+        "\n%s: measured / formula %.2f to %.2f, median %.2f; within 15%% of the formula: %d of "
+        "%zu; of the formula x %.2f: %d of %zu\n",
+        coded ? "coded" : "strobe", ratios.front(), ratios.back(), median, within, ratios.size(),
+        median, within_scaled, ratios.size());
+  }
+  int total_labels = 0;
+  for (const Point& p : points) total_labels += p.measured.labels_tried;
+  std::printf("\n%d labels in %.0f s wall (%d threads)\n", total_labels, wall, threads);
+
+  // Charts: speed against module size per symbology, one line per light level and scheme.
+  for (const auto kind : {sim::SceneKind::kCode128, sim::SceneKind::kDataMatrix}) {
+    const bool c128 = kind == sim::SceneKind::kCode128;
+    plot::LineChart chart;
+    chart.title = std::string("Highest belt speed with every label read: ") +
+                  (c128 ? "Code 128" : "Data Matrix");
+    chart.x_label = "module (mil)";
+    chart.y_label = "belt speed (m/s)";
+    char note[200];
+    std::snprintf(note, sizeof note,
+                  "%.2f mm/px, slot %g us x %d, cap %g, read noise %g e-; solid: coded one-of-3 "
+                  "(joint Wiener), dashed: best white strobe",
+                  line.mm_per_px, slot_us, line.slots, line.cap, line.read_noise);
+    chart.notes.push_back(note);
+    std::snprintf(note, sizeof note,
+                  "every point: %d of %d labels read (a point no verification passed is left out)",
+                  search.final_labels, search.final_labels);
+    chart.notes.push_back(note);
+    chart.y_min = 0;
+    const plot::Rgb palette[] = {
+        {0.85, 0.1, 0.1}, {0.1, 0.25, 0.85}, {0.1, 0.6, 0.15}, {0.8, 0.45, 0.0}, {0.55, 0.2, 0.7}};
+    for (std::size_t li = 0; li < light.size(); ++li)
+      for (bool coded : {true, false}) {
+        plot::Series series;
+        series.label = (coded ? "coded, " : "strobe, ") +
+                       std::to_string(static_cast<int>(light[li])) + " e-/ms";
+        series.colour = palette[li % std::size(palette)];
+        series.dashed = !coded;
+        series.marker_radius = 4;
+        for (const Point& p : points) {
+          const auto& s = all_symbols[symbol_pick[p.symbol]];
+          if (s.kind != kind || p.light != light[li] || p.coded != coded) continue;
+          series.x.push_back(s.mil);
+          // A speed no verification passed at is not a datasheet figure: the line breaks.
+          series.y.push_back(p.measured.verified ? p.measured.speed
+                                                 : std::numeric_limits<double>::quiet_NaN());
+        }
+        if (!series.x.empty()) chart.series.push_back(std::move(series));
+      }
+    if (chart.series.empty()) continue;
+    const std::string path =
+        out_dir + (c128 ? "/envelope-code128.png" : "/envelope-datamatrix.png");
+    if (const auto error = plot::write_png(chart, path); !error.empty()) {
+      std::fprintf(stderr, "envelope_bench: %s\n", error.c_str());
+      return 1;
+    }
+  }
+  return 0;
+}

@@ -1,0 +1,71 @@
+#pragma once
+// The line the datasheet (docs/datasheet.md) is measured on: the optics (one
+// pixel's size on the belt), the controller's slot time, the light (electrons a
+// pixel of white paper collects per millisecond at the LEDs' continuous
+// rating), the camera, and the two capture schemes compared: the product's coded
+// one-of-3 light and a white strobe of k slots under the same light budget
+// (docs/conventions.md, "Light level E and the cap c").
+
+#include <string>
+#include <vector>
+
+#include "bench/capture_schemes.hpp"
+#include "imaging/capture_model.hpp"
+#include "sim/scene.hpp"
+
+namespace flutterscan::bench {
+
+/// \brief The optics, timing and camera of the datasheet.
+struct LineSetup {
+  double mm_per_px = 0.1;  ///< one camera pixel on the belt
+  double slot_ms = 0.1;    ///< the controller's slot time (100 us: the session's default)
+  int slots = 52;          ///< slots per exposure: the exposure is slots x slot_ms
+  double cap = 3;          ///< LED overdrive cap c
+  double read_noise = 4;   ///< camera read noise, e- rms (the bench camera otherwise)
+};
+
+/// \brief A symbol of the datasheet: a symbology at one X dimension (mil).
+struct EnvelopeSymbol {
+  std::string name;  ///< e.g. "Code 128 10 mil"
+  sim::SceneKind kind = sim::SceneKind::kCode128;
+  double mil = 10;
+};
+
+/// \brief Code 128 at 7.5, 10, 13 and 20 mil; Data Matrix at 10 and 15 mil.
+std::vector<EnvelopeSymbol> datasheet_symbols();
+
+/// \brief One module in camera pixels: mil x 0.0254 mm / mm_per_px.
+double module_px(double mil, const LineSetup& line);
+
+/// \brief The belt's travel during one exposure in pixels at `speed_m_s`
+/// (m/s = mm/ms): speed x slots x slot_ms / mm_per_px.
+double exposure_blur_px(double speed_m_s, const LineSetup& line);
+
+/// \brief The belt speed (m/s) that moves `px` pixels in `ms` milliseconds.
+double speed_for_motion(double px, double ms, const LineSetup& line);
+
+/// \brief E of docs/conventions.md: electrons per channel of white paper over the
+/// exposure with every LED at its continuous rating: `electrons_per_ms` x exposure.
+double exposure_electrons(double electrons_per_ms, const LineSetup& line);
+
+/// \brief The product's coded one-of-3 light: the session's default code
+/// (controller.code, seed-maxmin-1).
+CaptureScheme coded_scheme();
+
+/// \brief A white strobe of `slots` slots (all LEDs, at the cap), the regime
+/// map's snapshot-k.
+CaptureScheme strobe_scheme(int slots);
+
+/// \brief The capture model of `scheme` on `line` at `speed_m_s` and
+/// `electrons_per_ms`: the bench camera (capture_schemes.hpp) with the line's
+/// read noise, cap and exposure, motion along +x, constant speed.
+imaging::CaptureModel line_capture(const CaptureScheme& scheme, const LineSetup& line,
+                                   double electrons_per_ms, double speed_m_s);
+
+/// \brief The stretch of the exposure, in slots, within which the light cannot
+/// tell positions apart: one slot for a code that changes LEDs every slot (every
+/// LED's light comes in boxes of one slot's motion, on one slot grid), k for a
+/// k-slot strobe. Its motion is the blur no deconvolution undoes.
+int lit_run_slots(const CaptureScheme& scheme);
+
+}  // namespace flutterscan::bench

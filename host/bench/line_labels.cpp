@@ -1,0 +1,180 @@
+#include "bench/line_labels.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <random>
+
+#include "imaging/deblur.hpp"
+#include "imaging/exposure_timeline.hpp"
+#include "imaging/frame_conversion.hpp"
+#include "imaging/motion_frame.hpp"
+#include "imaging/motion_psf.hpp"
+#include "imaging/motion_refinement.hpp"
+#include "reader/barcode_reader.hpp"
+#include "reader/code_reading.hpp"
+#include "reader/reader_options.hpp"
+#include "sim/forward_model.hpp"
+#include "sim/pixel_integration.hpp"
+#include "sim/timeline_forward.hpp"
+
+namespace flutterscan::bench {
+namespace {
+
+constexpr int kFine = sim::kSimSupersample;
+constexpr double kBelt = 0.35;        // sim::SceneSpec's belt
+constexpr int kMarginPx = 8;          // belt kept downstream of the blur
+constexpr double kUnfitResidual = 3;  // the session's motion-unfit guard (session/model_fit.cpp)
+
+std::string random_content(sim::SceneKind kind, std::mt19937_64& rng) {
+  static constexpr char kChars[] = "ABCDEFGHJKLMNPQRSTUVWXYZ0123456789";
+  const int length = kind == sim::SceneKind::kCode128 ? 6 : 8;
+  std::uniform_int_distribution<int> pick(0, static_cast<int>(sizeof kChars) - 2);
+  std::string text;
+  for (int i = 0; i < length; ++i) text += kChars[pick(rng)];
+  return text;
+}
+
+/// `fine` with `left` fine columns of belt before it and `right` after it.
+imaging::Plane padded(const imaging::Plane& fine, int left, int right, int first_row, int rows) {
+  imaging::Plane out(fine.width + left + right, rows, static_cast<float>(kBelt));
+  for (int y = 0; y < rows; ++y) {
+    const auto src = fine.row(first_row + y);
+    std::copy(src.begin(), src.end(), out.row(y).begin() + left);
+  }
+  return out;
+}
+
+}  // namespace
+
+std::vector<double> line_slot_boundaries(int slots, double blur_px, double speed_ratio,
+                                         double jitter_rms, std::uint64_t seed) {
+  const auto edges = imaging::accelerating_slot_edges(slots, blur_px, speed_ratio);
+  std::mt19937_64 rng(seed);
+  std::normal_distribution<double> normal(0.0, 1.0);
+  std::vector<double> step(static_cast<std::size_t>(slots));
+  double total = 0;
+  for (int t = 0; t < slots; ++t) {
+    const auto i = static_cast<std::size_t>(t);
+    step[i] = (edges[i + 1] - edges[i]) * std::max(0.0, 1.0 + jitter_rms * normal(rng));
+    total += step[i];
+  }
+  std::vector<double> out(static_cast<std::size_t>(slots) + 1, 0.0);
+  const double scale = total > 0 ? blur_px / total : 0.0;
+  for (std::size_t t = 0; t < step.size(); ++t) out[t + 1] = out[t] + step[t] * scale;
+  return out;
+}
+
+LabelLine LabelLine::make(sim::SceneKind kind, double module_px, int contents, std::uint64_t seed) {
+  LabelLine line;
+  line.kind_ = kind;
+  line.seed_ = seed;
+  std::mt19937_64 rng(seed);
+  const bool linear = kind == sim::SceneKind::kCode128;
+  for (int i = 0; i < contents; ++i) {
+    sim::SceneSpec spec;
+    spec.kind = kind;
+    spec.content = random_content(kind, rng);
+    spec.module_px = module_px;
+    // Big enough for the label: Code 128 of 6 characters is at most 121 modules
+    // with its quiet zones, a Data Matrix of 8 at most 18; grown until it fits.
+    const double modules = linear ? 121 : 18;
+    spec.width = static_cast<int>(std::ceil(modules * module_px)) + 2 * sim::kMinBeltPx + 2;
+    spec.height =
+        linear ? static_cast<int>(std::ceil(0.3 * spec.width)) + 2 * sim::kMinBeltPx : spec.width;
+    for (int attempt = 0;; ++attempt) {
+      auto rendered = sim::render_scene(spec, kFine);
+      if (rendered.ok()) {
+        line.labels_.push_back({spec.content, std::move(rendered.value())});
+        break;
+      }
+      if (attempt == 6) {
+        line.error_ = rendered.error();
+        return line;
+      }
+      spec.width = spec.width * 5 / 4;
+      spec.height = spec.height * 5 / 4;
+    }
+  }
+  return line;
+}
+
+int LabelLine::frame_width(double blur_px) const {
+  const int label = labels_.empty() ? 0 : labels_.front().fine.width / kFine;
+  return label + static_cast<int>(std::ceil(blur_px)) + kMarginPx + 1;
+}
+
+bool LabelLine::reads(const imaging::CaptureModel& nominal, const LineMotion& motion,
+                      std::uint64_t label) const {
+  if (labels_.empty()) return false;
+  std::mt19937_64 rng(seed_ * 0x9E3779B97F4A7C15ULL + label * 0xBF58476D1CE4E5B9ULL + 1);
+  const Label& shown = labels_[label % labels_.size()];
+  std::uniform_int_distribution<int> phase_pick(0, kFine - 1);
+  std::uniform_real_distribution<double> unit(-1.0, 1.0);
+  const int phase = phase_pick(rng);
+  const double speed_ratio = 1 + motion.speed_change * unit(rng);
+  const double encoder = 1 + motion.encoder_error * unit(rng);
+  const std::uint64_t jitter_seed = rng();
+  const std::uint64_t noise_seed = rng();
+
+  // The truth: the belt's motion slot by slot.
+  imaging::CaptureModel truth = nominal;
+  truth.direction = imaging::Direction::kPlusX;
+  const auto boundaries = line_slot_boundaries(truth.code.length(), truth.blur_px, speed_ratio,
+                                               motion.jitter_rms, jitter_seed);
+  const auto segments = imaging::segments_from_boundaries(truth.code, boundaries);
+
+  // The scene on the fine grid, belt downstream for the blur to run onto.
+  const int right = kFine * (static_cast<int>(std::ceil(truth.blur_px)) + kMarginPx) + kFine;
+  const bool linear = kind_ == sim::SceneKind::kCode128;
+  imaging::Image expected;
+  if (linear) {
+    const int middle = (shown.fine.height / kFine / 2) * kFine;
+    const auto strip = padded(shown.fine, phase, right - phase, middle, kFine);
+    const auto row = sim::expected_electrons_timeline(strip, truth, segments, kFine);
+    for (const auto& channel : row.channels) {
+      imaging::Plane rows(channel.width, kLinearStripRows);
+      for (int y = 0; y < kLinearStripRows; ++y)
+        std::copy(channel.row(0).begin(), channel.row(0).end(), rows.row(y).begin());
+      expected.channels.push_back(std::move(rows));
+    }
+  } else {
+    const int height = shown.fine.height / kFine * kFine;
+    const auto scene = padded(shown.fine, phase, right - phase, 0, height);
+    expected = sim::expected_electrons_timeline(scene, truth, segments, kFine);
+  }
+  const auto electrons =
+      imaging::dn_to_electrons(sim::record_frame(expected, truth, noise_seed), truth);
+
+  // What the session knows: the encoder's blur at constant speed, refined on the frame.
+  imaging::CaptureModel assumed = nominal;
+  assumed.direction = imaging::Direction::kPlusX;
+  assumed.blur_px = truth.blur_px * encoder;
+  assumed.speed_ratio = 1;
+  auto frame = imaging::MotionFrame::make(electrons, assumed.direction);
+  if (!frame.ok()) return false;
+  if (motion.refine_tolerance > 0 && !imaging::channels_share_one_code(assumed) &&
+      imaging::refinement_fits(assumed, motion.refine_tolerance, frame.value().along())) {
+    imaging::MotionRefinementOptions options;
+    options.tolerance = motion.refine_tolerance;
+    const auto refined = imaging::refine_motion(frame.value(), assumed, options);
+    if (refined.ok()) {
+      const auto& m = refined.value();
+      if (m.edges && !m.at_range_edge && m.residual_per_sample <= kUnfitResidual) {
+        assumed.blur_px = m.blur_px;
+        assumed.speed_ratio = m.speed_ratio;
+      }
+    }
+  }
+  imaging::DeblurOptions options;
+  options.method = imaging::Method::kJointWiener;
+  options.threads = 1;
+  const auto result = imaging::deblur(frame.value(), assumed, options);
+  if (!result.ok()) return false;
+  const auto texts =
+      reader::code_texts(reader::read_codes(result.value().latent, {}, assumed.direction,
+                                            reader::whole_frame_options())
+                             .readout);
+  return std::find(texts.begin(), texts.end(), shown.content) != texts.end();
+}
+
+}  // namespace flutterscan::bench

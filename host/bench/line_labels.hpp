@@ -1,0 +1,70 @@
+#pragma once
+// Labels passing a line camera, one frame each, through the session's per-frame
+// path (docs/datasheet.md, "The line measured"): a label of one symbol at one module
+// size, on the belt, under continuous motion with belt jitter, a speed change
+// within the exposure and an encoder that tells the blur a little wrong;
+// recorded with EMVA 1288 noise; the encoder's blur refined on the frame as the
+// session refines it (within 10%, used unless flagged); deblurred by joint Wiener
+// (the session's default method); read by the product's reader on the whole
+// frame. Each label number draws its own content, sub-pixel position, motion
+// and noise.
+
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "imaging/capture_model.hpp"
+#include "imaging/image.hpp"
+#include "sim/scene.hpp"
+
+namespace flutterscan::bench {
+
+/// \brief What the line does to the motion, per label.
+struct LineMotion {
+  double jitter_rms = 0.05;        ///< belt speed jitter per slot, fraction of the mean speed
+  double speed_change = 0.05;      ///< end / start speed drawn from 1 +- this (uniform)
+  double encoder_error = 0.02;     ///< the encoder's blur drawn from the true one x (1 +- this)
+  double refine_tolerance = 0.10;  ///< the session's processing.blur_tolerance
+};
+
+/// \brief The camera rows of a 1-D label's frame: a strip across the bars (every
+/// row of the bars is the same scene, so the strip is rendered once per frame
+/// and its rows differ by their noise).
+inline constexpr int kLinearStripRows = 32;
+
+/// \brief Labels of one symbol at one module size.
+class LabelLine {
+ public:
+  /// \brief Renders `contents` labels (random content of the symbology) of
+  /// `kind` with modules of `module_px` pixels; `seed` draws the contents.
+  /// Fails (message) when a label cannot be rendered.
+  static LabelLine make(sim::SceneKind kind, double module_px, int contents, std::uint64_t seed);
+
+  /// \brief Whether label number `label` reads when it passes under `nominal`
+  /// (its code, light, camera and blur at the belt's speed; motion along +x).
+  bool reads(const imaging::CaptureModel& nominal, const LineMotion& motion,
+             std::uint64_t label) const;
+
+  /// \brief The frame width (px) a label needs at a blur of `blur_px`.
+  int frame_width(double blur_px) const;
+
+  const std::string& error() const { return error_; }
+
+ private:
+  struct Label {
+    std::string content;
+    imaging::Plane fine;  ///< sim::kSimSupersample times finer than the camera
+  };
+  sim::SceneKind kind_ = sim::SceneKind::kCode128;
+  std::vector<Label> labels_;
+  std::uint64_t seed_ = 0;
+  std::string error_;
+};
+
+/// \brief Slot boundaries (px) of one exposure of `blur_px` with a speed that
+/// changes at a constant rate to `speed_ratio` (end / start) and per-slot jitter
+/// of `jitter_rms` (rescaled so the slots add up to `blur_px`).
+std::vector<double> line_slot_boundaries(int slots, double blur_px, double speed_ratio,
+                                         double jitter_rms, std::uint64_t seed);
+
+}  // namespace flutterscan::bench
