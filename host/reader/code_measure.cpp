@@ -189,10 +189,10 @@ ScanGrade grade_scan(const imaging::Plane& latent, const ScanLine& line, double 
 }
 
 /// How far (px) across from the scan line the bars go in `direction` (+1 or
-/// -1): where the profile's projection on the centre's falls to half.
+/// -1): where the profile's projection on the centre's falls to half. Steps of
+/// 2 px, then the last step halved twice and interpolated.
 double bar_extent(const imaging::Plane& latent, const ScanLine& line, double t_begin, double t_end,
                   double direction, double limit) {
-  constexpr double kStep = 0.5;
   const std::vector<double> ref = profile(latent, line, 0, t_begin, t_end, 1.0);
   double mean = 0;
   for (double v : ref) mean += v;
@@ -200,22 +200,35 @@ double bar_extent(const imaging::Plane& latent, const ScanLine& line, double t_b
   double norm = 0;
   for (double v : ref) norm += (v - mean) * (v - mean);
   if (norm <= 0) return 0;
-  double previous = 1;
-  for (double s = kStep; s <= limit; s += kStep) {
+  // The profile at offset s, projected on the centre's (1 = the same bars).
+  auto amplitude = [&](double s) {
     const std::vector<double> p = profile(latent, line, direction * s, t_begin, t_end, 1.0);
-    double amplitude = 0;
-    if (p.size() == ref.size()) {
-      double pm = 0;
-      for (double v : p) pm += v;
-      pm /= static_cast<double>(p.size());
-      for (std::size_t i = 0; i < p.size(); ++i) amplitude += (p[i] - pm) * (ref[i] - mean);
-      amplitude /= norm;
+    if (p.size() != ref.size()) return 0.0;  // off the image
+    double pm = 0;
+    for (double v : p) pm += v;
+    pm /= static_cast<double>(p.size());
+    double sum = 0;
+    for (std::size_t i = 0; i < p.size(); ++i) sum += (p[i] - pm) * (ref[i] - mean);
+    return sum / norm;
+  };
+  constexpr double kStep = 2;
+  double inside = 0, inside_amplitude = 1;
+  for (double s = kStep; s <= limit; s += kStep) {
+    const double a = amplitude(s);
+    if (a >= 0.5) {
+      inside = s;
+      inside_amplitude = a;
+      continue;
     }
-    if (amplitude < 0.5) {
-      const double f = previous == amplitude ? 0.5 : (previous - 0.5) / (previous - amplitude);
-      return s - kStep + std::clamp(f, 0.0, 1.0) * kStep;
+    double outside = s, outside_amplitude = a;
+    for (int halving = 0; halving < 2; ++halving) {
+      const double mid = 0.5 * (inside + outside);
+      const double am = amplitude(mid);
+      (am >= 0.5 ? inside : outside) = mid;
+      (am >= 0.5 ? inside_amplitude : outside_amplitude) = am;
     }
-    previous = amplitude;
+    const double f = (inside_amplitude - 0.5) / (inside_amplitude - outside_amplitude);
+    return inside + std::clamp(f, 0.0, 1.0) * (outside - inside);
   }
   return limit;
 }
