@@ -16,6 +16,7 @@
 #include "reader/code_reading.hpp"
 #include "session/frame_model.hpp"
 #include "session/model_fit.hpp"
+#include "session/read_record.hpp"
 #include "session/session_clock.hpp"
 
 namespace flutterscan::session {
@@ -249,20 +250,23 @@ double rounded(double value, int decimals) {
   return std::round(value * scale) / scale;
 }
 
-nlohmann::json decoded_json(const std::vector<reader::DecodedCode>& codes) {
+/// Each code read: its text, format and centre in the frame, its code record
+/// (read_record.hpp) and its centre on the belt (u, across).
+nlohmann::json decoded_json(const std::vector<reader::DecodedCode>& codes,
+                            imaging::Direction direction, const imaging::Plane& latent,
+                            double travel_px) {
   nlohmann::json decoded = nlohmann::json::array();
   for (const reader::DecodedCode& code : codes) {
-    nlohmann::json corners = nlohmann::json::array();
-    for (const reader::CodePoint& c : code.quality.corners)
-      corners.push_back({rounded(c.x, 1), rounded(c.y, 1)});
-    decoded.push_back({{"text", code.text},
-                       {"format", code.format},
-                       {"symbology_id", code.symbology_id},
-                       {"x", std::lround(code.centre_x)},
-                       {"y", std::lround(code.centre_y)},
-                       {"corners", corners},
-                       {"module_px", rounded(code.quality.module_px, 2)},
-                       {"grade", std::string(1, code.quality.grade)}});
+    nlohmann::json entry = {{"text", code.text},
+                            {"format", code.format},
+                            {"x", std::lround(code.centre_x)},
+                            {"y", std::lround(code.centre_y)}};
+    entry.update(code_record(code));
+    const double along = imaging::position_along_motion(direction, code.centre_x, code.centre_y,
+                                                        latent.width, latent.height);
+    const double across = imaging::moves_along_x(direction) ? code.centre_y : code.centre_x;
+    entry["centre_belt_px"] = {rounded(along - travel_px, 1), rounded(across, 1)};
+    decoded.push_back(std::move(entry));
   }
   return decoded;
 }
@@ -348,7 +352,8 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
   judge_labels(decoded, deblurred.value().latent, model.direction, model.blur_px, out);
   stamp_sightings(job, out.log, model.blur_px, ms_between(t2, t3), out);
   if (out.decode_failed) flags.push_back("no-read");
-  out.log["decoded"] = decoded_json(decoded.readout.codes);
+  out.log["decoded"] =
+      decoded_json(decoded.readout.codes, model.direction, deblurred.value().latent, job.travel_px);
   out.log["labels_in_view"] = out.sightings.size();
   out.log["times_ms"] = {{"convert", rounded_ms(t0, t1)},
                          {"deblur", rounded_ms(t1, t2)},

@@ -29,19 +29,31 @@ void add_frame(const SightingFrame& f, nlohmann::json& record) {
   if (!f.kept_frame.empty()) record["frame_file"] = f.kept_frame;
 }
 
-/// The part of a read's record: what the code is, where it lies, how good it is.
-void add_code(const Sighting& s, double travel_px, nlohmann::json& record) {
-  const reader::DecodedCode& code = s.code;
+}  // namespace
+
+std::string iso8601_utc(std::int64_t utc_ms) {
+  const std::time_t seconds =
+      static_cast<std::time_t>(utc_ms >= 0 ? utc_ms / 1000 : (utc_ms - 999) / 1000);
+  const int ms = static_cast<int>(utc_ms - static_cast<std::int64_t>(seconds) * 1000);
+  std::tm tm{};
+  gmtime_r(&seconds, &tm);
+  char text[96];
+  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900,
+                tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec, ms);
+  return text;
+}
+
+nlohmann::json code_record(const reader::DecodedCode& code) {
   const reader::CodeQuality& q = code.quality;
+  nlohmann::json record;
   record["symbology_id"] = code.symbology_id;
   nlohmann::json corners = nlohmann::json::array();
   for (const reader::CodePoint& c : q.corners)
     corners.push_back({rounded(c.x, 1), rounded(c.y, 1)});
   record["corners"] = corners;
-  record["centre_belt_px"] = {rounded(s.position_px - travel_px, 1), rounded(s.across_px, 1)};
   if (!q.measured) {
     record["quality"] = {{"problem", q.problem}};
-    return;
+    return record;
   }
   record["module_px"] = rounded(q.module_px, 2);
   nlohmann::json quality = {{"grade", std::string(1, q.grade)},
@@ -60,20 +72,7 @@ void add_code(const Sighting& s, double travel_px, nlohmann::json& record) {
     if (!code.ec_level.empty()) quality["ec_level"] = code.ec_level;
   }
   record["quality"] = quality;
-}
-
-}  // namespace
-
-std::string iso8601_utc(std::int64_t utc_ms) {
-  const std::time_t seconds =
-      static_cast<std::time_t>(utc_ms >= 0 ? utc_ms / 1000 : (utc_ms - 999) / 1000);
-  const int ms = static_cast<int>(utc_ms - static_cast<std::int64_t>(seconds) * 1000);
-  std::tm tm{};
-  gmtime_r(&seconds, &tm);
-  char text[96];
-  std::snprintf(text, sizeof text, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900,
-                tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec, ms);
-  return text;
+  return record;
 }
 
 nlohmann::json read_record(const ObjectResult& o) {
@@ -94,7 +93,11 @@ nlohmann::json read_record(const ObjectResult& o) {
     record["conflicting_values"] = all;
   }
   add_frame(o.best.frame, record);
-  if (o.read()) add_code(o.best, o.best.frame.travel_px, record);
+  if (o.read()) {
+    record.update(code_record(o.best.code));
+    record["centre_belt_px"] = {rounded(o.best.position_px - o.best.frame.travel_px, 1),
+                                rounded(o.best.across_px, 1)};
+  }
   return record;
 }
 

@@ -26,6 +26,10 @@ inline constexpr int kResultsProtocolVersion = 2;
 /// "2026-11-25T17:05:29.123Z".
 std::string iso8601_utc(std::int64_t utc_ms);
 
+/// \brief The code part of a record: symbology identifier, corners, module size
+/// and quality of one code read (also each `decoded` entry of session.jsonl).
+nlohmann::json code_record(const reader::DecodedCode& code);
+
 /// \brief The record of one finished object.
 nlohmann::json read_record(const ObjectResult& object);
 

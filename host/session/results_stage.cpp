@@ -110,6 +110,7 @@ void ResultsStage::handle_processed(FrameOutcome& f) {
                                   std::chrono::system_clock::now().time_since_epoch())
                                   .count() -
                               (done - f.arrival_ns) / 1'000'000;
+  f.log["time"] = iso8601_utc(utc_ms);
   for (Sighting& s : f.sightings) {
     s.frame.utc_ms = utc_ms;
     s.frame.kept_frame = kept_frame;
