@@ -374,8 +374,15 @@ CodeQuality measure_matrix(const imaging::Plane& latent, const CodeCorners& c) {
   // The reflectance at each module's centre.
   std::vector<double> centres;
   for (int r = 0; r < rows; ++r)
-    for (int k = 0; k < cols; ++k)
-      centres.push_back(*sample(latent, in_quad(c, (k + 0.5) / cols, (r + 0.5) / rows)));
+    for (int k = 0; k < cols; ++k) {
+      // Inside the patch sampled above, so inside the image; checked all the same.
+      const auto v = sample(latent, in_quad(c, (k + 0.5) / cols, (r + 0.5) / rows));
+      if (!v) {
+        q.problem = "the symbol runs off the image";
+        return q;
+      }
+      centres.push_back(*v);
+    }
   const auto [lo, hi] = std::minmax_element(centres.begin(), centres.end());
   q.r_min = *lo;
   q.r_max = *hi;
