@@ -55,9 +55,12 @@ class DeviceCli : public ::testing::Test {
   void TearDown() override { fs::remove_all(scratch_); }
 
   /// Runs the binary with `args`, stdout and stderr to files, bounded by a 30 s alarm.
-  /// With `interrupt_after_ms` >= 0, sends SIGINT (Ctrl-C) after that long.
+  /// With `interrupt_after_ms` >= 0, sends SIGINT (Ctrl-C) once that long has passed and
+  /// stdout holds `interrupt_once` (so that a slow start, under a sanitizer or a loaded
+  /// machine, is not interrupted before it runs).
   RunResult run(const std::vector<std::string>& args,
-                const std::string& binary = FLUTTERSCAN_BINARY, int interrupt_after_ms = -1) {
+                const std::string& binary = FLUTTERSCAN_BINARY, int interrupt_after_ms = -1,
+                const std::string& interrupt_once = "") {
     const fs::path out = scratch_ / "stdout";
     const fs::path err = scratch_ / "stderr";
     std::vector<std::string> storage{binary};
@@ -79,10 +82,15 @@ class DeviceCli : public ::testing::Test {
     }
     posix_spawn_file_actions_destroy(&actions);
     int status = 0;
+    bool interrupted = false;
     for (int waited_ms = 0;; waited_ms += 10) {
       const pid_t done = ::waitpid(pid, &status, WNOHANG);
       if (done == pid) break;
-      if (waited_ms == interrupt_after_ms) ::kill(pid, SIGINT);
+      if (!interrupted && interrupt_after_ms >= 0 && waited_ms >= interrupt_after_ms &&
+          slurp(out).find(interrupt_once) != std::string::npos) {
+        ::kill(pid, SIGINT);
+        interrupted = true;
+      }
       if (waited_ms > 30'000) {
         ::kill(pid, SIGKILL);
         ::waitpid(pid, &status, 0);
@@ -145,7 +153,7 @@ TEST_F(DeviceCli, SetCodeSelectSaveThenMonitorArmedEvents) {
 
 TEST_F(DeviceCli, MonitorStopsCleanlyOnCtrlC) {
   ASSERT_EQ(run(sim({"device", "set-code", kCode, "--select", "--save"})).exit_code, 0);
-  const auto r = run(sim({"device", "monitor", "--arm"}), FLUTTERSCAN_BINARY, 700);
+  const auto r = run(sim({"device", "monitor", "--arm"}), FLUTTERSCAN_BINARY, 700, "\n         1 ");
   EXPECT_EQ(r.exit_code, 0) << r;
   EXPECT_TRUE(contains(r.out, "\n         1 ")) << r;
   EXPECT_TRUE(contains(r.err, "0 exposures without an event")) << r;
