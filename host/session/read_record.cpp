@@ -51,6 +51,7 @@ nlohmann::json code_record(const reader::DecodedCode& code) {
   for (const reader::CodePoint& c : q.corners)
     corners.push_back({rounded(c.x, 1), rounded(c.y, 1)});
   record["corners"] = corners;
+  record["orientation_deg"] = code.orientation_deg;
   if (!q.measured) {
     record["quality"] = {{"problem", q.problem}};
     return record;

@@ -21,6 +21,7 @@ Sighting read(double position, const std::string& value, double grade_value,
   s.code.text = value;
   s.code.format = "Code128";
   s.code.symbology_id = "]C0";
+  s.code.orientation_deg = 90;
   s.code.quality.measured = true;
   s.code.quality.grade_value = grade_value;
   s.code.quality.grade = reader::grade_letter(grade_value);
@@ -85,6 +86,7 @@ TEST(ReadRecord, AReadCarriesTheVersion1FieldsAndTheRecord) {
   EXPECT_EQ(r["trigger"]["exposure_counter"], 1042);
   EXPECT_EQ(r["symbology_id"], "]C0");
   EXPECT_EQ(r["corners"], nlohmann::json::parse("[[10,20],[110,20],[110,60],[10,60]]"));
+  EXPECT_EQ(r["orientation_deg"], 90);
   EXPECT_EQ(r["centre_belt_px"], nlohmann::json::parse("[100.0,120.0]"));
   EXPECT_EQ(r["module_px"], 2.5);
   EXPECT_EQ(r["quality"]["grade"], "A");
