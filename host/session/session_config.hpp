@@ -107,7 +107,7 @@ struct OutputConfig {
   std::string dir = "sessions";
   bool timestamped_subfolder = true;  ///< DIR/YYYYmmdd-HHMMSS, else DIR itself
   int keep_first_frames = 10;         ///< raw + fused images of the first N frames
-  bool keep_failed_frames = true;     ///< and of every frame whose decode failed
+  bool keep_failed_frames = true;     ///< and of every frame with a NO-READ or a read graded D/F
   double disk_budget_mb = 512;        ///< frame files beyond it rotate away, oldest first
   bool report = true;
 };
