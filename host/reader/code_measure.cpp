@@ -188,28 +188,39 @@ ScanGrade grade_scan(const imaging::Plane& latent, const ScanLine& line, double 
   return g;
 }
 
-/// How far (px) across from the scan line the bars go in `direction` (+1 or
-/// -1): where the profile's projection on the centre's falls to half. Steps of
-/// 2 px, then the last step halved twice and interpolated.
-double bar_extent(const imaging::Plane& latent, const ScanLine& line, double t_begin, double t_end,
-                  double direction, double limit) {
-  const std::vector<double> ref = profile(latent, line, 0, t_begin, t_end, 1.0);
+/// The bars' profile along the scan line, to compare the profiles beside it with.
+struct BarProfile {
+  std::vector<double> samples;  ///< every px from the first bar to the last
   double mean = 0;
-  for (double v : ref) mean += v;
-  mean /= static_cast<double>(ref.size());
-  double norm = 0;
-  for (double v : ref) norm += (v - mean) * (v - mean);
-  if (norm <= 0) return 0;
+  double norm = 0;  ///< sum of squared deviations from the mean
+};
+
+BarProfile bar_profile(const imaging::Plane& latent, const ScanLine& line, double t_begin,
+                       double t_end) {
+  BarProfile ref;
+  ref.samples = profile(latent, line, 0, t_begin, t_end, 1.0);
+  for (double v : ref.samples) ref.mean += v;
+  ref.mean /= static_cast<double>(ref.samples.size());
+  for (double v : ref.samples) ref.norm += (v - ref.mean) * (v - ref.mean);
+  return ref;
+}
+
+/// How far (px) across from the scan line the bars of `ref` go in `direction`
+/// (+1 or -1): where the profile's projection on the centre's falls to half.
+/// Steps of 2 px, then the last step halved twice and interpolated.
+double bar_extent(const imaging::Plane& latent, const ScanLine& line, double t_begin, double t_end,
+                  const BarProfile& ref, double direction, double limit) {
+  if (ref.norm <= 0) return 0;
   // The profile at offset s, projected on the centre's (1 = the same bars).
   auto amplitude = [&](double s) {
     const std::vector<double> p = profile(latent, line, direction * s, t_begin, t_end, 1.0);
-    if (p.size() != ref.size()) return 0.0;  // off the image
+    if (p.size() != ref.samples.size()) return 0.0;  // off the image
     double pm = 0;
     for (double v : p) pm += v;
     pm /= static_cast<double>(p.size());
     double sum = 0;
-    for (std::size_t i = 0; i < p.size(); ++i) sum += (p[i] - pm) * (ref[i] - mean);
-    return sum / norm;
+    for (std::size_t i = 0; i < p.size(); ++i) sum += (p[i] - pm) * (ref.samples[i] - ref.mean);
+    return sum / ref.norm;
   };
   constexpr double kStep = 2;
   double inside = 0, inside_amplitude = 1;
@@ -283,8 +294,9 @@ CodeQuality measure_linear(const imaging::Plane& latent, const std::string& form
     q.modules = static_cast<int>(std::lround((t_end - t_begin) / q.module_px));
   }
   // The bars' ends across: where the centre's profile fades out either side.
-  const double up = bar_extent(latent, line, t_begin, t_end, -1, 2 * span);
-  const double down = bar_extent(latent, line, t_begin, t_end, +1, 2 * span);
+  const BarProfile bars = bar_profile(latent, line, t_begin, t_end);
+  const double up = bar_extent(latent, line, t_begin, t_end, bars, -1, 2 * span);
+  const double down = bar_extent(latent, line, t_begin, t_end, bars, +1, 2 * span);
   auto at = [&](double t, double s) { return line.origin + t * line.axis + s * line.across; };
   q.corners = {at(t_begin, -up), at(t_end, -up), at(t_end, down), at(t_begin, down)};
   // Ten scans over 10%-90% of the bar height.
@@ -318,6 +330,20 @@ CodePoint in_quad(const CodeCorners& c, double u, double v) {
   return (1 - u) * (1 - v) * c[0] + u * (1 - v) * c[1] + u * v * c[2] + (1 - u) * v * c[3];
 }
 
+/// Reflectance at the centres of a cols x rows grid over the quadrilateral `c`,
+/// row by row into `out`; false if a centre is off the image.
+bool sample_grid(const imaging::Plane& latent, const CodeCorners& c, int cols, int rows,
+                 std::vector<double>& out) {
+  out.resize(static_cast<std::size_t>(cols) * rows);
+  for (int r = 0; r < rows; ++r)
+    for (int k = 0; k < cols; ++k) {
+      const auto v = sample(latent, in_quad(c, (k + 0.5) / cols, (r + 0.5) / rows));
+      if (!v) return false;
+      out[static_cast<std::size_t>(r) * cols + k] = *v;
+    }
+  return true;
+}
+
 /// Cycles over `g` of its strongest periodic component among `lowest` .. size/2.
 int strongest_cycles(const std::vector<double>& g, int lowest) {
   const auto n = static_cast<int>(g.size());
@@ -346,16 +372,11 @@ CodeQuality measure_matrix(const imaging::Plane& latent, const CodeCorners& c) {
     return q;
   }
   // The symbol resampled square; the edges between modules fall on its module grid.
-  std::vector<double> patch(static_cast<std::size_t>(samples) * samples);
-  for (int j = 0; j < samples; ++j)
-    for (int i = 0; i < samples; ++i) {
-      const auto v = sample(latent, in_quad(c, (i + 0.5) / samples, (j + 0.5) / samples));
-      if (!v) {
-        q.problem = "the symbol runs off the image";
-        return q;
-      }
-      patch[static_cast<std::size_t>(j) * samples + i] = *v;
-    }
+  std::vector<double> patch;
+  if (!sample_grid(latent, c, samples, samples, patch)) {
+    q.problem = "the symbol runs off the image";
+    return q;
+  }
   std::vector<double> gx(samples - 1, 0.0), gy(samples - 1, 0.0);
   for (int j = 0; j < samples; ++j)
     for (int i = 0; i + 1 < samples; ++i) {
@@ -371,18 +392,13 @@ CodeQuality measure_matrix(const imaging::Plane& latent, const CodeCorners& c) {
   }
   q.modules = cols;
   q.module_px = width / cols;
-  // The reflectance at each module's centre.
+  // The reflectance at each module's centre (inside the patch sampled above, so inside the
+  // image; checked all the same).
   std::vector<double> centres;
-  for (int r = 0; r < rows; ++r)
-    for (int k = 0; k < cols; ++k) {
-      // Inside the patch sampled above, so inside the image; checked all the same.
-      const auto v = sample(latent, in_quad(c, (k + 0.5) / cols, (r + 0.5) / rows));
-      if (!v) {
-        q.problem = "the symbol runs off the image";
-        return q;
-      }
-      centres.push_back(*v);
-    }
+  if (!sample_grid(latent, c, cols, rows, centres)) {
+    q.problem = "the symbol runs off the image";
+    return q;
+  }
   const auto [lo, hi] = std::minmax_element(centres.begin(), centres.end());
   q.r_min = *lo;
   q.r_max = *hi;
