@@ -244,12 +244,6 @@ std::vector<ReadTruthCheck> check_reads(const std::vector<reader::DecodedCode>& 
   return checks;
 }
 
-/// A number rounded to `decimals` for the log and the record.
-double rounded(double value, int decimals) {
-  const double scale = std::pow(10.0, decimals);
-  return std::round(value * scale) / scale;
-}
-
 /// Each code read: its text, format and centre in the frame, its code record
 /// (read_record.hpp) and its centre on the belt (u, across).
 nlohmann::json decoded_json(const std::vector<reader::DecodedCode>& codes,

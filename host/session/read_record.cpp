@@ -8,11 +8,6 @@ namespace flutterscan::session {
 
 namespace {
 
-double rounded(double value, int decimals) {
-  const double scale = std::pow(10.0, decimals);
-  return std::round(value * scale) / scale;
-}
-
 /// The part of the record every sighting has: its frame.
 void add_frame(const SightingFrame& f, nlohmann::json& record) {
   record["time"] = iso8601_utc(f.utc_ms);
@@ -30,6 +25,11 @@ void add_frame(const SightingFrame& f, nlohmann::json& record) {
 }
 
 }  // namespace
+
+double rounded(double value, int decimals) {
+  const double scale = std::pow(10.0, decimals);
+  return std::round(value * scale) / scale;
+}
 
 std::string iso8601_utc(std::int64_t utc_ms) {
   const std::time_t seconds =

@@ -22,6 +22,10 @@ namespace flutterscan::session {
 /// version 1 line (which it keeps unchanged, so a version 1 client still parses it).
 inline constexpr int kResultsProtocolVersion = 2;
 
+/// \brief `value` rounded to `decimals` decimal places, as the record and the
+/// frame's log line give their numbers.
+double rounded(double value, int decimals);
+
 /// \brief `utc_ms` (ms since 1970) as ISO 8601 UTC with milliseconds:
 /// "2026-11-25T17:05:29.123Z".
 std::string iso8601_utc(std::int64_t utc_ms);
