@@ -10,6 +10,7 @@
 #include <map>
 #include <mutex>
 #include <numeric>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <thread>
@@ -233,6 +234,12 @@ class SimCamera final : public CameraSource {
   CameraCounters counters() const override { return counters_; }
 
  private:
+  /// A label's rendered tile and where its symbol lies in it (barcode labels).
+  struct LabelTile {
+    imaging::Plane plane;
+    std::optional<sim::SymbolPlacement> placement;
+  };
+
   /// What one exposure needs rendered.
   struct RenderJob {
     std::uint64_t sequence = 0;
@@ -391,7 +398,7 @@ class SimCamera final : public CameraSource {
     for (int x = 0; x < window.width; ++x) {
       const double u = (x - pad) - travel;
       float column_value = -1;
-      std::shared_ptr<const imaging::Plane> tile;
+      std::shared_ptr<const LabelTile> tile;
       double k = 0;
       if (u < 0) {
         const double i = std::ceil(-u / pitch) - 1;
@@ -405,8 +412,9 @@ class SimCamera final : public CameraSource {
       const int k0 = static_cast<int>(k);
       const float f = static_cast<float>(k - k0);
       for (int y = 0; y < o_.height; ++y)
-        window.at(x, y) =
-            tile == nullptr ? column_value : tile->at(k0, y) * (1 - f) + tile->at(k0 + 1, y) * f;
+        window.at(x, y) = tile == nullptr
+                              ? column_value
+                              : tile->plane.at(k0, y) * (1 - f) + tile->plane.at(k0 + 1, y) * f;
     }
     // Labels a deblur can recover whole: the tile stays in view from the first
     // slot to the last, and starts at least one blur length from the upstream
@@ -416,13 +424,14 @@ class SimCamera final : public CameraSource {
       if (left + o_.tile_width + blur <= o_.width && left >= blur) {
         frame.truth.push_back(content_of(sim_label_scene(i)));
         std::lock_guard lock(tiles_mutex_);
-        if (const auto placed = placements_.find(i); placed != placements_.end()) {
+        if (const auto tile = tiles_.find(i); tile != tiles_.end() && tile->second->placement) {
+          const sim::SymbolPlacement& placed = *tile->second->placement;
           TruthLabel t;
           t.value = frame.truth.back();
-          t.symbology_id = placed->second.symbology_id;
-          t.module_px = placed->second.module_px;
+          t.symbology_id = placed.symbology_id;
+          t.module_px = placed.module_px;
           for (int c = 0; c < 4; ++c)
-            t.corners[c] = {placed->second.corners[c][0] + left, placed->second.corners[c][1]};
+            t.corners[c] = {placed.corners[c][0] + left, placed.corners[c][1]};
           frame.truth_labels.push_back(std::move(t));
         }
       }
@@ -467,13 +476,12 @@ class SimCamera final : public CameraSource {
     return true;
   }
 
-  std::shared_ptr<const imaging::Plane> tile_for(std::uint64_t index, std::string& error) {
+  std::shared_ptr<const LabelTile> tile_for(std::uint64_t index, std::string& error) {
     std::lock_guard lock(tiles_mutex_);
     auto found = tiles_.find(index);
     if (found != tiles_.end()) return found->second;
     // Keep the cache small: tiles far behind the belt are gone for good.
     while (tiles_.size() > 8) tiles_.erase(tiles_.begin());
-    while (placements_.size() > 8) placements_.erase(placements_.begin());
     auto spec = sim::parse_scene(sim_label_scene(index));
     if (!spec.ok()) {
       error = "camera sim: label " + std::to_string(index) + ": " + spec.error();
@@ -490,10 +498,11 @@ class SimCamera final : public CameraSource {
       error = "camera sim: label " + std::to_string(index) + ": " + rendered.error();
       return {};
     }
-    auto tile = std::make_shared<const imaging::Plane>(std::move(rendered.value()));
-    tiles_.emplace(index, tile);
+    LabelTile made{std::move(rendered.value()), std::nullopt};
     if (auto placed = sim::symbol_placement(spec.value()); placed.ok())
-      placements_.emplace(index, std::move(placed.value()));
+      made.placement = std::move(placed.value());
+    auto tile = std::make_shared<const LabelTile>(std::move(made));
+    tiles_.emplace(index, tile);
     return tile;
   }
 
@@ -513,8 +522,7 @@ class SimCamera final : public CameraSource {
   std::int64_t host_start_ns_ = 0;
   bool running_ = false;
   std::mutex tiles_mutex_;
-  std::map<std::uint64_t, std::shared_ptr<const imaging::Plane>> tiles_;
-  std::map<std::uint64_t, sim::SymbolPlacement> placements_;  ///< with tiles_, by label
+  std::map<std::uint64_t, std::shared_ptr<const LabelTile>> tiles_;
   std::deque<std::future<Rendered>> in_flight_;
   std::vector<Frame> ring_;
 };
