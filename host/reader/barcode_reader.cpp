@@ -30,14 +30,16 @@ std::string check_symbologies(const std::string& symbologies) {
 
 namespace {
 
-/// Columns [x0, x1) of rows [y0, y1) of `latent` into `lum` (same layout) as
-/// ZXing's 8-bit luminance.
+/// Columns [x0, x1) of rows [y0, y1) of `latent` into `lum` (rows of x1 - x0
+/// bytes) as ZXing's 8-bit luminance.
 void to_luminance(const imaging::Plane& latent, int x0, int y0, int x1, int y1,
                   std::vector<std::uint8_t>& lum) {
+  const auto width = static_cast<std::size_t>(x1 - x0);
+  lum.resize(width * static_cast<std::size_t>(y1 - y0));
   for (int y = y0; y < y1; ++y) {
-    const auto row = latent.row(y);
-    std::uint8_t* out = lum.data() + static_cast<std::size_t>(y) * latent.width;
-    for (int x = x0; x < x1; ++x)
+    const float* row = latent.row(y).data() + x0;
+    std::uint8_t* out = lum.data() + static_cast<std::size_t>(y - y0) * width;
+    for (std::size_t x = 0; x < width; ++x)
       out[x] = static_cast<std::uint8_t>(std::clamp(row[x], 0.0f, 1.0f) * 255.0f + 0.5f);
   }
 }
@@ -82,7 +84,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
                              bool try_rotate, std::span<const DecodeWindow> windows) {
   BarcodeReadout out;
   if (latent.empty()) return out;
-  std::vector<std::uint8_t> lum(latent.pixels.size());  // filled window by window
+  std::vector<std::uint8_t> lum;  // one window at a time
   ZXing::DecodeHints hints;
   hints.setFormats(ZXing::BarcodeFormatsFromString(symbologies))
       .setTryHarder(true)
@@ -95,8 +97,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
               y1 = std::clamp(w.y + w.height, y0, latent.height);
     if (x1 - x0 < 1 || y1 - y0 < 1) continue;
     to_luminance(latent, x0, y0, x1, y1, lum);
-    const ZXing::ImageView view(lum.data() + static_cast<std::size_t>(y0) * latent.width + x0,
-                                x1 - x0, y1 - y0, ZXing::ImageFormat::Lum, latent.width);
+    const ZXing::ImageView view(lum.data(), x1 - x0, y1 - y0, ZXing::ImageFormat::Lum);
     ZXing::Results results;
     out.decoder_fault =
         run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, hints); });
@@ -147,6 +148,17 @@ std::vector<LabelRegion> find_paper_runs(const imaging::Plane& latent, double pa
     run.cut = run.begin == 0 || run.end == latent.width;
     if (run.end - run.begin >= min_width || run.cut) regions.push_back(run);
   }
+  for (LabelRegion& r : regions) {
+    const int row_need = std::max(1, static_cast<int>(min_fraction * (r.end - r.begin)));
+    for (int y = 0; y < latent.height; ++y) {
+      const float* row = latent.row(y).data();
+      int paper = 0;
+      for (int x = r.begin; x < r.end; ++x) paper += row[x] > paper_threshold ? 1 : 0;
+      if (paper < row_need) continue;
+      if (r.across_end == 0) r.across_begin = y;
+      r.across_end = y + 1;
+    }
+  }
   return regions;
 }
 
@@ -182,8 +194,12 @@ std::vector<DecodeWindow> decode_windows(std::span<const LabelRegion> runs, int 
     const int a = camera_boundary(std::max(0, r.begin - margin));
     const int b = camera_boundary(std::min(length, r.end + margin));
     const int begin = std::min(a, b), end = std::max(a, b);
-    windows.push_back(along_x ? DecodeWindow{begin, 0, end - begin, height}
-                              : DecodeWindow{0, begin, width, end - begin});
+    const int lines = along_x ? height : width;
+    const bool measured = r.across_end > r.across_begin;
+    const int top = measured ? std::max(0, r.across_begin - margin) : 0;
+    const int bottom = measured ? std::min(lines, r.across_end + margin) : lines;
+    windows.push_back(along_x ? DecodeWindow{begin, top, end - begin, bottom - top}
+                              : DecodeWindow{top, begin, bottom - top, end - begin});
   }
   return windows;
 }

@@ -74,17 +74,24 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent,
                              const std::string& symbologies = kDefaultSymbologies,
                              bool try_rotate = true, std::span<const DecodeWindow> windows = {});
 
-/// \brief A run of columns [begin, end) where the image is mostly label paper.
+/// \brief A run of columns [begin, end) where the image is mostly label paper,
+/// and the rows [across_begin, across_end) that hold its paper.
 struct LabelRegion {
   int begin = 0;
   int end = 0;
   bool cut = false;  ///< touches the first or last column: the label may go on outside the frame
+  /// Rows of the paper across the motion; both 0: not measured (every row).
+  int across_begin = 0;
+  int across_end = 0;
 };
 
 /// \brief Paper along x: columns where at least `min_fraction` of the pixels
 /// are brighter than `paper_threshold`, in runs at least `min_width` wide
 /// (narrower ones only where the frame's edge cuts them). Dark gaps up to
-/// `max_gap` columns (the bars of a linear code) do not split a run.
+/// `max_gap` columns (the bars of a linear code) do not split a run. Across
+/// the motion each run spans the rows from the first to the last where at
+/// least `min_fraction` of the run's columns are paper (the motion frame's
+/// rows are the camera's across coordinate, whatever the direction).
 std::vector<LabelRegion> find_paper_runs(const imaging::Plane& latent,
                                          double paper_threshold = 0.62, double min_fraction = 0.05,
                                          int min_width = 48, int max_gap = 16);
@@ -108,7 +115,8 @@ std::optional<DecodeArea> decode_area_from_name(const std::string& name);
 
 /// \brief Windows of a `width` x `height` latent around `runs` (found along
 /// the motion: x for +-x, y for +-y, in the motion frame of `direction`), each
-/// widened by `margin` px along the motion and spanning the frame across it.
+/// widened by `margin` px along the motion and across it (a run whose rows
+/// were not measured spans the frame across).
 std::vector<DecodeWindow> decode_windows(std::span<const LabelRegion> runs, int width, int height,
                                          imaging::Direction direction, int margin = 24);
 

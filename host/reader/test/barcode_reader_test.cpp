@@ -86,10 +86,12 @@ TEST(BarcodeReader, ACodeTurnedBy90DegreesIsReadOnlyWithTryRotate) {
   EXPECT_TRUE(read_barcodes(turned, "Code128", false).codes.empty());
 }
 
-/// A belt (0.35) with white labels, each carrying a Code 128 code, starting at
-/// `starts` (the last one may run past the right edge).
-imaging::Plane belt_with_labels(const std::vector<int>& starts, int width) {
-  imaging::Plane belt(width, 200, 0.35f);
+/// A belt (0.35) `height` rows tall with white labels 160 rows tall from row
+/// `top`, each carrying a Code 128 code, starting at `starts` (the last one may
+/// run past the right edge).
+imaging::Plane belt_with_labels(const std::vector<int>& starts, int width, int height = 200,
+                                int top = 20) {
+  imaging::Plane belt(width, height, 0.35f);
   int n = 0;
   for (int start : starts) {
     const std::wstring text = L"FS-WINDOW-" + std::to_wstring(++n);
@@ -101,7 +103,7 @@ imaging::Plane belt_with_labels(const std::vector<int>& starts, int width) {
         const int bx = x - 10, by = y - 20;
         const bool bar =
             bx >= 0 && by >= 0 && bx < bars.width() && by < bars.height() && bars.get(bx, by);
-        belt.at(start + x, 20 + y) = bar ? 0.05f : 0.9f;
+        belt.at(start + x, top + y) = bar ? 0.05f : 0.9f;
       }
   }
   return belt;
@@ -116,19 +118,22 @@ TEST(BarcodeReader, PaperRunsFindLabelsAndFlagThoseCutByTheFrame) {
   EXPECT_FALSE(runs[0].cut);
   EXPECT_TRUE(runs[2].cut);  // runs to the right edge
   EXPECT_EQ(runs[2].end, 1200);
+  EXPECT_EQ(runs[0].across_begin, 20);  // the label's rows
+  EXPECT_EQ(runs[0].across_end, 180);
   const auto judged = find_label_regions(image);
   ASSERT_EQ(judged.size(), 2u);
   EXPECT_EQ(judged[1].begin, 500);
 }
 
 TEST(BarcodeReader, DecodingThePaperAloneReadsWhatTheWholeFrameReads) {
-  const imaging::Plane image = belt_with_labels({60, 500, 900}, 1240);
+  const imaging::Plane image = belt_with_labels({60, 500, 900}, 1240, 600, 300);
   const auto windows =
       decode_windows(find_paper_runs(image), image.width, image.height, imaging::Direction::kPlusX);
   ASSERT_EQ(windows.size(), 3u);
   EXPECT_EQ(windows[0].x, 60 - 24);
   EXPECT_EQ(windows[0].width, 320 + 48);
-  EXPECT_EQ(windows[0].height, image.height);
+  EXPECT_EQ(windows[0].y, 300 - 24);  // the label's rows and a margin, not the frame's
+  EXPECT_EQ(windows[0].height, 160 + 48);
   const BarcodeReadout whole = read_barcodes(image, "Code128");
   const BarcodeReadout paper = read_barcodes(image, "Code128", true, windows);
   ASSERT_EQ(whole.codes.size(), 3u);
@@ -161,6 +166,15 @@ TEST(BarcodeReader, DecodeWindowsFollowTheMotionDirection) {
   EXPECT_EQ(plus_y[0].height, 248);
   const auto minus_y = decode_windows(runs, 1000, 400, imaging::Direction::kMinusY);
   EXPECT_EQ(minus_y[0].y, 400 - 324);
+  // Rows measured across the motion: the window spans them and a margin.
+  const std::vector<LabelRegion> rows = {{100, 300, false, 50, 150}};
+  const auto plus_x_rows = decode_windows(rows, 1000, 400, imaging::Direction::kPlusX);
+  EXPECT_EQ(plus_x_rows[0].y, 26);
+  EXPECT_EQ(plus_x_rows[0].height, 148);
+  const auto minus_y_rows = decode_windows(rows, 1000, 400, imaging::Direction::kMinusY);
+  EXPECT_EQ(minus_y_rows[0].x, 26);  // across +-y motion: the camera's columns
+  EXPECT_EQ(minus_y_rows[0].width, 148);
+  EXPECT_EQ(minus_y_rows[0].y, 400 - 324);
   // Margins stop at the frame's edges.
   const std::vector<LabelRegion> edge = {{0, 40, true}};
   const auto clipped = decode_windows(edge, 1000, 400, imaging::Direction::kPlusX);

@@ -5,6 +5,7 @@
 // (BENCH_ONLY=session) runs it; docs/benchmarks.md quotes it.
 //
 //   session_bench [--frames N] [--width W --height H] [--csv FILE] [--stages-only]
+//                 [--stage-repeats N]   (the stage table's runs, default 9; more for `perf`)
 
 #include <algorithm>
 #include <chrono>
@@ -227,6 +228,7 @@ int main(int argc, char** argv) {
   int frames = 300, width = 1920, height = 1080;
   std::string csv;
   bool stages_only = false;
+  int stage_repeats = 9;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     auto next = [&]() -> std::string {
@@ -246,13 +248,16 @@ int main(int argc, char** argv) {
       csv = next();
     else if (arg == "--stages-only")
       stages_only = true;
+    else if (arg == "--stage-repeats")
+      stage_repeats = std::atoi(next().c_str());
     else {
       std::cerr << "session_bench: unknown argument '" << arg << "'\n";
       return 2;
     }
   }
-  if (frames < 10 || width < 640 || height < 240) {
-    std::cerr << "session_bench: --frames >= 10, --width >= 640, --height >= 240\n";
+  if (frames < 10 || width < 640 || height < 240 || stage_repeats < 1) {
+    std::cerr << "session_bench: --frames >= 10, --width >= 640, --height >= 240, "
+                 "--stage-repeats >= 1\n";
     return 2;
   }
   const fs::path out = fs::temp_directory_path() / "flutterscan_session_bench";
@@ -264,9 +269,10 @@ int main(int argc, char** argv) {
             << " ms per frame\n\n";
 
   session::keep_freed_frame_memory();  // as run_session() does
-  const auto costs = stage_costs(width, height, 9);
+  const auto costs = stage_costs(width, height, stage_repeats);
   double total = 0;
-  std::cout << "one worker, one frame, stage by stage (thread CPU time, median of 9):\n\n"
+  std::cout << "one worker, one frame, stage by stage (thread CPU time, median of "
+            << stage_repeats << "):\n\n"
                "| stage | ms |\n|---|---|\n";
   for (const char* stage :
        {"convert", "refine_motion", "model_choice", "deblur", "guards", "decode"}) {
