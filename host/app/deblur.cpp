@@ -64,7 +64,7 @@ double elapsed_ms(std::chrono::steady_clock::time_point since) {
 std::vector<double> white_levels(const imaging::Image& electrons) {
   std::vector<double> levels;
   for (const auto& plane : electrons.channels) {
-    std::vector<float> values = plane.pixels;
+    std::vector<float> values(plane.pixels.begin(), plane.pixels.end());
     const auto at = values.begin() +
                     static_cast<std::ptrdiff_t>(0.995 * static_cast<double>(values.size() - 1));
     std::nth_element(values.begin(), at, values.end());

@@ -328,7 +328,10 @@ Replay replay(const ReplayOptions& o, session::SessionConfig config,
   std::map<fs::path, const KeptFrame*> by_path;
   for (const KeptFrame& k : kept) by_path[k.image] = &k;
 
-  std::atomic<double> last_blur_px{config.optics.nominal_blur_px};
+  // Offline, no line to keep up with: every second pass the cascade wants runs.
+  if (config.processing.second_pass_ms < 0)
+    config.processing.second_pass_ms = session::kMaxSecondPassMs;
+  session::WorkerShared shared(config);
   std::optional<LedCode> config_code;
   if (config.controller.code != "auto") config_code = config.controller.parsed_code;
   bool planned = false;
@@ -388,8 +391,7 @@ Replay replay(const ReplayOptions& o, session::SessionConfig config,
     FrameReplay r;
     r.kept = &k;
     r.then = reads_of(k.line);
-    const session::FrameOutcome outcome =
-        session::process_frame(job, config, last_blur_px, flat_field);
+    const session::FrameOutcome outcome = session::process_frame(job, config, shared, flat_field);
     if (!outcome.processed)
       r.error = outcome.log.value("error", std::string("not processed"));
     else
@@ -417,7 +419,7 @@ void print_text(const ReplayOptions& o, const session::SessionConfig& config, co
             << (o.config.empty() ? "the defaults (a session folder does not keep its config; "
                                    "give the line's with --config FILE)"
                                  : o.config)
-            << "; method " << imaging::method_name(config.processing.method);
+            << "; method " << session::processing_method_name(config.processing);
   if (!rp.session_methods.empty()) std::cout << " (the session's: " << rp.session_methods << ")";
   std::cout << "\n";
   for (const auto& note : rp.notes) std::cout << "note     " << note << "\n";
@@ -474,7 +476,7 @@ json replay_json(const ReplayOptions& o, const session::SessionConfig& config, c
   }
   json j = {{"session", o.folder},
             {"config", o.config.empty() ? json() : json(o.config)},
-            {"method", imaging::method_name(config.processing.method)},
+            {"method", session::processing_method_name(config.processing)},
             {"notes", rp.notes},
             {"optics_differences", rp.optics_differences},
             {"unreadable_log_lines", unreadable_lines},

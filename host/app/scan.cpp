@@ -40,11 +40,8 @@ void run(const ScanOptions& o) {
   if (o.camera) config.camera.spec = *o.camera;
   if (o.controller) config.controller.spec = *o.controller;
   if (o.out) config.output.dir = *o.out;
-  if (o.method) {
-    auto method = imaging::method_from_name(*o.method);
-    if (!method) throw UsageError("--method must be joint-wiener, wiener-avg, rl or tv");
-    config.processing.method = *method;
-  }
+  if (o.method && !session::set_processing_method(*o.method, config.processing))
+    throw UsageError(std::string("--method must be one of ") + session::kProcessingMethods);
   if (o.scheme) config.controller.code = *o.scheme;
   if (o.frames) config.processing.max_frames = *o.frames;
   if (o.seconds) config.processing.max_seconds = *o.seconds;
@@ -78,7 +75,7 @@ void add_scan(CLI::App& app) {
   command->add_option("--controller", o->controller,
                       "LED controller: auto (the only one attached), a serial number, or sim");
   command->add_option("--out", o->out, "folder for session folders");
-  command->add_option("--method", o->method, "joint-wiener, wiener-avg, rl or tv");
+  command->add_option("--method", o->method, session::kProcessingMethods);
   command->add_option("--scheme", o->scheme,
                       "LED pattern: a code (digits or library name), or auto: the capture scheme "
                       "the regime map (docs/algorithms.md) says wins at the light measured on the "

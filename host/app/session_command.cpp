@@ -84,6 +84,16 @@ void run_session_command(session::SessionConfig config, bool progress) {
             << "speed    " << format_number(s.value("fps", 0.0), 1) << " fps; latency p50 "
             << format_number(s.value("latency_ms_p50", 0.0), 1) << " ms, p99 "
             << format_number(s.value("latency_ms_p99", 0.0), 1) << " ms\n";
+  if (s.contains("cascade")) {
+    const auto& c = s["cascade"];
+    std::cout << "cascade  " << c.value("windows_second_pass", 0)
+              << " label windows joint Wiener read nothing in were deblurred again by tv; "
+              << c.value("windows_read", 0) << " of them read " << c.value("codes_read", 0)
+              << " code(s)";
+    if (const auto over = c.value("windows_over_budget", 0); over > 0)
+      std::cout << "; " << over << " left for lack of CPU time";
+    std::cout << "\n";
+  }
   if (s.contains("ground_truth"))
     std::cout << "truth    " << s["ground_truth"].value("labels_read", 0) << " of "
               << s["ground_truth"].value("labels_fully_in_view", 0)

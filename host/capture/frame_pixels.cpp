@@ -22,9 +22,11 @@ static_assert(std::endian::native == std::endian::little,
 
 using Out = Result<imaging::Image, std::string>;
 
+/// `count` planes whose every sample the caller writes.
 imaging::Image planes(int count, int width, int height) {
   imaging::Image image;
-  for (int c = 0; c < count; ++c) image.channels.emplace_back(width, height);
+  for (int c = 0; c < count; ++c)
+    image.channels.push_back(imaging::Plane::uninitialised(width, height));
   return image;
 }
 
@@ -66,14 +68,31 @@ void deinterleave3(const Sample* __restrict in, int width, float* __restrict a, 
   }
 }
 
-/// One row of samples (`stride` apart, first at `in`) into electrons, counting
-/// samples at or above `ceiling` DN.
-template <int Stride, typename Sample>
+/// One row of interleaved samples (three per pixel, in the order of `out`) into
+/// electrons in one pass, counting samples at or above `ceiling` DN.
+template <typename Sample>
+std::size_t row3_to_electrons(const Sample* __restrict in, int width, float black, float gain,
+                              float ceiling, float* __restrict a, float* __restrict b,
+                              float* __restrict c) {
+  std::size_t saturated = 0;
+  for (int x = 0; x < width; ++x) {
+    const float da = in[3 * x], db = in[3 * x + 1], dc = in[3 * x + 2];
+    saturated += (da >= ceiling ? 1 : 0) + (db >= ceiling ? 1 : 0) + (dc >= ceiling ? 1 : 0);
+    a[x] = (da - black) * gain;
+    b[x] = (db - black) * gain;
+    c[x] = (dc - black) * gain;
+  }
+  return saturated;
+}
+
+/// One row of samples (one per pixel) into electrons, counting samples at or
+/// above `ceiling` DN.
+template <typename Sample>
 std::size_t row_to_electrons(const Sample* __restrict in, int width, float black, float gain,
                              float ceiling, float* __restrict out) {
   std::size_t saturated = 0;
   for (int x = 0; x < width; ++x) {
-    const float dn = in[Stride * x];
+    const float dn = in[x];
     saturated += dn >= ceiling ? 1 : 0;
     out[x] = (dn - black) * gain;
   }
@@ -251,16 +270,21 @@ Result<ElectronFrame, std::string> frame_to_electrons(const Frame& frame,
   for (int y = 0; y < f.height; ++y) {
     const std::uint8_t* row = frame.data.data() + row_bytes * static_cast<std::size_t>(y);
     if (wide) std::memcpy(samples16.data(), row, samples16.size() * 2);  // little-endian
-    for (int c = 0; c < channels; ++c) {
-      const int sample = c == 0 ? first : c == 2 ? 2 - first : 1;
-      float* to = out.electrons.channels[static_cast<std::size_t>(c)].row(y).data();
-      if (channels == 3)
-        saturated +=
-            wide ? row_to_electrons<3>(samples16.data() + sample, f.width, black, gain, ceiling, to)
-                 : row_to_electrons<3>(row + sample, f.width, black, gain, ceiling, to);
-      else
-        saturated += wide ? row_to_electrons<1>(samples16.data(), f.width, black, gain, ceiling, to)
-                          : row_to_electrons<1>(row, f.width, black, gain, ceiling, to);
+    if (channels == 3) {
+      // The planes in the samples' order: R, G, B (BGR8: B, G, R).
+      auto plane = [&](int c) {
+        return out.electrons.channels[static_cast<std::size_t>(c)].row(y).data();
+      };
+      float* const a = plane(first);
+      float* const b = plane(1);
+      float* const c = plane(2 - first);
+      saturated += wide
+                       ? row3_to_electrons(samples16.data(), f.width, black, gain, ceiling, a, b, c)
+                       : row3_to_electrons(row, f.width, black, gain, ceiling, a, b, c);
+    } else {
+      float* to = out.electrons.channels[0].row(y).data();
+      saturated += wide ? row_to_electrons(samples16.data(), f.width, black, gain, ceiling, to)
+                        : row_to_electrons(row, f.width, black, gain, ceiling, to);
     }
   }
   out.saturated_share =

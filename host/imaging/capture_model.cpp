@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "imaging/lane_sum.hpp"
 #include "imaging/limits.hpp"
 
 namespace flutterscan::imaging {
@@ -109,9 +110,9 @@ double noise_level_mean(const Plane& plane) {
   double sum = 0;
   std::size_t count = 0;
   for (int y = 0; y < plane.height; y += kRowStep) {
-    float row_sum = 0;  // a row in float (vectorised), the rows in double
-    for (float v : plane.row(y)) row_sum += v;
-    sum += row_sum;
+    const float* row = plane.row(y).data();
+    // A row in float (vectorised), the rows in double.
+    sum += lane_sum(static_cast<std::size_t>(plane.width), [&](std::size_t x) { return row[x]; });
     count += static_cast<std::size_t>(plane.width);
   }
   return count == 0 ? 0.0 : sum / static_cast<double>(count);

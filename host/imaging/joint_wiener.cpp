@@ -126,7 +126,7 @@ JointWiener::RowLoader plane_row_loader(std::span<const Plane> channels) {
 
 Plane JointWiener::deconvolve(std::span<const Plane> channels, int threads) {
   const int height = channels[0].height;
-  Plane latent(width_, height);
+  Plane latent = Plane::uninitialised(width_, height);  // every row written below
   RowPool pool(std::max(1, std::min(threads, height)));
   deconvolve(plane_row_loader(channels), height, latent, pool);
   return latent;

@@ -4,6 +4,8 @@
 #include <cmath>
 #include <vector>
 
+#include "imaging/lane_sum.hpp"
+
 namespace flutterscan::imaging {
 
 double saturation_ceiling_dn(const CaptureModel& model) {
@@ -46,14 +48,14 @@ double residual_ratio(const MotionFrame& frame, const Plane& latent, const Captu
         const float tap = taps[static_cast<std::size_t>(j)];
         for (int n = k - 1; n < width; ++n) predicted[n] += tap * sharp[n - j];
       }
-      float row_squares = 0, row_signal = 0;
-      for (int n = k - 1; n < width; ++n) {
-        const float r = observed[n] - predicted[n];
-        row_squares += r * r;
-        row_signal += observed[n];
-      }
-      squares += row_squares;
-      signal += row_signal;
+      const float* seen = observed.data() + (k - 1);
+      const float* blurred = predicted.data() + (k - 1);
+      const auto valid = static_cast<std::size_t>(width - k + 1);
+      squares += lane_sum(valid, [&](std::size_t n) {
+        const float r = seen[n] - blurred[n];
+        return r * r;
+      });
+      signal += lane_sum(valid, [&](std::size_t n) { return seen[n]; });
       samples += static_cast<std::size_t>(width - k + 1);
     }
     if (samples == 0) continue;

@@ -9,7 +9,7 @@ namespace flutterscan::imaging {
 namespace {
 
 Plane transposed(const Plane& in) {
-  Plane out(in.height, in.width);
+  Plane out = Plane::uninitialised(in.height, in.width);  // every sample written below
   constexpr int kBlock = 32;
   for (int y0 = 0; y0 < in.height; y0 += kBlock)
     for (int x0 = 0; x0 < in.width; x0 += kBlock)

@@ -59,7 +59,7 @@ nlohmann::json log_head(const FrameJob& job, const SessionConfig& config) {
                           {"slot_time_us", job.event.slot_time_us},
                           {"flags", job.event.flags}}},
                         {"clock_residual_us", std::round(job.residual_us * 10) / 10},
-                        {"method", imaging::method_name(config.processing.method)}};
+                        {"method", processing_method_name(config.processing)}};
   if (!job.match_note.empty()) log["match_note"] = job.match_note;
   return log;
 }
@@ -84,13 +84,22 @@ Result<Converted, StepFailure> convert(const FrameJob& job, const SessionConfig&
   return Out::success(Converted{std::move(model.value()), std::move(electrons.value())});
 }
 
-/// The fused latent, in the camera's orientation (decoded and kept) and in the
-/// motion frame (where labels are looked for), with what the model fit said.
+/// The fused latent in the motion frame (where labels are looked for) and in
+/// the camera's orientation (decoded and kept; for +x motion the same plane),
+/// with the frame it came from and what the model fit said.
 struct Deblurred {
-  imaging::Plane latent;
   imaging::Plane motion_latent;
+  std::optional<imaging::Plane> camera_latent;    ///< none: the motion latent is the camera's
+  imaging::MotionFrame electrons;                 ///< empty for raw Bayer frames
+  imaging::CaptureModel model;                    ///< the model the latent was deblurred with
+  bool grey_global = false;                       ///< the latent is the grey global model's
   std::vector<std::string> flags;                 ///< guards that fired
   nlohmann::json log = nlohmann::json::object();  ///< model fit: {"model": ..., "guards": ...}
+
+  const imaging::Plane& latent() const { return camera_latent ? *camera_latent : motion_latent; }
+  imaging::Plane take_latent() {
+    return camera_latent ? std::move(*camera_latent) : std::move(motion_latent);
+  }
 };
 
 imaging::DeblurOptions deblur_options(const ProcessingConfig& processing) {
@@ -110,14 +119,15 @@ Result<Deblurred, StepFailure> deblur_bayer_frame(const Converted& in,
                                  imaging::BayerMode::kRawPlanes);
   if (!r.ok()) return Out::failure({r.error()});
   Deblurred out;
-  out.latent = std::move(r.value().latent);
+  out.camera_latent = std::move(r.value().latent);
   out.motion_latent = std::move(r.value().motion_latent);
+  out.model = in.model;
   return Out::success(std::move(out));
 }
 
 /// Step "deblur": the flat field (if any), then the simplest model that fits
 /// and the guards (model_fit.hpp) on the frame turned once into the motion
-/// frame. The blur the model used replaces the encoder's in `in.model`.
+/// frame, which the result keeps (for the second pass).
 Result<Deblurred, StepFailure> deblur(Converted& in, const FrameJob& job,
                                       const SessionConfig& config,
                                       std::atomic<double>& last_blur_px,
@@ -144,10 +154,13 @@ Result<Deblurred, StepFailure> deblur(Converted& in, const FrameJob& job,
   if (r.value().estimated_blur_px > 0) last_blur_px.store(r.value().estimated_blur_px);
   Deblurred out;
   out.motion_latent = std::move(r.value().latent);
-  out.latent = frame.value().to_camera(out.motion_latent);
+  if (in.model.direction != imaging::Direction::kPlusX)
+    out.camera_latent = frame.value().to_camera(out.motion_latent);
+  out.electrons = std::move(frame.value());
+  out.model = std::move(r.value().model);
+  out.grey_global = r.value().grey_global;
   out.flags = std::move(r.value().flags);
   out.log = std::move(r.value().log);
-  if (out.log.contains("model")) in.model.blur_px = out.log["model"]["blur_px"].get<double>();
   return Out::success(std::move(out));
 }
 
@@ -166,7 +179,7 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
   Decoded out;
   out.paper = reader::find_paper_runs(image.motion_latent);
   reader::CodeReading reading =
-      reader::read_codes(image.latent, out.paper, direction, reader_options(processing));
+      reader::read_codes(image.latent(), out.paper, direction, reader_options(processing));
   out.readout = std::move(reading.readout);
   out.windows = reading.windows;
   return out;
@@ -176,11 +189,16 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
 /// within the blur plus 4 px of the upstream edge, where the deblurred image
 /// has no support) is a sighting, read when a code lies on it (8 px slack),
 /// else NO-READ; codes off the judged regions are sightings of their own.
-void judge_labels(const Decoded& decoded, const imaging::Plane& latent,
-                  imaging::Direction direction, double blur_px, FrameOutcome& out) {
+std::vector<reader::LabelRegion> judged_regions(const Decoded& decoded, double blur_px) {
   std::vector<reader::LabelRegion> regions = decoded.paper;
   const double upstream = blur_px + 4;
   std::erase_if(regions, [&](const reader::LabelRegion& r) { return r.cut || r.begin < upstream; });
+  return regions;
+}
+
+void judge_labels(const Decoded& decoded, const imaging::Plane& latent,
+                  imaging::Direction direction, double blur_px, FrameOutcome& out) {
+  const std::vector<reader::LabelRegion> regions = judged_regions(decoded, blur_px);
   const std::vector<reader::DecodedCode>& codes = decoded.readout.codes;
   auto position = [&](const reader::DecodedCode& code) {
     return imaging::position_along_motion(direction, code.centre_x, code.centre_y, latent.width,
@@ -315,10 +333,34 @@ FrameOutcome stopped(FrameOutcome out, const StepFailure& failure, nlohmann::jso
   return out;
 }
 
+/// Step "second pass" (method "cascade"): the judged label windows the
+/// decode read nothing in, deblurred again by tv and read again, within the
+/// budget; the codes found join `decoded`, its log line and flag join `out`.
+void second_pass(Deblurred& image, Decoded& decoded, const FrameJob& job,
+                 const ProcessingConfig& processing, double first_pass_ms, SecondPassBudget& budget,
+                 FrameOutcome& out, nlohmann::json& flags) {
+  budget.add_frame(job.index, job.frame.timestamp_ns, first_pass_ms);
+  if (!image.grey_global) {
+    out.log["second_pass"] = {{"not_run", "the frame's model is not the grey global one"}};
+    return;
+  }
+  const imaging::Plane& latent = image.latent();
+  const std::vector<reader::LabelRegion> judged = judged_regions(decoded, image.model.blur_px);
+  const std::vector<reader::LabelRegion> unread =
+      unread_runs(judged, decoded.readout, image.model.direction, latent.width, latent.height);
+  if (unread.empty()) return;
+  const SecondPassFrame frame{image.electrons, image.model, image.motion_latent,
+                              image.camera_latent ? &*image.camera_latent : nullptr};
+  const SecondPass pass =
+      run_second_pass(frame, unread, reader_options(processing), budget, decoded.readout);
+  out.log["second_pass"] = pass.log(budget.credit_ms());
+  if (pass.skipped > 0) flags.push_back("second-pass-budget");
+}
+
 }  // namespace
 
-FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
-                           std::atomic<double>& last_blur_px, const imaging::FlatField* flat) {
+FrameOutcome process_frame(FrameJob& job, const SessionConfig& config, WorkerShared& shared,
+                           const imaging::FlatField* flat) {
   FrameOutcome out = start_outcome(job);
   const std::int64_t t0 = now_ns();
   out.log = log_head(job, config);
@@ -329,14 +371,14 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
   out.log["blur_px"] = std::round(converted.value().model.blur_px * 100) / 100;
   const std::int64_t t1 = now_ns();
 
-  auto deblurred = deblur(converted.value(), job, config, last_blur_px, flat);
+  auto deblurred = deblur(converted.value(), job, config, shared.last_blur_px, flat);
   const std::int64_t t2 = now_ns();
   if (!deblurred.ok()) return stopped(std::move(out), deblurred.error(), flags);
   for (const auto& flag : deblurred.value().flags) flags.push_back(flag);
   out.log.update(deblurred.value().log);
 
-  const imaging::CaptureModel& model = converted.value().model;
-  const Decoded decoded = decode(deblurred.value(), model.direction, config.processing);
+  const imaging::CaptureModel& model = deblurred.value().model;
+  Decoded decoded = decode(deblurred.value(), model.direction, config.processing);
   if (decoded.windows) out.log["decode_windows"] = *decoded.windows;
   if (!decoded.readout.decoder_fault.empty()) {
     // ZXing failed an internal assertion on this image: nothing read, the session goes on.
@@ -344,16 +386,21 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
     flags.push_back("decoder-fault");
   }
   const std::int64_t t3 = now_ns();
+  if (config.processing.cascade && decoded.readout.decoder_fault.empty())
+    second_pass(deblurred.value(), decoded, job, config.processing, ms_between(t0, t3),
+                shared.second_pass, out, flags);
+  const std::int64_t t4 = now_ns();
 
-  judge_labels(decoded, deblurred.value().latent, model.direction, model.blur_px, out);
-  stamp_sightings(job, out.log, model.blur_px, ms_between(t2, t3), out);
+  const imaging::Plane& latent = deblurred.value().latent();
+  judge_labels(decoded, latent, model.direction, model.blur_px, out);
+  stamp_sightings(job, out.log, model.blur_px, ms_between(t2, t4), out);
   if (out.decode_failed) flags.push_back("no-read");
-  out.log["decoded"] =
-      decoded_json(decoded.readout.codes, model.direction, deblurred.value().latent, job.travel_px);
+  out.log["decoded"] = decoded_json(decoded.readout.codes, model.direction, latent, job.travel_px);
   out.log["labels_in_view"] = out.sightings.size();
   out.log["times_ms"] = {{"convert", rounded_ms(t0, t1)},
                          {"deblur", rounded_ms(t1, t2)},
                          {"decode", rounded_ms(t2, t3)}};
+  if (config.processing.cascade) out.log["times_ms"]["second_pass"] = rounded_ms(t3, t4);
   if (!job.frame.truth.empty()) out.log["truth"] = job.frame.truth;
   out.truth_checks = check_reads(decoded.readout.codes, job.frame.truth_labels);
   if (!out.truth_checks.empty()) {
@@ -367,7 +414,7 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
     out.log["truth_check"] = checks;
   }
   out.log["flags"] = flags;
-  record(job, model, std::move(deblurred.value().latent), out);
+  record(job, model, deblurred.value().take_latent(), out);
   return out;
 }
 

@@ -3,23 +3,37 @@
 // the frame's model from its exposure event, the frame in electrons
 // (flat-field corrected), the simplest model that fits and its deblur
 // (model_fit.hpp; raw Bayer frames: the grey model on their raw planes), the
-// paper found along the motion, the codes read (processing.decode_area), and
-// the labels judged: each whole label in view is a sighting, read or not.
+// paper found along the motion, the codes read (processing.decode_area), the
+// cascade's second pass on the label windows that read nothing
+// (second_pass.hpp), and the labels judged: each whole label in view is a
+// sighting, read or not.
 
 #include <atomic>
 
 #include "imaging/flat_field.hpp"
 #include "session/pipeline.hpp"
+#include "session/second_pass.hpp"
 #include "session/session_config.hpp"
 
 namespace flutterscan::session {
 
+/// \brief What the workers share from frame to frame.
+struct WorkerShared {
+  explicit WorkerShared(const SessionConfig& config)
+      : last_blur_px(config.optics.nominal_blur_px),
+        second_pass(config.processing.second_pass_ms, config.processing.workers) {}
+  /// The last confident blur estimate: read when a frame without an encoder has
+  /// no edges along the motion, updated by each new estimate.
+  std::atomic<double> last_blur_px;
+  /// The cascade's CPU budget for second passes.
+  SecondPassBudget second_pass;
+};
+
 /// \brief Processes `job` (its frame moved into the outcome) under `config`,
-/// corrected by `flat` when not null. `last_blur_px` is the last confident
-/// blur estimate, shared by the workers: read when a frame without an encoder
-/// has no edges along the motion, updated by each new estimate. A frame that
-/// cannot be processed comes back with processed = false and its error logged.
-FrameOutcome process_frame(FrameJob& job, const SessionConfig& config,
-                           std::atomic<double>& last_blur_px, const imaging::FlatField* flat);
+/// corrected by `flat` when not null, with what the workers share. A frame
+/// that cannot be processed comes back with processed = false and its error
+/// logged.
+FrameOutcome process_frame(FrameJob& job, const SessionConfig& config, WorkerShared& shared,
+                           const imaging::FlatField* flat);
 
 }  // namespace flutterscan::session

@@ -151,6 +151,7 @@ Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
     auto result = imaging::deblur(frame, model, options);
     if (!result.ok()) return Out::failure(result.error());
     out.latent = std::move(result.value().latent);
+    out.grey_global = true;
     times["deblur"] = lap_ms(lap);
     // The residual check needs the grey global model the frame was deblurred with.
     guards.residual_ratio =
@@ -166,6 +167,7 @@ Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
   if (guards.blur_checked) out.log["guards"]["blur_disagrees"] = guards.blur_disagrees;
   for (auto& flag : guards.flags()) out.flags.push_back(flag);
   times["guards"] = lap_ms(lap);  // with the residual check after a global deblur
+  out.model = std::move(model);
   return Out::success(std::move(out));
 }
 

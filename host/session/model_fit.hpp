@@ -59,6 +59,11 @@ struct FittedFrame {
   /// the frame was deblurred with it.
   std::optional<imaging::MotionRefinement> refinement;
   bool refinement_used = false;
+  /// The model the latent was deblurred with (the blur and speed the fit chose).
+  imaging::CaptureModel model;
+  /// The latent is the grey global model's, made by imaging::deblur (what the
+  /// cascade's second pass can redo window by window with another method).
+  bool grey_global = false;
 };
 
 /// \brief Deblurs one frame (`frame`: electrons in the motion frame;

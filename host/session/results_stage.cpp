@@ -72,6 +72,7 @@ void ResultsStage::handle_processed(FrameOutcome& f) {
     else if (!motion->value("edges", true))
       ++results_.frames_without_motion_edges;
   }
+  count_second_pass(f.log);
   results_.processed_at_s.push_back(ms_between(start_ns_, done) * 1e-3);
   ++pipeline_.frames_processed;
   for (const auto& t : f.truth) results_.truth_seen.insert(t);
@@ -140,6 +141,26 @@ void ResultsStage::count_truth_checks(const std::vector<ReadTruthCheck>& checks)
     t.worst_corner_error_px = std::max(t.worst_corner_error_px, c.corner_error_px);
     t.worst_module_error = std::max(t.worst_module_error, c.module_error);
   }
+}
+
+void ResultsStage::count_second_pass(const nlohmann::json& frame_log) {
+  const auto pass = frame_log.find("second_pass");
+  if (pass == frame_log.end() || !pass->contains("windows")) return;
+  SecondPassTally& t = results_.second_pass;
+  const nlohmann::json& windows = (*pass)["windows"];
+  t.frames += windows.empty() ? 0 : 1;
+  for (const nlohmann::json& w : windows) {
+    ++t.windows;
+    t.window_ms.push_back(w.value("ms", 0.0));
+    const nlohmann::json& read = w["read"];
+    t.windows_read += read.empty() ? 0 : 1;
+    t.codes_read += read.size();
+    for (const nlohmann::json& value : read)
+      if (t.values.size() < kSecondPassValuesKept) t.values.push_back(value.get<std::string>());
+  }
+  const auto skipped = pass->value("skipped", std::uint64_t{0});
+  t.windows_skipped += skipped;
+  t.frames_skipping += skipped > 0 ? 1 : 0;
 }
 
 void ResultsStage::publish(std::vector<ObjectResult> finished) {

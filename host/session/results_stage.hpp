@@ -37,6 +37,20 @@ struct ReadRecordTruth {
   double worst_module_error = 0;
 };
 
+/// \brief The cascade's second passes over the session (processing.method "cascade").
+struct SecondPassTally {
+  std::uint64_t frames = 0;           ///< frames with a window deblurred again
+  std::uint64_t windows = 0;          ///< windows deblurred again
+  std::uint64_t windows_read = 0;     ///< of which read something
+  std::uint64_t codes_read = 0;       ///< codes they read
+  std::uint64_t windows_skipped = 0;  ///< left as they were: the budget was spent
+  std::uint64_t frames_skipping = 0;  ///< frames with such a window (flag second-pass-budget)
+  std::vector<double> window_ms;      ///< each window's deblur and decode
+  /// The first few values they read (at most kSecondPassValuesKept, in order).
+  std::vector<std::string> values;
+};
+inline constexpr std::size_t kSecondPassValuesKept = 20;
+
 /// \brief What the results stage gathered for the summary and the report.
 struct SessionResults {
   std::vector<ObjectResult> objects;   ///< in the order they were published
@@ -56,6 +70,7 @@ struct SessionResults {
   ReadRecordTruth read_record_truth;
   /// Reads by indicative grade ("A" .. "F"), every frame.
   std::map<std::string, std::uint64_t> reads_by_grade;
+  SecondPassTally second_pass;
 };
 
 /// \brief Reads graded below this (D or F) keep their frame's files, as
@@ -87,6 +102,7 @@ class ResultsStage {
   void handle_processed(FrameOutcome& f);
   void publish(std::vector<ObjectResult> finished);
   void count_truth_checks(const std::vector<ReadTruthCheck>& checks);
+  void count_second_pass(const nlohmann::json& frame_log);
   Progress progress(std::int64_t now) const;
 
   const SessionConfig& config_;

@@ -238,21 +238,25 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
   if (const toml::table* t = root["processing"].as_table()) {
     if (auto p = known_keys_problem(
             *t, "processing.",
-            {"method", "workers", "threads_per_worker", "queue_depth", "max_frames", "max_seconds",
-             "match_tolerance_us", "object_match_px", "choose_model", "blur_check_every",
-             "blur_tolerance", "symbologies", "try_rotate", "decode_area"},
+            {"method", "second_pass_ms", "workers", "threads_per_worker", "queue_depth",
+             "max_frames", "max_seconds", "match_tolerance_us", "object_match_px", "choose_model",
+             "blur_check_every", "blur_tolerance", "symbologies", "try_rotate", "decode_area"},
             origin);
         !p.empty())
       return Out::failure(p);
     TableReader r(t, "processing.", origin, error);
     std::string method;
     r.get("method", method);
-    if (!method.empty()) {
-      auto m = imaging::method_from_name(method);
-      if (!m)
-        return Out::failure(origin + ": processing.method '" + method +
-                            "' is none of joint-wiener, wiener-avg, rl, tv");
-      c.processing.method = *m;
+    if (!method.empty() && !set_processing_method(method, c.processing))
+      return Out::failure(origin + ": processing.method '" + method + "' is none of " +
+                          kProcessingMethods);
+    if (const toml::node* budget = t->get("second_pass_ms"); budget && budget->is_string()) {
+      if (budget->value_exact<std::string>() != "auto")
+        return Out::failure(origin + ":" + std::to_string(budget->source().begin.line) +
+                            ": processing.second_pass_ms must be \"auto\" or a number of ms");
+      c.processing.second_pass_ms = -1;
+    } else {
+      r.get("second_pass_ms", c.processing.second_pass_ms);
     }
     r.get("workers", c.processing.workers);
     r.get("threads_per_worker", c.processing.threads_per_worker);
@@ -444,6 +448,11 @@ std::string check_config(SessionConfig& c) {
                    "0 means full well at full scale");
   if (c.processing.workers < 1 || c.processing.workers > 64)
     return problem("processing.workers", "must be within 1..64" + got(c.processing.workers));
+  if (!(c.processing.second_pass_ms == -1 ||
+        (c.processing.second_pass_ms >= 0 && c.processing.second_pass_ms <= kMaxSecondPassMs)))
+    return outside("processing.second_pass_ms", c.processing.second_pass_ms,
+                   "\"auto\" or [0, " + number_text(kMaxSecondPassMs) + "] ms per frame",
+                   "the cascade's CPU budget for second passes");
   if (c.processing.threads_per_worker < 1 || c.processing.threads_per_worker > 64)
     return problem("processing.threads_per_worker",
                    "must be within 1..64" + got(c.processing.threads_per_worker));
@@ -472,6 +481,23 @@ std::string check_config(SessionConfig& c) {
   if (!c.results.serial.empty() && (c.results.serial_baud < 50 || c.results.serial_baud > 4000000))
     return outside("results.serial_baud", c.results.serial_baud, "50..4000000");
   return {};
+}
+
+bool set_processing_method(const std::string& name, ProcessingConfig& processing) {
+  if (name == "cascade") {
+    processing.method = imaging::Method::kJointWiener;
+    processing.cascade = true;
+    return true;
+  }
+  const auto method = imaging::method_from_name(name);
+  if (!method) return false;
+  processing.method = *method;
+  processing.cascade = false;
+  return true;
+}
+
+std::string processing_method_name(const ProcessingConfig& processing) {
+  return processing.cascade ? "cascade" : imaging::method_name(processing.method);
 }
 
 }  // namespace flutterscan::session

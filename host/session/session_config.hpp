@@ -69,7 +69,14 @@ struct OpticsConfig {
 };
 
 struct ProcessingConfig {
+  /// The method that deblurs each whole frame ("cascade": joint Wiener).
   imaging::Method method = imaging::Method::kJointWiener;
+  /// Method "cascade" (the default): the label windows joint Wiener read nothing
+  /// in are deblurred again by tv, alone (second_pass.hpp).
+  bool cascade = true;
+  /// The cascade's CPU budget for second passes, ms per frame; < 0 ("auto"):
+  /// from the frame rate and the workers, leaving 15% of their time spare.
+  double second_pass_ms = -1;
   int workers = 2;              ///< frames deblurred at once
   int threads_per_worker = 1;   ///< row threads inside one deblur
   std::size_t queue_depth = 4;  ///< frames waiting for a worker; beyond it frames are dropped
@@ -97,6 +104,16 @@ struct ProcessingConfig {
   /// straight on a substrate no brighter than the belt.
   reader::DecodeArea decode_area = reader::ReaderOptions{}.area;
 };
+
+/// \brief The names processing.method takes: every imaging method and "cascade".
+inline constexpr const char* kProcessingMethods = "cascade, joint-wiener, wiener-avg, rl, tv";
+
+/// \brief Sets `processing`'s method (and cascade) from `name`; false if
+/// `name` is none of kProcessingMethods.
+bool set_processing_method(const std::string& name, ProcessingConfig& processing);
+
+/// \brief The method `processing` names: "cascade" or the imaging method's name.
+std::string processing_method_name(const ProcessingConfig& processing);
 
 /// \brief The reader's options of `processing`: symbologies, try_rotate and decode_area.
 inline reader::ReaderOptions reader_options(const ProcessingConfig& processing) {
@@ -133,6 +150,7 @@ inline constexpr double kMaxPxPerCount = 1000;      ///< optics.px_per_count
 inline constexpr double kMaxElectrons = 1e9;        ///< optics.electrons, full_well_e
 inline constexpr std::size_t kMaxQueueDepth = 256;  ///< processing.queue_depth
 inline constexpr double kMaxDiskBudgetMb = 1e9;     ///< output.disk_budget_mb (a petabyte)
+inline constexpr double kMaxSecondPassMs = 1e6;     ///< processing.second_pass_ms
 inline constexpr double kMaxCrosstalk = 100;        ///< each optics.crosstalk entry
 
 /// \brief Reads a TOML file over the defaults; the error names the file, the key and the line.

@@ -65,7 +65,7 @@ nlohmann::json session_summary(const SessionConfig& config, const SessionCounts&
                             {"read_noise_e", scheme->cell_read_noise},
                             {"cap", scheme->cell_cap}}}};
   if (counts.scheme_light) s["scheme_choice"]["light"] = scheme_light_json(*counts.scheme_light);
-  s["method"] = imaging::method_name(config.processing.method);
+  s["method"] = processing_method_name(config.processing);
   s["frame_size"] = std::to_string(counts.format.width) + "x" +
                     std::to_string(counts.format.height) + " " +
                     capture::pixel_format_name(counts.format.pixel_format);
@@ -95,6 +95,18 @@ nlohmann::json session_summary(const SessionConfig& config, const SessionCounts&
                             {"refined_minus_encoder_px_p5", px(percentile(delta, 5))},
                             {"refined_minus_encoder_px_p50", px(percentile(delta, 50))},
                             {"refined_minus_encoder_px_p95", px(percentile(delta, 95))}};
+  if (config.processing.cascade) {
+    const SecondPassTally& t = results.second_pass;
+    s["cascade"] = {{"frames_with_second_pass", t.frames},
+                    {"windows_second_pass", t.windows},
+                    {"windows_read", t.windows_read},
+                    {"codes_read", t.codes_read},
+                    {"values_read_first", t.values},
+                    {"windows_over_budget", t.windows_skipped},
+                    {"frames_over_budget", t.frames_skipping},
+                    {"window_ms_p50", std::round(percentile(t.window_ms, 50) * 10) / 10},
+                    {"window_ms_p99", std::round(percentile(t.window_ms, 99) * 10) / 10}};
+  }
   s["clock_drift_ppm"] = std::round(counts.clocks.drift_ppm() * 10) / 10;
   s["clock_fit_points"] = counts.clocks.points;
   s["stopped_by"] = counts.stopped_by;

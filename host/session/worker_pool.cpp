@@ -4,7 +4,6 @@
 
 #include "imaging/motion_frame.hpp"
 #include "imaging/row_fft.hpp"
-#include "session/frame_processing.hpp"
 
 namespace flutterscan::session {
 namespace {
@@ -22,12 +21,12 @@ void plan_row_ffts(const capture::FrameFormat& format, imaging::Direction direct
 
 WorkerPool::WorkerPool(Pipeline& pipeline, const SessionConfig& config,
                        const imaging::FlatField* flat)
-    : last_blur_px_(config.optics.nominal_blur_px) {
+    : shared_(config) {
   for (int w = 0; w < config.processing.workers; ++w)
     threads_.emplace_back([this, &pipeline, &config, flat] {
       FrameJob job;
       while (pipeline.jobs.pop(job)) {
-        FrameOutcome o = process_frame(job, config, last_blur_px_, flat);
+        FrameOutcome o = process_frame(job, config, shared_, flat);
         if (!o.processed) ++pipeline.processing_errors;
         pipeline.outcomes.push(std::move(o));
       }

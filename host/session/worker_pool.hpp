@@ -4,13 +4,13 @@
 // (frame_processing.hpp) and send every outcome to the results thread, in
 // whatever order they finish.
 
-#include <atomic>
 #include <thread>
 #include <vector>
 
 #include "capture/camera_source.hpp"
-#include "imaging/flat_field.hpp"
 #include "imaging/capture_model.hpp"
+#include "imaging/flat_field.hpp"
+#include "session/frame_processing.hpp"
 #include "session/pipeline.hpp"
 #include "session/session_config.hpp"
 
@@ -34,9 +34,7 @@ class WorkerPool {
   void join();
 
  private:
-  /// Without an encoder, the last confident blur estimate stands in for
-  /// frames without edges along the motion.
-  std::atomic<double> last_blur_px_;
+  WorkerShared shared_;  ///< the last blur estimate, the second passes' budget
   std::vector<std::thread> threads_;
 };
 

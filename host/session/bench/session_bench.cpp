@@ -6,6 +6,7 @@
 //
 //   session_bench [--frames N] [--width W --height H] [--csv FILE] [--stages-only]
 //                 [--stage-repeats N]   (the stage table's runs, default 9; more for `perf`)
+//                 [--cascade]           (only the cascade against tv on every frame, dim light)
 
 #include <algorithm>
 #include <chrono>
@@ -19,6 +20,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/cpu_model.hpp"
 #include "capture/frame_pixels.hpp"
 #include "capture/sim_camera.hpp"
 #include "device/controller_client.hpp"
@@ -99,6 +101,56 @@ session::SessionConfig bench_config(int width, int height, int frames, bool pace
   c.output.keep_failed_frames = false;
   c.output.report = false;
   return c;
+}
+
+/// The cascade (the session's default, at 60 fps input) against tv on every
+/// frame (offline, unpaced) on the same `frames` frames of a sim line at
+/// `electrons` (the sim's labels: Code 128, EAN-13, QR, Data Matrix in turn):
+/// object read rates side by side, drops, latency and the second passes.
+int cascade_against_tv(int width, int height, int frames, const fs::path& out) {
+  std::cout << "cascade (60 fps input, paced) against tv on every frame (offline), the same "
+            << frames << " frames of a sim line, " << width << "x" << height << "\n\n"
+            << "| e- | method | objects read | read rate | dropped | latency p99 ms | second "
+               "passes (windows, read, over budget) | window ms p50 |\n"
+            << "|---|---|---|---|---|---|---|---|\n";
+  for (const double electrons : {300.0, 1000.0}) {
+    for (const bool cascade : {true, false}) {
+      fs::remove_all(out);
+      session::SessionConfig c = bench_config(width, height, frames, cascade, 16667, out);
+      c.camera.options.push_back({"electrons", std::to_string(electrons)});
+      c.camera.options.push_back({"ring_frames", std::to_string(frames)});
+      c.optics.electrons = electrons;
+      if (!cascade) {
+        c.processing.cascade = false;
+        c.processing.method = imaging::Method::kTotalVariation;
+        c.processing.queue_depth = static_cast<std::size_t>(frames);  // offline: nothing dropped
+      }
+      if (auto problem = session::check_config(c); !problem.empty()) {
+        std::cerr << "session_bench: " << problem << "\n";
+        return 1;
+      }
+      std::atomic<bool> stop{false};
+      const auto outcome = session::run_session(c, stop, {});
+      if (!outcome.error.empty()) {
+        std::cerr << "session_bench: cascade: " << outcome.error << "\n";
+        return 1;
+      }
+      const auto& s = outcome.summary;
+      std::cout << "| " << electrons << " | " << (cascade ? "cascade, 60 fps" : "tv, offline")
+                << " | " << s["objects_read"] << " of " << s["objects"] << " | "
+                << s["object_read_rate"] << " | " << s["frames_dropped"] << " | "
+                << s["latency_ms_p99"] << " | ";
+      if (s.contains("cascade"))
+        std::cout << s["cascade"]["windows_second_pass"] << ", " << s["cascade"]["windows_read"]
+                  << ", " << s["cascade"]["windows_over_budget"] << " | "
+                  << s["cascade"]["window_ms_p50"];
+      else
+        std::cout << "- | -";
+      std::cout << " |\n" << std::flush;
+    }
+  }
+  fs::remove_all(out);
+  return 0;
 }
 
 /// The sim conveyor of bench_config(), rendering on one thread, for the measurements apart.
@@ -229,6 +281,7 @@ int main(int argc, char** argv) {
   std::string csv;
   bool stages_only = false;
   int stage_repeats = 9;
+  bool cascade_only = false;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     auto next = [&]() -> std::string {
@@ -250,6 +303,8 @@ int main(int argc, char** argv) {
       stages_only = true;
     else if (arg == "--stage-repeats")
       stage_repeats = std::atoi(next().c_str());
+    else if (arg == "--cascade")
+      cascade_only = true;
     else {
       std::cerr << "session_bench: unknown argument '" << arg << "'\n";
       return 2;
@@ -261,6 +316,8 @@ int main(int argc, char** argv) {
     return 2;
   }
   const fs::path out = fs::temp_directory_path() / "flutterscan_session_bench";
+  std::cout << "CPU: " << bench::cpu_model() << "\n\n";
+  if (cascade_only) return cascade_against_tv(width, height, std::min(frames, 120), out);
   std::cout << "session pipeline, " << width << "x" << height
             << " RGB 12-bit frames from a ring of 8 pre-rendered sim frames, joint-wiener, "
                "2 workers x 1 thread, queue 4\n\n";
@@ -271,8 +328,8 @@ int main(int argc, char** argv) {
   session::keep_freed_frame_memory();  // as run_session() does
   const auto costs = stage_costs(width, height, stage_repeats);
   double total = 0;
-  std::cout << "one worker, one frame, stage by stage (thread CPU time, median of "
-            << stage_repeats << "):\n\n"
+  std::cout << "one worker, one frame, stage by stage (thread CPU time, median of " << stage_repeats
+            << "):\n\n"
                "| stage | ms |\n|---|---|\n";
   for (const char* stage :
        {"convert", "refine_motion", "model_choice", "deblur", "guards", "decode"}) {

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <optional>
 
 #include "capture/sim_camera.hpp"
 #include "device/controller_client.hpp"
@@ -27,8 +28,9 @@ SessionConfig small_config() {
 }
 
 /// A sim frame with a whole label in view and the event that lit it (the
-/// encoder's counts from the frame's own descriptor).
-FrameJob job_with_a_label(const SessionConfig& config) {
+/// encoder's counts from the frame's own descriptor), at the light of
+/// config.optics.electrons, the `skip`-th such frame.
+FrameJob job_with_a_label(const SessionConfig& config, int skip = 0) {
   auto controller = std::make_shared<device::VirtualController>();
   auto client = device::ControllerClient::connect(device::in_process_opener(controller));
   EXPECT_TRUE(client.ok());
@@ -43,12 +45,15 @@ FrameJob job_with_a_label(const SessionConfig& config) {
   belt.height = 240;
   belt.gap = 100;
   belt.render_threads = 1;
+  belt.electrons = config.optics.electrons;
   auto camera = capture::make_sim_camera(*controller, belt);
   EXPECT_EQ(camera->start(), "");
   FrameJob job;
   std::string error;
-  for (int i = 0; i < 40 && (i < 4 || job.frame.truth.empty()); ++i)
+  for (int i = 0, found = 0; i < 80; ++i) {
     camera->next_frame(job.frame, std::chrono::milliseconds(1000), error);
+    if (i >= 4 && !job.frame.truth.empty() && found++ == skip) break;
+  }
   const auto model = imaging::from_descriptor(nlohmann::json::parse(job.frame.descriptor_json));
   EXPECT_TRUE(model.ok());
   job.index = 7;
@@ -67,8 +72,8 @@ TEST(FrameProcessing, AWholeLabelIsDeblurredAndReadAtItsGroundTruth) {
   ASSERT_FALSE(job.frame.truth.empty());
   const std::vector<std::string> truth = job.frame.truth;
   const std::uint64_t sequence = job.frame.sequence;
-  std::atomic<double> last_blur_px{config.optics.nominal_blur_px};
-  const FrameOutcome out = process_frame(job, config, last_blur_px, nullptr);
+  WorkerShared shared(config);
+  const FrameOutcome out = process_frame(job, config, shared, nullptr);
   ASSERT_TRUE(out.processed) << out.log.dump();
   EXPECT_EQ(out.index, 7u);
   EXPECT_EQ(out.sequence, sequence);
@@ -91,8 +96,8 @@ TEST(FrameProcessing, AnEventThatDoesNotFitTheCodeIsLoggedNotProcessed) {
   const SessionConfig config = small_config();
   FrameJob job = job_with_a_label(config);
   job.event.slot_count = static_cast<std::uint16_t>(job.event.slot_count + 1);
-  std::atomic<double> last_blur_px{config.optics.nominal_blur_px};
-  const FrameOutcome out = process_frame(job, config, last_blur_px, nullptr);
+  WorkerShared shared(config);
+  const FrameOutcome out = process_frame(job, config, shared, nullptr);
   EXPECT_FALSE(out.processed);
   EXPECT_NE(out.log["error"].get<std::string>().find("exposure 8"), std::string::npos)
       << out.log.dump();
@@ -129,8 +134,8 @@ TEST(FrameProcessing, ARawBayerFrameIsDeblurredOnItsPlanesAndReadInEitherDirecti
     ASSERT_FALSE(job.frame.truth.empty());
     const std::vector<std::string> truth = job.frame.truth;
     to_bayer_mosaic(job.frame, mirror);
-    std::atomic<double> last_blur_px{config.optics.nominal_blur_px};
-    const FrameOutcome out = process_frame(job, config, last_blur_px, nullptr);
+    WorkerShared shared(config);
+    const FrameOutcome out = process_frame(job, config, shared, nullptr);
     ASSERT_TRUE(out.processed) << out.log.dump();
     EXPECT_EQ(out.latent.width, 640);
     EXPECT_EQ(out.latent.height, 240);
@@ -140,6 +145,118 @@ TEST(FrameProcessing, ARawBayerFrameIsDeblurredOnItsPlanesAndReadInEitherDirecti
           << value << (mirror ? " (-x)" : " (+x)") << " not read: " << out.log.dump();
     EXPECT_GT(out.log["decode_windows"].get<int>(), 0) << out.log.dump();
   }
+}
+
+/// A frame at `electrons` whose label joint Wiener alone does not read
+/// (searched over the first frames with a whole label), or none.
+std::optional<FrameJob> frame_joint_wiener_misses(SessionConfig config, double electrons) {
+  config.optics.electrons = electrons;
+  config.processing.cascade = false;
+  for (int skip = 0; skip < 6; ++skip) {
+    FrameJob job = job_with_a_label(config, skip);
+    FrameJob copy = job;
+    WorkerShared shared(config);
+    const FrameOutcome out = process_frame(copy, config, shared, nullptr);
+    if (out.processed && out.decode_failed) return job;
+  }
+  return std::nullopt;
+}
+
+TEST(FrameProcessing, TheCascadeReadsAWindowJointWienerMissedByDeblurringItAgainWithTv) {
+  SessionConfig config = small_config();
+  std::optional<FrameJob> missed;
+  for (double electrons : {400.0, 300.0})
+    if ((missed = frame_joint_wiener_misses(config, electrons))) {
+      config.optics.electrons = electrons;
+      break;
+    }
+  ASSERT_TRUE(missed) << "joint Wiener read every label at 400 and 300 e-";
+  const std::vector<std::string> truth = missed->frame.truth;
+  config.processing.cascade = true;
+  config.processing.second_pass_ms = kMaxSecondPassMs;  // offline: every window
+  ASSERT_EQ(check_config(config), "");
+  FrameJob job = *missed;
+  WorkerShared shared(config);
+  const FrameOutcome out = process_frame(job, config, shared, nullptr);
+  ASSERT_TRUE(out.processed) << out.log.dump();
+  const nlohmann::json& pass = out.log["second_pass"];
+  ASSERT_GE(pass["windows"].size(), 1u) << out.log.dump();
+  EXPECT_GT(pass["windows"][0]["ms"].get<double>(), 0);
+  EXPECT_EQ(pass["skipped"], 0);
+  EXPECT_TRUE(out.log["times_ms"].contains("second_pass"));
+  for (const auto& value : truth)
+    EXPECT_TRUE(std::any_of(out.sightings.begin(), out.sightings.end(),
+                            [&](const Sighting& s) { return s.decoded && s.value == value; }))
+        << value << " not read by the second pass: " << out.log.dump();
+  EXPECT_FALSE(out.decode_failed);
+  EXPECT_EQ(pass["windows"][0]["read"], nlohmann::json(truth)) << pass.dump();
+
+  // The same frame turned to -x: the window is pasted into the camera's latent too.
+  SessionConfig mirrored = config;
+  mirrored.optics.direction = "-x";
+  ASSERT_EQ(check_config(mirrored), "");
+  FrameJob turned = *missed;
+  const int w = turned.frame.format.width;
+  const std::size_t stride = turned.frame.format.row_bytes != 0 ? turned.frame.format.row_bytes
+                                                                : static_cast<std::size_t>(w) * 6;
+  for (int y = 0; y < turned.frame.format.height; ++y)
+    for (int x = 0; x < w / 2; ++x)
+      std::swap_ranges(
+          turned.frame.data.begin() + static_cast<std::ptrdiff_t>(y * stride + x * 6),
+          turned.frame.data.begin() + static_cast<std::ptrdiff_t>(y * stride + x * 6 + 6),
+          turned.frame.data.begin() + static_cast<std::ptrdiff_t>(y * stride + (w - 1 - x) * 6));
+  WorkerShared shared_turned(mirrored);
+  const FrameOutcome out_turned = process_frame(turned, mirrored, shared_turned, nullptr);
+  ASSERT_TRUE(out_turned.processed) << out_turned.log.dump();
+  EXPECT_FALSE(out_turned.decode_failed) << out_turned.log.dump();
+  ASSERT_EQ(out_turned.sightings.size(), out.sightings.size());
+}
+
+TEST(FrameProcessing, AWindowTheBudgetCannotPayForIsFlaggedAndStaysANoRead) {
+  SessionConfig config = small_config();
+  std::optional<FrameJob> missed;
+  for (double electrons : {400.0, 300.0})
+    if ((missed = frame_joint_wiener_misses(config, electrons))) {
+      config.optics.electrons = electrons;
+      break;
+    }
+  ASSERT_TRUE(missed);
+  config.processing.second_pass_ms = 0;
+  ASSERT_EQ(check_config(config), "");
+  WorkerShared shared(config);
+  const FrameOutcome out = process_frame(*missed, config, shared, nullptr);
+  ASSERT_TRUE(out.processed);
+  EXPECT_TRUE(out.decode_failed);
+  EXPECT_GE(out.log["second_pass"]["skipped"].get<int>(), 1) << out.log.dump();
+  EXPECT_TRUE(out.log["second_pass"]["windows"].empty());
+  const auto& flags = out.log["flags"];
+  EXPECT_NE(std::find(flags.begin(), flags.end(), "second-pass-budget"), flags.end())
+      << flags.dump();
+}
+
+TEST(SecondPassBudget, CreditFollowsTheFramePeriodTheWorkersAndTheFirstPass) {
+  SecondPassBudget budget(-1, 2);  // auto
+  budget.add_frame(0, 0, 20);      // no period yet: no credit
+  EXPECT_EQ(budget.credit_ms(), 0);
+  budget.add_frame(1, 16'666'667, 20);  // 60 fps, 2 workers: 33.3 x 0.85 - 20 = 8.3 ms
+  EXPECT_NEAR(budget.credit_ms(), 2 * 16.666667 * SecondPassBudget::kShare - 20, 0.01);
+  EXPECT_FALSE(budget.take(9));
+  EXPECT_TRUE(budget.take(8));
+  budget.settle(8, 10, 100'000);  // took 2 ms more than estimated: owed
+  EXPECT_NEAR(budget.credit_ms(), 2 * 16.666667 * SecondPassBudget::kShare - 30, 0.01);
+  for (int i = 2; i < 50; ++i) budget.add_frame(i, i * 16'666'667LL, 0);  // idle frames
+  EXPECT_NEAR(budget.credit_ms(), 2 * 2 * 16.666667 * SecondPassBudget::kShare, 0.01);  // capped
+  // The cost model follows what windows took: 10 ms for 0.1 Mpx -> 100 ms per Mpx, on the way.
+  const double before = budget.estimate_ms(1'000'000);
+  budget.settle(0, 10, 100'000);
+  EXPECT_GT(budget.estimate_ms(1'000'000), before);
+
+  SecondPassBudget fixed(5, 2);
+  fixed.add_frame(0, 0, 1000);  // a fixed budget ignores the rate and the first pass
+  EXPECT_EQ(fixed.credit_ms(), 5);
+  SecondPassBudget none(0, 2);
+  none.add_frame(0, 0, 0);
+  EXPECT_FALSE(none.take(0.1));
 }
 
 }  // namespace

@@ -1,0 +1,212 @@
+#include "session/second_pass.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <utility>
+
+#include "imaging/deblur.hpp"
+
+namespace flutterscan::session {
+namespace {
+
+/// Along and across the motion, what a window keeps around its paper: the
+/// decode window's margin (decode_windows' default).
+constexpr int kWindowMargin = 24;
+/// Beyond the blur, what the crop adds at each end along the motion: the
+/// latent within one blur of a crop's ends is not determined by the crop's
+/// samples (docs/algorithms.md, borders), and the periodic extension rings a
+/// little further.
+constexpr int kCropSlack = 16;
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// Camera (x, y) of motion-frame sample `n` of line `line` (the inverse of
+/// imaging::to_motion_frame's arrangement), for a motion frame `along` long.
+std::pair<int, int> camera_point(imaging::Direction direction, int n, int line, int along) {
+  switch (direction) {
+    case imaging::Direction::kPlusX:
+      return {n, line};
+    case imaging::Direction::kMinusX:
+      return {along - 1 - n, line};
+    case imaging::Direction::kPlusY:
+      return {line, n};
+    case imaging::Direction::kMinusY:
+      return {line, along - 1 - n};
+  }
+  return {n, line};
+}
+
+bool same_code(const reader::DecodedCode& a, const reader::DecodedCode& b) {
+  return a.text == b.text && a.format == b.format && std::abs(a.centre_x - b.centre_x) < 4 &&
+         std::abs(a.centre_y - b.centre_y) < 4;
+}
+
+bool inside(const reader::DecodeWindow& w, double x, double y) {
+  return x >= w.x && x < w.x + w.width && y >= w.y && y < w.y + w.height;
+}
+
+}  // namespace
+
+SecondPassBudget::SecondPassBudget(double per_frame_ms, int workers)
+    : per_frame_ms_(per_frame_ms), workers_(std::max(1, workers)) {}
+
+void SecondPassBudget::add_frame(std::uint64_t index, std::int64_t camera_ns,
+                                 double first_pass_ms) {
+  const std::lock_guard lock(mutex_);
+  if (seen_frame_ && index > last_index_ && camera_ns > last_camera_ns_) {
+    const double period = static_cast<double>(camera_ns - last_camera_ns_) * 1e-6 /
+                          static_cast<double>(index - last_index_);
+    if (period < 1000) period_ms_ = period_ms_ == 0 ? period : 0.9 * period_ms_ + 0.1 * period;
+  }
+  if (!seen_frame_ || index > last_index_) {
+    last_index_ = index;
+    last_camera_ns_ = camera_ns;
+    seen_frame_ = true;
+  }
+  double added = 0, bound = 0;
+  if (per_frame_ms_ >= 0) {
+    added = per_frame_ms_;
+    bound = 2 * per_frame_ms_;
+  } else if (period_ms_ > 0) {
+    const double available = period_ms_ * workers_ * kShare;  // per frame, all workers
+    added = available - first_pass_ms;
+    bound = 2 * available;
+  }
+  credit_ms_ = std::clamp(credit_ms_ + added, -bound, bound);
+}
+
+bool SecondPassBudget::take(double estimate_ms) {
+  const std::lock_guard lock(mutex_);
+  if (credit_ms_ < estimate_ms) return false;
+  credit_ms_ -= estimate_ms;
+  return true;
+}
+
+void SecondPassBudget::settle(double estimate_ms, double actual_ms, std::size_t pixels) {
+  const std::lock_guard lock(mutex_);
+  credit_ms_ -= actual_ms - estimate_ms;
+  if (pixels > 0 && actual_ms > 0)
+    ms_per_megapixel_ =
+        0.8 * ms_per_megapixel_ + 0.2 * actual_ms / (static_cast<double>(pixels) * 1e-6);
+}
+
+double SecondPassBudget::estimate_ms(std::size_t pixels) const {
+  const std::lock_guard lock(mutex_);
+  return ms_per_megapixel_ * static_cast<double>(pixels) * 1e-6;
+}
+
+double SecondPassBudget::credit_ms() const {
+  const std::lock_guard lock(mutex_);
+  return credit_ms_;
+}
+
+nlohmann::json SecondPass::log(double credit_ms) const {
+  nlohmann::json windows = nlohmann::json::array();
+  for (const WindowRetry& r : retried)
+    windows.push_back({{"x", r.window.x},
+                       {"y", r.window.y},
+                       {"width", r.window.width},
+                       {"height", r.window.height},
+                       {"ms", std::round(r.ms * 100) / 100},
+                       {"read", r.read}});
+  return {{"windows", std::move(windows)},
+          {"skipped", skipped},
+          {"credit_ms", std::round(credit_ms * 10) / 10}};
+}
+
+std::vector<reader::LabelRegion> unread_runs(std::span<const reader::LabelRegion> paper,
+                                             const reader::BarcodeReadout& readout,
+                                             imaging::Direction direction, int width, int height) {
+  const std::vector<reader::DecodeWindow> windows =
+      reader::decode_windows(paper, width, height, direction, kWindowMargin);
+  std::vector<reader::LabelRegion> unread;
+  for (std::size_t i = 0; i < paper.size(); ++i) {
+    const bool read = std::any_of(readout.codes.begin(), readout.codes.end(), [&](const auto& c) {
+      return inside(windows[i], c.centre_x, c.centre_y);
+    });
+    if (!read) unread.push_back(paper[i]);
+  }
+  return unread;
+}
+
+SecondPass run_second_pass(const SecondPassFrame& frame,
+                           std::span<const reader::LabelRegion> unread,
+                           const reader::ReaderOptions& options, SecondPassBudget& budget,
+                           reader::BarcodeReadout& readout) {
+  SecondPass out;
+  const imaging::MotionFrame& electrons = frame.electrons;
+  const int along = electrons.along(), lines = electrons.lines();
+  const imaging::Direction direction = electrons.direction();
+  const bool along_x = imaging::moves_along_x(direction);
+  const int camera_width = along_x ? along : lines, camera_height = along_x ? lines : along;
+  const int blur = static_cast<int>(std::ceil(frame.model.blur_px)) + 1;
+  imaging::DeblurOptions tv;
+  tv.method = imaging::Method::kTotalVariation;
+  tv.threads = 1;
+  for (const reader::LabelRegion& run : unread) {
+    // The window kept, and the crop deblurred around it (motion frame).
+    const int keep0 = std::max(0, run.begin - kWindowMargin);
+    const int keep1 = std::min(along, run.end + kWindowMargin);
+    const int c0 = std::max(0, keep0 - blur - kCropSlack);
+    const int c1 = std::min(along, keep1 + blur + kCropSlack);
+    const bool rows_known = run.across_end > run.across_begin;
+    const int r0 = rows_known ? std::max(0, run.across_begin - kWindowMargin) : 0;
+    const int r1 = rows_known ? std::min(lines, run.across_end + kWindowMargin) : lines;
+    if (c1 - c0 <= blur || r1 <= r0) continue;
+    const auto pixels = static_cast<std::size_t>(c1 - c0) * static_cast<std::size_t>(r1 - r0);
+    const double estimate = budget.estimate_ms(pixels);
+    if (!budget.take(estimate)) {
+      ++out.skipped;
+      continue;
+    }
+    const auto t0 = std::chrono::steady_clock::now();
+    imaging::Image crop;
+    for (int c = 0; c < electrons.channel_count(); ++c) {
+      crop.channels.push_back(imaging::Plane::uninitialised(c1 - c0, r1 - r0));
+      for (int y = r0; y < r1; ++y) {
+        const auto from = electrons.channel(c).row(y);
+        std::copy(from.begin() + c0, from.begin() + c1, crop.channels.back().row(y - r0).begin());
+      }
+    }
+    WindowRetry retry;
+    retry.window =
+        reader::decode_windows({&run, 1}, camera_width, camera_height, direction, kWindowMargin)[0];
+    // The crop is in the motion frame already (+x); its samples passed the frame's checks.
+    const auto cropped = imaging::MotionFrame::make(std::move(crop), imaging::Direction::kPlusX);
+    using DeblurOut = Result<imaging::DeblurResult, std::string>;
+    const DeblurOut deblurred = cropped.ok() ? imaging::deblur(cropped.value(), frame.model, tv)
+                                             : DeblurOut::failure(cropped.error());
+    if (deblurred.ok()) {
+      const imaging::Plane& patch = deblurred.value().latent;
+      for (int y = r0; y < r1; ++y)
+        for (int n = keep0; n < keep1; ++n) {
+          const float v = patch.at(n - c0, y - r0);
+          frame.motion_latent.at(n, y) = v;
+          if (frame.camera_latent != nullptr) {
+            const auto [x, cy] = camera_point(direction, n, y, along);
+            frame.camera_latent->at(x, cy) = v;
+          }
+        }
+      const imaging::Plane& camera =
+          frame.camera_latent != nullptr ? *frame.camera_latent : frame.motion_latent;
+      reader::BarcodeReadout again = reader::read_barcodes(camera, options.symbologies,
+                                                           options.try_rotate, {&retry.window, 1});
+      for (reader::DecodedCode& code : again.codes) {
+        if (std::any_of(readout.codes.begin(), readout.codes.end(),
+                        [&](const reader::DecodedCode& c) { return same_code(c, code); }))
+          continue;
+        retry.read.push_back(code.text);
+        readout.codes.push_back(std::move(code));
+      }
+    }
+    retry.ms = ms_since(t0);
+    budget.settle(estimate, retry.ms, pixels);
+    out.retried.push_back(std::move(retry));
+  }
+  return out;
+}
+
+}  // namespace flutterscan::session

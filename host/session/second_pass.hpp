@@ -1,0 +1,104 @@
+#pragma once
+// The cascade's second pass (processing.method = "cascade", the session's
+// default; docs/session.md, "The cascade"). Joint Wiener deblurs the whole
+// frame; each judged label window where it read nothing is deblurred again,
+// alone, by tv (slower, and reads far more in dim light), pasted into the
+// fused frame and read again, while the session's CPU budget lasts. A window
+// the budget cannot pay for is counted and flagged, never dropped silently.
+
+#include <cstdint>
+#include <mutex>
+#include <span>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "imaging/capture_model.hpp"
+#include "imaging/image.hpp"
+#include "imaging/motion_frame.hpp"
+#include "reader/barcode_reader.hpp"
+#include "reader/reader_options.hpp"
+
+namespace flutterscan::session {
+
+/// \brief The CPU the workers may spend on second passes, shared by them: a
+/// credit of milliseconds that each frame tops up by its share of the line's
+/// frame period (period x workers x kShare, less the frame's first pass) and
+/// each window spends. Bounded both ways (a burst of NO-READs spends at most
+/// two frame periods of every worker; a slow stretch owes at most as much).
+class SecondPassBudget {
+ public:
+  /// The share of the workers' time the session lets itself use (headroom for the rest).
+  static constexpr double kShare = 0.85;
+
+  /// \brief `per_frame_ms` < 0: from the frame rate (the cameras' timestamps)
+  /// and `workers`; >= 0: that many ms of credit per frame, whatever the rate.
+  SecondPassBudget(double per_frame_ms, int workers);
+
+  /// \brief Frame `index`, exposed at camera time `camera_ns`, whose first pass
+  /// took `first_pass_ms` (wall time on its worker): its credit is added.
+  void add_frame(std::uint64_t index, std::int64_t camera_ns, double first_pass_ms);
+  /// \brief Spends `estimate_ms` if the credit holds it (true), else nothing (false).
+  bool take(double estimate_ms);
+  /// \brief A window that was estimated at `estimate_ms` took `actual_ms`:
+  /// the credit and the cost model follow what it really took.
+  void settle(double estimate_ms, double actual_ms, std::size_t pixels);
+  /// \brief What a window of `pixels` pixels is expected to cost, ms.
+  double estimate_ms(std::size_t pixels) const;
+  /// \brief The credit left, ms.
+  double credit_ms() const;
+
+ private:
+  mutable std::mutex mutex_;
+  double per_frame_ms_;
+  int workers_;
+  double credit_ms_ = 0;
+  double period_ms_ = 0;  ///< the frame period the timestamps show (0: not yet known)
+  std::uint64_t last_index_ = 0;
+  std::int64_t last_camera_ns_ = 0;
+  bool seen_frame_ = false;
+  double ms_per_megapixel_ = 80;  ///< tv-40 on one thread, updated by every window
+};
+
+/// \brief One window the second pass deblurred again.
+struct WindowRetry {
+  reader::DecodeWindow window;    ///< in the frame (camera coordinates)
+  double ms = 0;                  ///< its deblur and decode, wall time
+  std::vector<std::string> read;  ///< the codes it read
+};
+
+/// \brief What a frame's second pass did.
+struct SecondPass {
+  std::vector<WindowRetry> retried;
+  int skipped = 0;  ///< windows left as they were: the budget was spent
+  /// The frame's line entry: {"windows": [...], "skipped": n, "credit_ms": c}.
+  nlohmann::json log(double credit_ms) const;
+};
+
+/// \brief Where the second pass works: the frame in electrons and its model
+/// (the first pass's), and the fused latent in the motion frame and, unless
+/// the motion is +x (then they are one plane), in the camera's orientation.
+struct SecondPassFrame {
+  const imaging::MotionFrame& electrons;
+  const imaging::CaptureModel& model;
+  imaging::Plane& motion_latent;
+  imaging::Plane* camera_latent;  ///< null: the motion latent is the camera's
+};
+
+/// \brief The paper runs of `paper` (the motion frame's) where `readout` has no
+/// code (its centre outside the run's decode window): the windows the first
+/// pass read nothing in.
+std::vector<reader::LabelRegion> unread_runs(std::span<const reader::LabelRegion> paper,
+                                             const reader::BarcodeReadout& readout,
+                                             imaging::Direction direction, int width, int height);
+
+/// \brief Deblurs each of `unread` again with tv (one thread), alone with the
+/// margin its blur needs, pastes it into the latents, and reads its decode
+/// window again with `options`; the codes found are added to `readout`.
+SecondPass run_second_pass(const SecondPassFrame& frame,
+                           std::span<const reader::LabelRegion> unread,
+                           const reader::ReaderOptions& options, SecondPassBudget& budget,
+                           reader::BarcodeReadout& readout);
+
+}  // namespace flutterscan::session
