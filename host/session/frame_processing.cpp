@@ -337,23 +337,28 @@ FrameOutcome stopped(FrameOutcome out, const StepFailure& failure, nlohmann::jso
 /// decode read nothing in, deblurred again by tv and read again, within the
 /// budget; the codes found join `decoded`, its log line and flag join `out`.
 void second_pass(Deblurred& image, Decoded& decoded, const FrameJob& job,
-                 const ProcessingConfig& processing, double first_pass_ms, SecondPassBudget& budget,
+                 const ProcessingConfig& processing, double first_pass_ms, WorkerShared& shared,
                  FrameOutcome& out, nlohmann::json& flags) {
-  budget.add_frame(job.index, job.frame.timestamp_ns, first_pass_ms);
+  const imaging::Plane& latent = image.latent();
+  const imaging::Direction direction = image.model.direction;
+  for (const reader::DecodedCode& code : decoded.readout.codes)
+    shared.belt_reads.add(imaging::position_along_motion(direction, code.centre_x, code.centre_y,
+                                                         latent.width, latent.height) -
+                          job.travel_px);
+  shared.second_pass.add_frame(job.index, job.frame.timestamp_ns, first_pass_ms);
   if (!image.grey_global) {
     out.log["second_pass"] = {{"not_run", "the frame's model is not the grey global one"}};
     return;
   }
-  const imaging::Plane& latent = image.latent();
   const std::vector<reader::LabelRegion> judged = judged_regions(decoded, image.model.blur_px);
   const std::vector<reader::LabelRegion> unread =
-      unread_runs(judged, decoded.readout, image.model.direction, latent.width, latent.height);
+      unread_runs(judged, decoded.readout, direction, latent.width, latent.height);
   if (unread.empty()) return;
   const SecondPassFrame frame{image.electrons, image.model, image.motion_latent,
-                              image.camera_latent ? &*image.camera_latent : nullptr};
-  const SecondPass pass =
-      run_second_pass(frame, unread, reader_options(processing), budget, decoded.readout);
-  out.log["second_pass"] = pass.log(budget.credit_ms());
+                              image.camera_latent ? &*image.camera_latent : nullptr, job.travel_px};
+  const SecondPass pass = run_second_pass(frame, unread, reader_options(processing),
+                                          shared.second_pass, shared.belt_reads, decoded.readout);
+  out.log["second_pass"] = pass.log(shared.second_pass.credit_ms());
   if (pass.skipped > 0) flags.push_back("second-pass-budget");
 }
 
@@ -387,8 +392,8 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config, WorkerSha
   }
   const std::int64_t t3 = now_ns();
   if (config.processing.cascade && decoded.readout.decoder_fault.empty())
-    second_pass(deblurred.value(), decoded, job, config.processing, ms_between(t0, t3),
-                shared.second_pass, out, flags);
+    second_pass(deblurred.value(), decoded, job, config.processing, ms_between(t0, t3), shared, out,
+                flags);
   const std::int64_t t4 = now_ns();
 
   const imaging::Plane& latent = deblurred.value().latent();

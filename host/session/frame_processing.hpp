@@ -27,6 +27,8 @@ struct WorkerShared {
   std::atomic<double> last_blur_px;
   /// The cascade's CPU budget for second passes.
   SecondPassBudget second_pass;
+  /// Where codes were read lately on the belt: no second pass for an object read already.
+  BeltReads belt_reads;
 };
 
 /// \brief Processes `job` (its frame moved into the outcome) under `config`,

@@ -50,6 +50,21 @@ bool inside(const reader::DecodeWindow& w, double x, double y) {
 
 }  // namespace
 
+void BeltReads::add(double belt_px) {
+  const std::lock_guard lock(mutex_);
+  if (reads_.size() < kKept)
+    reads_.push_back(belt_px);
+  else
+    reads_[next_] = belt_px;
+  next_ = (next_ + 1) % kKept;
+}
+
+bool BeltReads::any_within(double begin_px, double end_px, double slack_px) const {
+  const std::lock_guard lock(mutex_);
+  return std::any_of(reads_.begin(), reads_.end(),
+                     [&](double u) { return u >= begin_px - slack_px && u <= end_px + slack_px; });
+}
+
 SecondPassBudget::SecondPassBudget(double per_frame_ms, int workers)
     : per_frame_ms_(per_frame_ms), workers_(std::max(1, workers)) {}
 
@@ -114,6 +129,7 @@ nlohmann::json SecondPass::log(double credit_ms) const {
                        {"read", r.read}});
   return {{"windows", std::move(windows)},
           {"skipped", skipped},
+          {"read_before", read_before},
           {"credit_ms", std::round(credit_ms * 10) / 10}};
 }
 
@@ -135,7 +151,7 @@ std::vector<reader::LabelRegion> unread_runs(std::span<const reader::LabelRegion
 SecondPass run_second_pass(const SecondPassFrame& frame,
                            std::span<const reader::LabelRegion> unread,
                            const reader::ReaderOptions& options, SecondPassBudget& budget,
-                           reader::BarcodeReadout& readout) {
+                           BeltReads& reads, reader::BarcodeReadout& readout) {
   SecondPass out;
   const imaging::MotionFrame& electrons = frame.electrons;
   const int along = electrons.along(), lines = electrons.lines();
@@ -147,6 +163,10 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
   tv.method = imaging::Method::kTotalVariation;
   tv.threads = 1;
   for (const reader::LabelRegion& run : unread) {
+    if (reads.any_within(run.begin - frame.travel_px, run.end - frame.travel_px, 0)) {
+      ++out.read_before;
+      continue;
+    }
     // The window kept, and the crop deblurred around it (motion frame).
     const int keep0 = std::max(0, run.begin - kWindowMargin);
     const int keep1 = std::min(along, run.end + kWindowMargin);
@@ -199,6 +219,9 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
                         [&](const reader::DecodedCode& c) { return same_code(c, code); }))
           continue;
         retry.read.push_back(code.text);
+        reads.add(imaging::position_along_motion(direction, code.centre_x, code.centre_y,
+                                                 camera_width, camera_height) -
+                  frame.travel_px);
         readout.codes.push_back(std::move(code));
       }
     }

@@ -61,6 +61,23 @@ class SecondPassBudget {
   double ms_per_megapixel_ = 80;  ///< tv-40 on one thread, updated by every window
 };
 
+/// \brief Where on the belt codes were read lately (belt px: position along
+/// the motion less the belt's travel), shared by the workers: a window whose
+/// object was read in another frame needs no second pass, so the budget goes
+/// to the objects not read yet. Bounded: the last kKept reads.
+class BeltReads {
+ public:
+  static constexpr std::size_t kKept = 256;
+  void add(double belt_px);
+  /// \brief Whether a read lies within [begin_px - slack_px, end_px + slack_px].
+  bool any_within(double begin_px, double end_px, double slack_px) const;
+
+ private:
+  mutable std::mutex mutex_;
+  std::vector<double> reads_;  ///< a ring of kKept
+  std::size_t next_ = 0;
+};
+
 /// \brief One window the second pass deblurred again.
 struct WindowRetry {
   reader::DecodeWindow window;    ///< in the frame (camera coordinates)
@@ -71,8 +88,9 @@ struct WindowRetry {
 /// \brief What a frame's second pass did.
 struct SecondPass {
   std::vector<WindowRetry> retried;
-  int skipped = 0;  ///< windows left as they were: the budget was spent
-  /// The frame's line entry: {"windows": [...], "skipped": n, "credit_ms": c}.
+  int skipped = 0;      ///< windows left as they were: the budget was spent
+  int read_before = 0;  ///< windows left as they were: their object was read in another frame
+  /// The frame's line entry: {"windows": [...], "skipped": n, "read_before": n, "credit_ms": c}.
   nlohmann::json log(double credit_ms) const;
 };
 
@@ -84,6 +102,7 @@ struct SecondPassFrame {
   const imaging::CaptureModel& model;
   imaging::Plane& motion_latent;
   imaging::Plane* camera_latent;  ///< null: the motion latent is the camera's
+  double travel_px = 0;           ///< the belt's travel at this frame (belt = along - travel)
 };
 
 /// \brief The paper runs of `paper` (the motion frame's) where `readout` has no
@@ -93,12 +112,13 @@ std::vector<reader::LabelRegion> unread_runs(std::span<const reader::LabelRegion
                                              const reader::BarcodeReadout& readout,
                                              imaging::Direction direction, int width, int height);
 
-/// \brief Deblurs each of `unread` again with tv (one thread), alone with the
-/// margin its blur needs, pastes it into the latents, and reads its decode
-/// window again with `options`; the codes found are added to `readout`.
+/// \brief Deblurs each of `unread` whose object `reads` has not seen read
+/// again with tv (one thread), alone with the margin its blur needs, pastes it
+/// into the latents, and reads its decode window again with `options`; the
+/// codes found are added to `readout` and to `reads`.
 SecondPass run_second_pass(const SecondPassFrame& frame,
                            std::span<const reader::LabelRegion> unread,
                            const reader::ReaderOptions& options, SecondPassBudget& budget,
-                           reader::BarcodeReadout& readout);
+                           BeltReads& reads, reader::BarcodeReadout& readout);
 
 }  // namespace flutterscan::session
