@@ -177,8 +177,8 @@ int main(int argc, char** argv) {
     return 1;
   }
   std::ifstream loadavg("/proc/loadavg");
-  std::string load;
-  std::getline(loadavg, load);
+  std::string load, one, five, fifteen;
+  if (loadavg >> one >> five >> fifteen) load = one + " " + five + " " + fifteen;
   std::printf(
       "results over MQTT on loopback: %zu messages of %zu bytes, one every %ld us; "
       "publish() to the subscriber's callback (load average %s)\n\n",

@@ -76,13 +76,18 @@ inline bool accepts(int port) {
 
 class MosquittoBroker {
  public:
-  /// \brief A broker run from `binary` with its config, log and persistence in `dir`.
-  MosquittoBroker(std::string binary, std::filesystem::path dir)
+  /// \brief A broker run from `binary` with its config, log and persistence in `dir`;
+  /// `password_file` (made by mosquitto_passwd; empty: anyone may connect) lists the users.
+  MosquittoBroker(std::string binary, std::filesystem::path dir,
+                  const std::filesystem::path& password_file = {})
       : binary_(std::move(binary)), dir_(std::move(dir)), port_(free_loopback_port()) {
     std::ofstream conf(dir_ / "mosquitto.conf");
-    conf << "listener " << port_ << " 127.0.0.1\n"
-         << "allow_anonymous true\n"
-         << "set_tcp_nodelay true\n"
+    conf << "listener " << port_ << " 127.0.0.1\n";
+    if (password_file.empty())
+      conf << "allow_anonymous true\n";
+    else
+      conf << "allow_anonymous false\npassword_file " << password_file.string() << "\n";
+    conf << "set_tcp_nodelay true\n"
          << "persistence true\n"
          << "persistence_location " << (dir_ / "").string() << "\n"
          << "log_dest file " << (dir_ / "broker.log").string() << "\n"
