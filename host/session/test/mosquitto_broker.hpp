@@ -74,19 +74,28 @@ inline bool accepts(int port) {
   return ok;
 }
 
+/// \brief What a test broker asks of its clients besides the defaults.
+struct BrokerOptions {
+  /// Made by mosquitto_passwd; empty: anyone may connect.
+  std::filesystem::path password_file;
+  /// TLS on the listener: its certificate and key (empty: plain TCP).
+  std::filesystem::path certificate, key;
+};
+
 class MosquittoBroker {
  public:
-  /// \brief A broker run from `binary` with its config, log and persistence in `dir`;
-  /// `password_file` (made by mosquitto_passwd; empty: anyone may connect) lists the users.
-  MosquittoBroker(std::string binary, std::filesystem::path dir,
-                  const std::filesystem::path& password_file = {})
+  /// \brief A broker run from `binary` with its config, log and persistence in `dir`.
+  MosquittoBroker(std::string binary, std::filesystem::path dir, const BrokerOptions& options = {})
       : binary_(std::move(binary)), dir_(std::move(dir)), port_(free_loopback_port()) {
     std::ofstream conf(dir_ / "mosquitto.conf");
     conf << "listener " << port_ << " 127.0.0.1\n";
-    if (password_file.empty())
+    if (!options.certificate.empty())
+      conf << "certfile " << options.certificate.string() << "\nkeyfile " << options.key.string()
+           << "\n";
+    if (options.password_file.empty())
       conf << "allow_anonymous true\n";
     else
-      conf << "allow_anonymous false\npassword_file " << password_file.string() << "\n";
+      conf << "allow_anonymous false\npassword_file " << options.password_file.string() << "\n";
     conf << "set_tcp_nodelay true\n"
          << "persistence true\n"
          << "persistence_location " << (dir_ / "").string() << "\n"

@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "session/mqtt_publisher.hpp"
 #include "session/session.hpp"
 #include "session/session_config.hpp"
 #include "session/test/mosquitto_broker.hpp"
@@ -184,7 +185,9 @@ TEST(MqttResults, EveryObjectArrivesAsItsRecord) {
                                         (dir / "broker" / "passwords").string(), "line3", "s3cret"},
                                        dir / "passwd.out", dir / "passwd.err")),
             0);
-  MosquittoBroker broker(MOSQUITTO, dir / "broker", dir / "broker" / "passwords");
+  BrokerOptions options;
+  options.password_file = dir / "broker" / "passwords";
+  MosquittoBroker broker(MOSQUITTO, dir / "broker", options);
   ASSERT_TRUE(broker.start()) << "mosquitto did not start: see " << dir;
   std::ofstream(dir / "password") << "s3cret\n";
   fs::permissions(dir / "password", fs::perms::owner_read | fs::perms::owner_write);
@@ -221,6 +224,79 @@ TEST(MqttResults, EveryObjectArrivesAsItsRecord) {
   EXPECT_EQ(status["waiting"], 0);
 }
 
+/// Runs openssl with `args` in `dir`; true if it succeeded.
+bool openssl(const std::vector<std::string>& args, const fs::path& dir) {
+  std::vector<std::string> all = {OPENSSL};
+  all.insert(all.end(), args.begin(), args.end());
+  return wait_program(spawn_program(all, dir / "openssl.out", dir / "openssl.err")) == 0;
+}
+
+/// A CA ("NAME.crt", "NAME.key") made in `dir`.
+bool make_ca(const fs::path& dir, const std::string& name) {
+  return openssl({"req", "-x509", "-newkey", "rsa:2048", "-nodes", "-days", "1", "-subj",
+                  "/CN=flutterscan test " + name, "-keyout", (dir / (name + ".key")).string(),
+                  "-out", (dir / (name + ".crt")).string()},
+                 dir);
+}
+
+// TLS (mqtts://): the broker's certificate, for 127.0.0.1, signed by a CA the
+// config's ca_file names: every result arrives. With another CA's file the
+// client refuses the broker: nothing is published, the result is counted as
+// undelivered.
+TEST(MqttResults, OverTlsOnlyToABrokerTheCaVouchesFor) {
+  REQUIRE_MOSQUITTO();
+  if (std::string(OPENSSL).empty()) GTEST_SKIP() << "openssl not installed (tools/install-deps)";
+  const ScratchFolder scratch("mqtt_tls");
+  const fs::path& dir = scratch.path();
+  fs::create_directories(dir / "broker");
+  std::ofstream(dir / "san.cnf") << "subjectAltName = IP:127.0.0.1\n";
+  ASSERT_TRUE(make_ca(dir, "ca") && make_ca(dir, "other-ca"));
+  ASSERT_TRUE(openssl({"req", "-newkey", "rsa:2048", "-nodes", "-subj", "/CN=127.0.0.1", "-keyout",
+                       (dir / "broker.key").string(), "-out", (dir / "broker.csr").string()},
+                      dir));
+  ASSERT_TRUE(
+      openssl({"x509", "-req", "-days", "1", "-in", (dir / "broker.csr").string(), "-CA",
+               (dir / "ca.crt").string(), "-CAkey", (dir / "ca.key").string(), "-CAcreateserial",
+               "-extfile", (dir / "san.cnf").string(), "-out", (dir / "broker.crt").string()},
+              dir));
+  BrokerOptions options;
+  options.certificate = dir / "broker.crt";
+  options.key = dir / "broker.key";
+  MosquittoBroker broker(MOSQUITTO, dir / "broker", options);
+  ASSERT_TRUE(broker.start()) << "mosquitto did not start: see " << dir;
+  const std::string topic = mqtt_config(broker).topic;
+  Subscriber subscriber(broker, topic, dir, {"--cafile", (dir / "ca.crt").string()});
+  ASSERT_TRUE(subscriber.start());
+
+  const auto config_with = [&](const std::string& ca) {
+    auto c = parse_config(
+        "[results.mqtt]\nbroker = \"mqtts://127.0.0.1:" + std::to_string(broker.port()) +
+            "\"\ntopic = \"" + topic + "\"\nca_file = \"" + (dir / ca).string() + "\"\n",
+        "line3.toml");
+    EXPECT_TRUE(c.ok()) << c.error();
+    return *c.value().results.mqtt;
+  };
+  const std::vector<std::string> lines = {R"({"object":1,"status":"READ","value":"FS-1"})",
+                                          R"({"object":2,"status":"NO-READ"})"};
+  {
+    MqttPublisher publisher;
+    ASSERT_EQ(publisher.start(config_with("ca.crt"), {}), "");
+    for (const auto& line : lines) publisher.publish(line);
+    publisher.stop(std::chrono::seconds(20));
+    EXPECT_EQ(publisher.counters().published, lines.size());
+    EXPECT_EQ(publisher.counters().undelivered, 0u);
+  }
+  EXPECT_EQ(subscriber.wait_for(lines.size(), 30), lines);
+
+  MqttPublisher refused;
+  ASSERT_EQ(refused.start(config_with("other-ca.crt"), {}), "");
+  refused.publish(lines[0]);
+  refused.stop(std::chrono::seconds(3));
+  EXPECT_EQ(refused.counters().published, 0u);
+  EXPECT_EQ(refused.counters().undelivered, 1u);
+  EXPECT_EQ(subscriber.received(), lines);
+}
+
 // The broker stops (SIGTERM: it saves the subscriber's session) once objects
 // have arrived, and starts again on the same port once the session has
 // finished two more objects while it was away; the session goes on until two
@@ -239,11 +315,14 @@ TEST(MqttResults, NothingIsLostAcrossABrokerRestart) {
   ASSERT_TRUE(subscriber.start());
 
   std::atomic<bool> stop{false}, ended{false};
-  std::atomic<std::uint64_t> objects_finished{0};
+  std::atomic<std::uint64_t> objects_finished{0}, progress_lines{0};
   std::mutex messages_mutex;
   std::vector<std::string> messages;
   SessionHooks hooks;
-  hooks.progress = [&](const Progress& p) { objects_finished = p.objects; };
+  hooks.progress = [&](const Progress& p) {
+    objects_finished = p.objects;
+    ++progress_lines;
+  };
   hooks.message = [&](const std::string& text) {
     std::lock_guard lock(messages_mutex);
     messages.push_back(text);
@@ -262,6 +341,10 @@ TEST(MqttResults, NothingIsLostAcrossABrokerRestart) {
   const bool arrived = wait_until([&] { return subscriber.received().size() >= 2; }, 300);
   broker.stop();
   const std::size_t received_at_stop = subscriber.received().size();
+  // At least the objects finished by the stop: the count of the second progress
+  // line after it (the first may have been counted just before).
+  const std::uint64_t lines_at_stop = progress_lines;
+  wait_until([&] { return progress_lines > lines_at_stop + 1; }, 60);
   const std::uint64_t finished_at_stop = objects_finished;
   const bool finished_while_away =
       wait_until([&] { return objects_finished >= finished_at_stop + 2; }, 300);
@@ -284,8 +367,6 @@ TEST(MqttResults, NothingIsLostAcrossABrokerRestart) {
   for (const auto& line : received)
     if (std::find(distinct.begin(), distinct.end(), line) == distinct.end())
       distinct.push_back(line);
-  std::printf("%zu objects, %zu received before the broker stopped, %zu messages in all\n",
-              objects.size(), received_at_stop, received.size());
   expect_records(distinct, objects);
   const auto& counters = outcome.summary["results"]["mqtt"];
   EXPECT_EQ(counters["published"], objects.size());
@@ -302,6 +383,10 @@ TEST(MqttResults, NothingIsLostAcrossABrokerRestart) {
     if (const auto again = m.find("again; "); again != std::string::npos)
       waiting_at_reconnect = std::strtol(m.c_str() + again + 7, nullptr, 10);
   }
+  std::printf(
+      "%zu objects, %zu received before the broker stopped, %ld waiting at the "
+      "reconnect, %zu messages in all\n",
+      objects.size(), received_at_stop, waiting_at_reconnect, received.size());
   EXPECT_TRUE(lost) << ::testing::PrintToString(messages);
   EXPECT_GE(waiting_at_reconnect, 2) << ::testing::PrintToString(messages);
 }
