@@ -43,6 +43,7 @@ std::string MqttPublisher::start(const MqttConfig& config, Say say) {
   mosquitto_connect_callback_set(client_, on_connect);
   mosquitto_disconnect_callback_set(client_, on_disconnect);
   mosquitto_publish_callback_set(client_, on_publish);
+  mosquitto_log_callback_set(client_, on_log);
   mosquitto_reconnect_delay_set(client_, kReconnectMinS, kReconnectMaxS, true);
   mosquitto_int_option(client_, MOSQ_OPT_TCP_NODELAY, 1);  // a result goes out at once
   if (!config_.username.empty())
@@ -66,11 +67,14 @@ std::string MqttPublisher::start(const MqttConfig& config, Say say) {
       rc != MOSQ_ERR_SUCCESS)
     return failed("will on " + status_topic_, rc);
   // A broker not there yet is retried by the client's thread, like a lost one.
-  if (int rc = mosquitto_connect_async(client_, config_.host.c_str(), config_.port, kKeepaliveS);
-      rc == MOSQ_ERR_INVAL || rc == MOSQ_ERR_NOMEM)
-    return failed("broker " + broker_, rc);
-  else if (rc != MOSQ_ERR_SUCCESS && say_)
-    say_("warning: MQTT broker " + broker_ + " not reachable yet (" + mosquitto_strerror(rc) +
+  const int connected =
+      mosquitto_connect_async(client_, config_.host.c_str(), config_.port, kKeepaliveS);
+  if (connected == MOSQ_ERR_INVAL || connected == MOSQ_ERR_NOMEM)
+    return failed("broker " + broker_, connected);
+  told_waiting_ = connected != MOSQ_ERR_SUCCESS;
+  if (told_waiting_ && say_)
+    say_("warning: MQTT broker " + broker_ + " not reachable yet (" +
+         mosquitto_strerror(connected) +
          "): results wait for it (up to results.mqtt.queue_limit = " +
          std::to_string(config_.queue_limit) + ")");
   if (int rc = mosquitto_loop_start(client_); rc != MOSQ_ERR_SUCCESS)
@@ -96,6 +100,11 @@ void MqttPublisher::publish(const std::string& line) {
          " dropped meanwhile");
   overflowing_ = false;
   dropped_in_overflow_ = 0;
+  if (!connected_ && !told_waiting_ && say_)
+    say_("warning: MQTT broker " + broker_ +
+         " not connected: results wait for it (up to results.mqtt.queue_limit = " +
+         std::to_string(config_.queue_limit) + ")");
+  told_waiting_ = told_waiting_ || !connected_;
   int mid = 0;
   // The lock is held across the call so that the acknowledgement (on the
   // client's thread) finds the id. With QoS 1 and 2 libmosquitto keeps the
@@ -177,6 +186,8 @@ void MqttPublisher::on_connect(mosquitto*, void* self, int rc) {
     return;
   }
   p.last_refusal_ = 0;
+  p.last_log_.clear();
+  p.told_waiting_ = false;
   p.connected_ = true;
   if (p.connects_++ > 0) {
     ++p.counters_.reconnects;
@@ -199,6 +210,16 @@ void MqttPublisher::on_disconnect(mosquitto*, void* self, int rc) {
     p.say_("warning: MQTT broker " + p.broker_ +
            " lost: reconnecting; results wait for it (up to results.mqtt.queue_limit = " +
            std::to_string(p.config_.queue_limit) + ")");
+  p.told_waiting_ = p.told_waiting_ || (rc != 0 && was_connected);
+}
+
+void MqttPublisher::on_log(mosquitto*, void* self, int level, const char* text) {
+  if ((level & (MOSQ_LOG_ERR | MOSQ_LOG_WARNING)) == 0) return;
+  auto& p = *static_cast<MqttPublisher*>(self);
+  std::lock_guard lock(p.mutex_);
+  if (text == p.last_log_) return;
+  p.last_log_ = text;
+  if (p.say_) p.say_("warning: MQTT: " + p.last_log_);
 }
 
 void MqttPublisher::on_publish(mosquitto*, void* self, int mid) {

@@ -67,6 +67,8 @@ class MqttPublisher {
   static void on_connect(mosquitto* client, void* self, int rc);
   static void on_disconnect(mosquitto* client, void* self, int rc);
   static void on_publish(mosquitto* client, void* self, int mid);
+  /// libmosquitto's errors and warnings (a TLS handshake refused, say), each text once in a row.
+  static void on_log(mosquitto* client, void* self, int level, const char* text);
   /// The status message ("running" or "stopped") with the counters; mutex_ held.
   void publish_status_locked(const char* state);
   nlohmann::json status_locked(const char* state) const;
@@ -86,6 +88,8 @@ class MqttPublisher {
   bool connected_ = false;
   std::uint64_t connects_ = 0;
   int last_refusal_ = 0;
+  std::string last_log_;
+  bool told_waiting_ = false;  ///< said that results wait for the broker, since the last connect
   bool overflowing_ = false;
   std::uint64_t dropped_in_overflow_ = 0;
   std::chrono::steady_clock::time_point last_status_{};

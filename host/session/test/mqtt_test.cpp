@@ -289,12 +289,25 @@ TEST(MqttResults, OverTlsOnlyToABrokerTheCaVouchesFor) {
   EXPECT_EQ(subscriber.wait_for(lines.size(), 30), lines);
 
   MqttPublisher refused;
-  ASSERT_EQ(refused.start(config_with("other-ca.crt"), {}), "");
+  std::mutex said_mutex;
+  std::vector<std::string> said;
+  ASSERT_EQ(refused.start(config_with("other-ca.crt"),
+                          [&](const std::string& text) {
+                            std::lock_guard lock(said_mutex);
+                            said.push_back(text);
+                          }),
+            "");
   refused.publish(lines[0]);
   refused.stop(std::chrono::seconds(3));
   EXPECT_EQ(refused.counters().published, 0u);
   EXPECT_EQ(refused.counters().undelivered, 1u);
   EXPECT_EQ(subscriber.received(), lines);
+  // Said, not silent: the result waiting, the handshake's failure, the result not delivered.
+  std::lock_guard lock(said_mutex);
+  const std::string all = ::testing::PrintToString(said);
+  EXPECT_NE(all.find("results wait for it"), std::string::npos) << all;
+  EXPECT_NE(all.find("certificate verify failed"), std::string::npos) << all;
+  EXPECT_NE(all.find("1 results were not acknowledged"), std::string::npos) << all;
 }
 
 // The broker stops (SIGTERM: it saves the subscriber's session) once objects
