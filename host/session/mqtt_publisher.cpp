@@ -186,8 +186,11 @@ void MqttPublisher::on_connect(mosquitto*, void* self, int rc) {
     return;
   }
   p.last_refusal_ = 0;
-  p.last_log_.clear();
   p.told_waiting_ = false;
+  {
+    std::lock_guard log_lock(p.log_mutex_);  // the next trouble is told again
+    p.last_log_.clear();
+  }
   p.connected_ = true;
   if (p.connects_++ > 0) {
     ++p.counters_.reconnects;
@@ -216,7 +219,7 @@ void MqttPublisher::on_disconnect(mosquitto*, void* self, int rc) {
 void MqttPublisher::on_log(mosquitto*, void* self, int level, const char* text) {
   if ((level & (MOSQ_LOG_ERR | MOSQ_LOG_WARNING)) == 0) return;
   auto& p = *static_cast<MqttPublisher*>(self);
-  std::lock_guard lock(p.mutex_);
+  std::lock_guard lock(p.log_mutex_);
   if (text == p.last_log_) return;
   p.last_log_ = text;
   if (p.say_) p.say_("warning: MQTT: " + p.last_log_);

@@ -88,6 +88,10 @@ class MqttPublisher {
   bool connected_ = false;
   std::uint64_t connects_ = 0;
   int last_refusal_ = 0;
+  /// Not mutex_: libmosquitto calls on_log holding its own lock, which
+  /// mosquitto_publish (called with mutex_ held) takes too. No other lock is
+  /// taken while it is held.
+  std::mutex log_mutex_;
   std::string last_log_;
   bool told_waiting_ = false;  ///< said that results wait for the broker, since the last connect
   bool overflowing_ = false;
