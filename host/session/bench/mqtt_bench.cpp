@@ -98,10 +98,14 @@ Figures measure(const flutterscan::session::testing::MosquittoBroker& broker, in
   mosquitto_message_callback_set(sub, on_message);
   mosquitto_subscribe_callback_set(sub, on_subscribe);
   mosquitto_int_option(sub, MOSQ_OPT_TCP_NODELAY, 1);
-  mosquitto_connect(sub, "127.0.0.1", broker.port(), 10);
-  mosquitto_subscribe(sub, nullptr, topic.c_str(), qos);
-  mosquitto_loop_start(sub);
-  while (!arrivals.subscribed) std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  if (mosquitto_connect(sub, "127.0.0.1", broker.port(), 10) != MOSQ_ERR_SUCCESS ||
+      mosquitto_subscribe(sub, nullptr, topic.c_str(), qos) != MOSQ_ERR_SUCCESS ||
+      mosquitto_loop_start(sub) != MOSQ_ERR_SUCCESS) {
+    std::fprintf(stderr, "mqtt_bench: the subscriber could not subscribe\n");
+    std::exit(1);
+  }
+  for (int i = 0; i < 1000 && !arrivals.subscribed; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
 
   MqttConfig config;
   config.host = "127.0.0.1";

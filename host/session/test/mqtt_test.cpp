@@ -3,7 +3,8 @@
 // session arrives as its record in summary.json (the line TCP clients get),
 // also when the broker is stopped mid-session and started again on the same
 // port while objects keep coming; the retained status says "stopped" with
-// the counters. And [results.mqtt] read from the config.
+// the counters, and "offline" (the will) when the process dies. And
+// [results.mqtt] read from the config.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -222,6 +223,43 @@ TEST(MqttResults, EveryObjectArrivesAsItsRecord) {
   EXPECT_EQ(status["state"], "stopped");
   EXPECT_EQ(status["published"], objects.size());
   EXPECT_EQ(status["waiting"], 0);
+}
+
+// A process that dies without a goodbye: the broker publishes the will, and the
+// retained status says "offline" (it said "running" while the process lived).
+TEST(MqttResults, TheBrokerMarksADeadSessionOffline) {
+  REQUIRE_MOSQUITTO();
+  const ScratchFolder scratch("mqtt_will");
+  const fs::path& dir = scratch.path();
+  fs::create_directories(dir / "broker");
+  MosquittoBroker broker(MOSQUITTO, dir / "broker");
+  ASSERT_TRUE(broker.start()) << "mosquitto did not start: see " << dir;
+  const MqttConfig config = mqtt_config(broker);
+  const pid_t child = ::fork();
+  if (child == 0) {  // publishes a result, then dies
+    MqttPublisher publisher;
+    if (!publisher.start(config, {}).empty()) _exit(1);
+    publisher.publish(R"({"object":1,"status":"NO-READ"})");
+    // Until the result is acknowledged and the test has read "running".
+    for (int i = 0; i < 600 && (publisher.counters().published == 0 || !fs::exists(dir / "die"));
+         ++i)
+      std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    _exit(publisher.counters().published == 1 ? 0 : 2);
+  }
+  const auto running = retained_status(broker, config.topic, dir, {});
+  std::ofstream(dir / "die") << "now\n";
+  EXPECT_EQ(wait_program(child), 0);
+  ASSERT_TRUE(running.is_object()) << running;
+  EXPECT_EQ(running["state"], "running");
+  EXPECT_EQ(running["client_id"], config.client_id);
+  nlohmann::json status;
+  for (int i = 0; i < 50 && (!status.is_object() || status["state"] != "offline"); ++i) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    status = retained_status(broker, config.topic, dir, {});
+  }
+  ASSERT_TRUE(status.is_object()) << status;
+  EXPECT_EQ(status["state"], "offline");
+  EXPECT_EQ(status["client_id"], config.client_id);
 }
 
 /// Runs openssl with `args` in `dir`; true if it succeeded.
