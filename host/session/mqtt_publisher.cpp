@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <chrono>
 #include <mutex>
+#include <thread>
 
 #include "session/read_record.hpp"
 
@@ -12,7 +13,7 @@ namespace flutterscan::session {
 namespace {
 
 constexpr int kKeepaliveS = 10;
-constexpr unsigned kReconnectMinS = 1, kReconnectMaxS = 30;
+constexpr std::chrono::seconds kReconnectMin{1}, kReconnectMax{30};
 
 std::string utc_now() {
   return iso8601_utc(std::chrono::duration_cast<std::chrono::milliseconds>(
@@ -44,7 +45,8 @@ std::string MqttPublisher::start(const MqttConfig& config, Say say) {
   mosquitto_disconnect_callback_set(client_, on_disconnect);
   mosquitto_publish_callback_set(client_, on_publish);
   mosquitto_log_callback_set(client_, on_log);
-  mosquitto_reconnect_delay_set(client_, kReconnectMinS, kReconnectMaxS, true);
+  // Publishing from the session's threads while the client's thread runs the loop.
+  mosquitto_threaded_set(client_, true);
   mosquitto_int_option(client_, MOSQ_OPT_TCP_NODELAY, 1);  // a result goes out at once
   if (!config_.username.empty())
     if (int rc = mosquitto_username_pw_set(
@@ -66,7 +68,7 @@ std::string MqttPublisher::start(const MqttConfig& config, Say say) {
                                   will.data(), 1, true);
       rc != MOSQ_ERR_SUCCESS)
     return failed("will on " + status_topic_, rc);
-  // A broker not there yet is retried by the client's thread, like a lost one.
+  // A broker not there yet is tried again by the client's thread, like a lost one.
   const int connected =
       mosquitto_connect_async(client_, config_.host.c_str(), config_.port, kKeepaliveS);
   if (connected == MOSQ_ERR_INVAL || connected == MOSQ_ERR_NOMEM)
@@ -77,8 +79,7 @@ std::string MqttPublisher::start(const MqttConfig& config, Say say) {
          mosquitto_strerror(connected) +
          "): results wait for it (up to results.mqtt.queue_limit = " +
          std::to_string(config_.queue_limit) + ")");
-  if (int rc = mosquitto_loop_start(client_); rc != MOSQ_ERR_SUCCESS)
-    return failed("client thread", rc);
+  thread_ = std::thread([this, connected] { run(connected); });
   running_ = true;
   return {};
 }
@@ -139,8 +140,42 @@ void MqttPublisher::stop(std::chrono::milliseconds drain) {
     acknowledged_.wait_for(lock, std::chrono::seconds(2), [&] { return status_ids_.empty(); });
   }
   lock.unlock();
-  mosquitto_disconnect(client_);
-  mosquitto_loop_stop(client_, false);
+  mosquitto_disconnect(client_);  // the client's thread sends it, then ends
+  {
+    std::lock_guard stopping_lock(mutex_);  // run() waits for it under the lock
+    stopping_ = true;
+  }
+  acknowledged_.notify_all();
+  thread_.join();
+}
+
+void MqttPublisher::run(int first_connect) {
+  int rc = first_connect;
+  auto delay = kReconnectMin;
+  std::chrono::steady_clock::time_point give_up{};
+  while (true) {
+    if (rc == MOSQ_ERR_SUCCESS) rc = mosquitto_loop(client_, 100, 1);
+    if (stopping_) {
+      // Stopping: the loop goes on until the DISCONNECT is out and the
+      // connection closed, 2 s at most.
+      const auto now = std::chrono::steady_clock::now();
+      if (give_up == std::chrono::steady_clock::time_point{})
+        give_up = now + std::chrono::seconds(2);
+      if (rc != MOSQ_ERR_SUCCESS || now > give_up) return;
+      continue;
+    }
+    if (rc == MOSQ_ERR_SUCCESS) continue;
+    // Not connected: again after the delay (1 s after a connection that worked,
+    // doubling up to 30 s while none does).
+    if (connected_since_failure_.exchange(false)) delay = kReconnectMin;
+    {
+      std::unique_lock lock(mutex_);
+      acknowledged_.wait_for(lock, delay, [&] { return stopping_.load(); });
+    }
+    if (stopping_) return;
+    delay = std::min(delay * 2, kReconnectMax);
+    rc = mosquitto_reconnect_async(client_);
+  }
 }
 
 MqttCounters MqttPublisher::counters() const {
@@ -187,6 +222,7 @@ void MqttPublisher::on_connect(mosquitto*, void* self, int rc) {
   }
   p.last_refusal_ = 0;
   p.told_waiting_ = false;
+  p.connected_since_failure_ = true;
   {
     std::lock_guard log_lock(p.log_mutex_);  // the next trouble is told again
     p.last_log_.clear();

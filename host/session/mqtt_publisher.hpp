@@ -6,8 +6,8 @@
 // at the end, and "offline" as the client's will, which the broker publishes
 // when the process dies or the connection is lost without a goodbye.
 //
-// libmosquitto's own thread talks to the broker, so publish() never blocks the
-// pipeline. A result waits in the client until the broker acknowledges it
+// The publisher's own thread runs libmosquitto's loop, so publish() never
+// blocks the pipeline. A result waits in the client until the broker acknowledges it
 // (QoS 1 and 2), across reconnects (1 s, doubling up to 30 s) while the broker
 // is away, and is sent again after a reconnect if the broker had not
 // acknowledged it. At most results.mqtt.queue_limit results wait: beyond it a
@@ -15,12 +15,14 @@
 
 #include <nlohmann/json.hpp>
 
+#include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <cstdint>
 #include <functional>
 #include <mutex>
 #include <string>
+#include <thread>
 #include <unordered_set>
 
 #include "session/session_config.hpp"
@@ -64,6 +66,10 @@ class MqttPublisher {
   nlohmann::json summary() const;
 
  private:
+  /// The client's thread: libmosquitto's loop, and after any failure (the broker
+  /// not there at the start, lost, a TLS or name lookup error) a new connection
+  /// after 1 s, doubling up to 30 s, until stop().
+  void run(int first_connect);
   static void on_connect(mosquitto* client, void* self, int rc);
   static void on_disconnect(mosquitto* client, void* self, int rc);
   static void on_publish(mosquitto* client, void* self, int mid);
@@ -78,7 +84,10 @@ class MqttPublisher {
   std::string status_topic_;
   std::string broker_;  ///< "mqtt://host:port", for messages
   mosquitto* client_ = nullptr;
+  std::thread thread_;    ///< the client's thread (run)
   bool running_ = false;  ///< the client's thread started
+  std::atomic<bool> stopping_{false};
+  std::atomic<bool> connected_since_failure_{false};  ///< the backoff starts again at 1 s
 
   mutable std::mutex mutex_;
   std::condition_variable acknowledged_;

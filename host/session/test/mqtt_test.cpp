@@ -3,8 +3,9 @@
 // session arrives as its record in summary.json (the line TCP clients get),
 // also when the broker is stopped mid-session and started again on the same
 // port while objects keep coming; the retained status says "stopped" with
-// the counters, and "offline" (the will) when the process dies. And
-// [results.mqtt] read from the config.
+// the counters, and "offline" (the will) when the process dies; beyond the
+// queue limit results are dropped, counted and said. And [results.mqtt] read
+// from the config.
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
@@ -260,6 +261,61 @@ TEST(MqttResults, TheBrokerMarksADeadSessionOffline) {
   ASSERT_TRUE(status.is_object()) << status;
   EXPECT_EQ(status["state"], "offline");
   EXPECT_EQ(status["client_id"], config.client_id);
+}
+
+// The broker away from the start and queue_limit = 2: two results wait, the
+// next three are dropped, counted and said once; the two arrive when the broker
+// comes, and the next result is taken again, said with the count of the dropped.
+TEST(MqttResults, BeyondTheQueueLimitResultsAreDroppedCountedAndSaid) {
+  REQUIRE_MOSQUITTO();
+  const ScratchFolder scratch("mqtt_overflow");
+  const fs::path& dir = scratch.path();
+  fs::create_directories(dir / "broker");
+  MosquittoBroker broker(MOSQUITTO, dir / "broker");
+  MqttConfig config = mqtt_config(broker);
+  config.queue_limit = 2;
+  // The subscriber's session made while the broker is up, kept in its persistence.
+  ASSERT_TRUE(broker.start()) << "mosquitto did not start: see " << dir;
+  Subscriber subscriber(broker, config.topic, dir);
+  ASSERT_TRUE(subscriber.start());
+  subscriber.stop();
+  broker.stop();
+
+  std::mutex said_mutex;
+  std::vector<std::string> said;
+  MqttPublisher publisher;
+  ASSERT_EQ(publisher.start(config,
+                            [&](const std::string& text) {
+                              std::lock_guard lock(said_mutex);
+                              said.push_back(text);
+                            }),
+            "");
+  std::vector<std::string> lines;
+  for (int i = 1; i <= 6; ++i)
+    lines.push_back(R"({"object":)" + std::to_string(i) + R"(,"status":"NO-READ"})");
+  for (int i = 0; i < 5; ++i) publisher.publish(lines[i]);
+  EXPECT_EQ(publisher.counters().dropped, 3u);
+  EXPECT_EQ(publisher.counters().queued_max, 2u);
+
+  ASSERT_TRUE(broker.start());
+  ASSERT_TRUE(subscriber.start());
+  for (int i = 0; i < 600 && publisher.counters().published < 2; ++i)
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+  publisher.publish(lines[5]);
+  publisher.stop(std::chrono::seconds(20));
+  const MqttCounters c = publisher.counters();
+  EXPECT_EQ(c.published, 3u);
+  EXPECT_EQ(c.dropped, 3u);
+  EXPECT_EQ(c.undelivered, 0u);
+  EXPECT_EQ(subscriber.wait_for(3, 30), (std::vector<std::string>{lines[0], lines[1], lines[5]}));
+
+  std::lock_guard lock(said_mutex);
+  const auto count = [&](const std::string& text) {
+    return std::count_if(said.begin(), said.end(),
+                         [&](const std::string& s) { return s.find(text) != std::string::npos; });
+  };
+  EXPECT_EQ(count("results are dropped until it takes them"), 1) << ::testing::PrintToString(said);
+  EXPECT_EQ(count("takes results again; 3 dropped meanwhile"), 1) << ::testing::PrintToString(said);
 }
 
 /// Runs openssl with `args` in `dir`; true if it succeeded.
