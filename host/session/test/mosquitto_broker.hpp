@@ -99,8 +99,7 @@ class MosquittoBroker {
     conf << "set_tcp_nodelay true\n"
          << "persistence true\n"
          << "persistence_location " << (dir_ / "").string() << "\n"
-         << "log_dest file " << (dir_ / "broker.log").string() << "\n"
-         << "log_type all\n";
+         << "log_dest file " << (dir_ / "broker.log").string() << "\n";
     // Run as root, mosquitto would become user mosquitto, who cannot write the folder.
     if (const passwd* user = ::getpwuid(::getuid())) conf << "user " << user->pw_name << "\n";
   }
