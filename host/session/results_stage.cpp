@@ -7,18 +7,21 @@
 
 #include "capture/frame_pixels.hpp"
 #include "session/frame_preview.hpp"
+#include "session/mqtt_publisher.hpp"
 #include "session/read_record.hpp"
 #include "session/session_clock.hpp"
 
 namespace flutterscan::session {
 
 ResultsStage::ResultsStage(const SessionConfig& config, int belt_length_px, std::int64_t start_ns,
-                           Pipeline& pipeline, SessionFolder& folder, ResultsServer& server)
+                           Pipeline& pipeline, SessionFolder& folder, ResultsServer& server,
+                           MqttPublisher* mqtt)
     : config_(config),
       start_ns_(start_ns),
       pipeline_(pipeline),
       folder_(folder),
       server_(server),
+      mqtt_(mqtt),
       tracker_(belt_length_px, config.processing.object_match_px) {}
 
 void ResultsStage::run(const std::function<void(const Progress&)>& progress) {
@@ -165,7 +168,9 @@ void ResultsStage::count_second_pass(const nlohmann::json& frame_log) {
 
 void ResultsStage::publish(std::vector<ObjectResult> finished) {
   for (auto& o : finished) {
-    server_.publish(result_line(o));
+    const std::string line = result_line(o);
+    server_.publish(line);
+    if (mqtt_ != nullptr) mqtt_->publish(line);
     results_.objects.push_back(std::move(o));
   }
 }

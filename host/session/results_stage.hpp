@@ -24,6 +24,8 @@
 
 namespace flutterscan::session {
 
+class MqttPublisher;
+
 /// \brief The read record against the simulator's truth (sim sessions): how
 /// many reads had their label found, and how many of those were within the
 /// targets (corners within 2 px, module size within 10%, identifier equal).
@@ -80,9 +82,11 @@ inline constexpr double kLowGradeValue = 1.5;
 class ResultsStage {
  public:
   /// \brief Results of frames `belt_length_px` long along the motion, for the
-  /// session started at `start_ns`; lines to `server`, logs and files to `folder`.
+  /// session started at `start_ns`; lines to `server` (and `mqtt`, if given),
+  /// logs and files to `folder`.
   ResultsStage(const SessionConfig& config, int belt_length_px, std::int64_t start_ns,
-               Pipeline& pipeline, SessionFolder& folder, ResultsServer& server);
+               Pipeline& pipeline, SessionFolder& folder, ResultsServer& server,
+               MqttPublisher* mqtt = nullptr);
 
   /// \brief Takes outcomes from `pipeline.outcomes` until it is closed and
   /// empty, then finishes every object; `progress` (may be empty) about twice a second.
@@ -110,6 +114,7 @@ class ResultsStage {
   Pipeline& pipeline_;
   SessionFolder& folder_;
   ResultsServer& server_;
+  MqttPublisher* mqtt_;
   ObjectTracker tracker_;
   std::map<std::uint64_t, FrameOutcome> waiting_;  ///< by index, until the earlier ones came
   std::uint64_t next_ = 0;

@@ -13,6 +13,7 @@
 #include "session/light_probe.hpp"
 #include "session/line_devices.hpp"
 #include "session/matching_stage.hpp"
+#include "session/mqtt_publisher.hpp"
 #include "session/pipeline.hpp"
 #include "session/results_server.hpp"
 #include "session/results_stage.hpp"
@@ -89,6 +90,9 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   ResultsServer server;
   if (auto p = open_result_outputs(config.results, server, hooks.listening); !p.empty())
     return fail(p, false);
+  MqttPublisher mqtt;
+  if (config.results.mqtt)
+    if (auto p = mqtt.start(*config.results.mqtt, say); !p.empty()) return fail(p, false);
 
   // Armed, the camera streaming; exposure events come in on the controller's reader thread.
   EventInbox inbox;
@@ -106,7 +110,7 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   const std::int64_t start_ns = now_ns();
   WorkerPool workers(pipeline, config, flat_field);
   ResultsStage results(config, imaging::length_along_motion(direction, format.width, format.height),
-                       start_ns, pipeline, folder, server);
+                       start_ns, pipeline, folder, server, config.results.mqtt ? &mqtt : nullptr);
   std::thread results_thread([&] { results.run(hooks.progress); });
   MatchingStage matching(config.processing.match_tolerance_us, config.optics);
   const CaptureEnd capture_end =
@@ -123,6 +127,7 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   const capture::CameraCounters camera_counters = camera->counters();
   const double duration_s = ms_between(start_ns, now_ns()) * 1e-3;
   server.close();
+  mqtt.stop();
 
   // The summary: summary.json, report.html.
   SessionCounts counts =
@@ -133,6 +138,7 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   counts.format = format;
   counts.duration_s = duration_s;
   outcome.summary = session_summary(config, counts, results.results());
+  if (config.results.mqtt) outcome.summary["results"]["mqtt"] = mqtt.summary();
   folder.close();
   if (auto p = folder.write_file("summary.json", outcome.summary.dump(2) + "\n"); !p.empty())
     return fail(p, false);

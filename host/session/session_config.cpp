@@ -2,7 +2,14 @@
 
 #include <toml++/toml.h>
 
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <fstream>
 #include <limits>
 #include <sstream>
@@ -97,11 +104,166 @@ std::string number_text(double value) {
   return text.str();
 }
 
+/// " (got VALUE)".
+std::string got_text(double value) {
+  return " (got " + number_text(value) + ")";
+}
+
 /// "KEY = VALUE is outside RANGE": the key, what it was and what it may be.
 std::string outside(const std::string& key, double value, const std::string& range,
                     const std::string& why = {}) {
   return key + " = " + number_text(value) + " is outside " + range + (why.empty() ? "" : ": ") +
          why;
+}
+
+/// "FILE:LINE: results.mqtt.KEY WHAT": a problem with one key of [results.mqtt].
+std::string mqtt_problem(const std::string& origin, const toml::table& table, const char* key,
+                         const std::string& what) {
+  const toml::node* node = table.get(key);
+  std::ostringstream where;
+  where << origin << ":" << (node ? node->source().begin.line : table.source().begin.line)
+        << ": results.mqtt." << key << " " << what;
+  return where.str();
+}
+
+/// The broker URL "mqtt://HOST[:PORT]" or "mqtts://HOST[:PORT]" (HOST may be "[v6]") into
+/// `m`; false if it is not one.
+bool parse_broker_url(const std::string& url, MqttConfig& m) {
+  std::string rest;
+  if (url.starts_with("mqtt://")) {
+    m.tls = false;
+    m.port = 1883;
+    rest = url.substr(7);
+  } else if (url.starts_with("mqtts://")) {
+    m.tls = true;
+    m.port = 8883;
+    rest = url.substr(8);
+  } else {
+    return false;
+  }
+  if (!rest.empty() && rest.back() == '/') rest.pop_back();
+  // HOST, or [IPv6 address], then :PORT or nothing.
+  std::size_t host_end = rest.starts_with("[") ? rest.find(']') : rest.find(':');
+  if (rest.starts_with("[")) {
+    if (host_end == std::string::npos) return false;
+    m.host = rest.substr(1, host_end - 1);
+    ++host_end;
+  } else {
+    m.host = rest.substr(0, host_end);
+  }
+  const auto is_bad = [](char ch) {
+    return std::isspace(static_cast<unsigned char>(ch)) || ch == '/' || ch == '@' || ch == '?';
+  };
+  if (m.host.empty() || std::any_of(m.host.begin(), m.host.end(), is_bad)) return false;
+  if (host_end >= rest.size()) return true;
+  const std::string port = rest.substr(host_end + 1);
+  const auto digit = [](char ch) { return std::isdigit(static_cast<unsigned char>(ch)) != 0; };
+  if (rest[host_end] != ':' || port.empty() || port.size() > 5 ||
+      !std::all_of(port.begin(), port.end(), digit))
+    return false;
+  m.port = std::stoi(port);
+  return m.port >= 1 && m.port <= 65535;
+}
+
+/// The first line of a password file that only its owner and group may read; error if not.
+std::string read_password_file(const std::string& path, std::string& password) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode))
+    return "'" + path + "' is not a readable file";
+  if ((st.st_mode & S_IROTH) != 0) {
+    char mode[8];
+    std::snprintf(mode, sizeof mode, "%04o", static_cast<unsigned>(st.st_mode & 07777));
+    return "'" + path + "' is readable by every user (mode " + mode +
+           "): a password file must not be (chmod o-r)";
+  }
+  std::ifstream in(path);
+  if (!in) return "'" + path + "' is not a readable file";
+  std::getline(in, password);
+  if (!password.empty() && password.back() == '\r') password.pop_back();
+  if (password.empty()) return "'" + path + "' has no password on its first line";
+  return {};
+}
+
+/// [results.mqtt]: every key checked where it is (the error names the file, line and key).
+std::string parse_mqtt(const toml::table& t, const std::string& origin, MqttConfig& m) {
+  if (auto p =
+          known_keys_problem(t, "results.mqtt.",
+                             {"broker", "topic", "qos", "client_id", "queue_limit", "username",
+                              "password_file", "password_env", "ca_file", "cert_file", "key_file"},
+                             origin);
+      !p.empty())
+    return p;
+  std::string error, broker, password_file, password_env;
+  TableReader r(&t, "results.mqtt.", origin, error);
+  r.get("broker", broker);
+  r.get("topic", m.topic);
+  r.get("qos", m.qos);
+  r.get("client_id", m.client_id);
+  r.get("queue_limit", m.queue_limit);
+  r.get("username", m.username);
+  r.get("password_file", password_file);
+  r.get("password_env", password_env);
+  r.get("ca_file", m.ca_file);
+  r.get("cert_file", m.cert_file);
+  r.get("key_file", m.key_file);
+  if (!error.empty()) return error;
+  const auto problem = [&](const char* key, const std::string& what) {
+    return mqtt_problem(origin, t, key, what);
+  };
+  if (broker.empty())
+    return problem("broker", "must be given: \"mqtt://HOST[:PORT]\" or \"mqtts://HOST[:PORT]\"");
+  if (!parse_broker_url(broker, m))
+    return problem("broker", "'" + broker +
+                                 "' is not mqtt://HOST[:PORT] or mqtts://HOST[:PORT] (port "
+                                 "1..65535)");
+  if (m.topic.empty() || m.topic.size() > 1024 ||
+      m.topic.find_first_of(std::string("+#\0", 3)) != std::string::npos)
+    return problem("topic", "must be 1..1024 bytes without the wildcards + and #");
+  if (m.qos < 0 || m.qos > 2) return problem("qos", "must be 0, 1 or 2" + got_text(m.qos));
+  if (t.get("client_id") != nullptr && (m.client_id.empty() || m.client_id.size() > 256 ||
+                                        !std::all_of(m.client_id.begin(), m.client_id.end(),
+                                                     [](char ch) { return ch > ' ' && ch < 127; })))
+    return problem("client_id", "must be 1..256 printable ASCII characters without spaces");
+  if (m.queue_limit < 1 || m.queue_limit > kMaxMqttQueue)
+    return problem("queue_limit", "must be within 1.." + std::to_string(kMaxMqttQueue) +
+                                      " results (each holds its line)" +
+                                      got_text(static_cast<double>(m.queue_limit)));
+  if (!password_file.empty() && !password_env.empty())
+    return problem("password_env", "and results.mqtt.password_file: give one of them");
+  if (!password_file.empty()) {
+    if (auto why = read_password_file(password_file, m.password); !why.empty())
+      return problem("password_file", why);
+  } else if (t.get("password_file") != nullptr) {
+    return problem("password_file", "must not be empty");
+  }
+  if (!password_env.empty()) {
+    const char* value = std::getenv(password_env.c_str());
+    if (value == nullptr || *value == '\0')
+      return problem("password_env", "names " + password_env + ", which is not set");
+    m.password = value;
+  } else if (t.get("password_env") != nullptr) {
+    return problem("password_env", "must not be empty");
+  }
+  if (!m.password.empty() && m.username.empty())
+    return problem("username", "must be given with a password");
+  for (const auto& [key, path] :
+       {std::pair{"ca_file", &m.ca_file}, std::pair{"cert_file", &m.cert_file},
+        std::pair{"key_file", &m.key_file}}) {
+    if (t.get(key) == nullptr) continue;
+    if (!m.tls) return problem(key, "needs an mqtts:// broker");
+    std::ifstream file(*path);
+    if (path->empty() || !file) return problem(key, "'" + *path + "' is not a readable file");
+  }
+  if (m.cert_file.empty() != m.key_file.empty())
+    return problem(m.cert_file.empty() ? "cert_file" : "key_file",
+                   "must be given with results.mqtt." +
+                       std::string(m.cert_file.empty() ? "key_file" : "cert_file"));
+  if (m.client_id.empty()) {
+    char host[256] = "host";
+    ::gethostname(host, sizeof host - 1);
+    m.client_id = "flutterscan-" + std::string(host);
+  }
+  return {};
 }
 
 }  // namespace
@@ -296,8 +458,8 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     r.get("report", c.output.report);
   }
   if (const toml::table* t = root["results"].as_table()) {
-    if (auto p = known_keys_problem(*t, "results.",
-                                    {"tcp_port", "tcp_bind", "serial", "serial_baud"}, origin);
+    if (auto p = known_keys_problem(
+            *t, "results.", {"tcp_port", "tcp_bind", "serial", "serial_baud", "mqtt"}, origin);
         !p.empty())
       return Out::failure(p);
     TableReader r(t, "results.", origin, error);
@@ -305,6 +467,14 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     r.get("tcp_bind", c.results.tcp_bind);
     r.get("serial", c.results.serial);
     r.get("serial_baud", c.results.serial_baud);
+    if (const toml::node* mqtt = t->get("mqtt")) {
+      if (!mqtt->is_table())
+        return Out::failure(origin + ":" + std::to_string(mqtt->source().begin.line) +
+                            ": results.mqtt must be a table ([results.mqtt])");
+      MqttConfig m;
+      if (auto p = parse_mqtt(*mqtt->as_table(), origin, m); !p.empty()) return Out::failure(p);
+      c.results.mqtt = std::move(m);
+    }
   }
   if (!error.empty()) return Out::failure(error);
   return Out::success(std::move(c));

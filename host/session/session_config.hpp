@@ -129,11 +129,28 @@ struct OutputConfig {
   bool report = true;
 };
 
+/// \brief Results over MQTT ([results.mqtt], docs/session-output.md, "Results over MQTT").
+struct MqttConfig {
+  std::string host;  ///< from broker = "mqtt://HOST[:PORT]" or "mqtts://HOST[:PORT]"
+  int port = 1883;   ///< 1883 (mqtt), 8883 (mqtts) unless the URL says
+  bool tls = false;  ///< mqtts://
+  std::string topic = "flutterscan/results";  ///< objects here, the status on TOPIC/status
+  int qos = 1;
+  std::string client_id;            ///< empty: "flutterscan-" and the host name
+  std::size_t queue_limit = 10000;  ///< results not yet acknowledged; beyond it dropped, counted
+  std::string username;
+  /// Read from password_file (not readable by others) or the variable password_env; never
+  /// from the command line, never written anywhere.
+  std::string password;
+  std::string ca_file, cert_file, key_file;  ///< TLS; no ca_file: the system's CAs
+};
+
 struct ResultsConfig {
   int tcp_port = -1;  ///< -1: off; 0: any free port (printed); else that port
   std::string tcp_bind = "127.0.0.1";
   std::string serial;  ///< e.g. /dev/ttyUSB0; empty: off
   int serial_baud = 115200;
+  std::optional<MqttConfig> mqtt;  ///< [results.mqtt]; none: off
 };
 
 struct SessionConfig {
@@ -152,6 +169,8 @@ inline constexpr std::size_t kMaxQueueDepth = 256;  ///< processing.queue_depth
 inline constexpr double kMaxDiskBudgetMb = 1e9;     ///< output.disk_budget_mb (a petabyte)
 inline constexpr double kMaxSecondPassMs = 1e6;     ///< processing.second_pass_ms
 inline constexpr double kMaxCrosstalk = 100;        ///< each optics.crosstalk entry
+/// results.mqtt.queue_limit: below MQTT's 65535 message ids, each waiting result holding one.
+inline constexpr std::size_t kMaxMqttQueue = 50000;
 
 /// \brief Reads a TOML file over the defaults; the error names the file, the key and the line.
 Result<SessionConfig, std::string> load_config(const std::string& path);

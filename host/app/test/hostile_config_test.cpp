@@ -6,6 +6,7 @@
 // naming the file and the key) or run (exit 0) with every captured frame
 // accounted for (processed, failed, dropped or without an event, the failed
 // frames in the printed summary). Never a signal, an abort or another exit code.
+// And [results.mqtt]'s keys, each refused naming the file, the line and the key.
 
 #include <fcntl.h>
 #include <gtest/gtest.h>
@@ -242,6 +243,80 @@ TEST(HostileConfigKeys, AnEncoderBlurLongerThanTheFrameIsFlaggedAndCounted) {
   EXPECT_NE(lines.find("optics.px_per_count 100"), std::string::npos) << lines.substr(0, 600);
   EXPECT_NE(lines.find("\"blur-out-of-range\""), std::string::npos);
   fs::remove_all(base);
+}
+
+// [results.mqtt] (docs/session-config.md, "Results over MQTT"): each bad value refused
+// before anything starts, exit 2, the message naming the file, the line and the key.
+TEST(HostileConfigKeys, MqttKeysAreRefusedNamingTheFileLineAndKey) {
+  const char* tmp = std::getenv("TMPDIR");
+  const fs::path base = fs::path(tmp && *tmp ? tmp : "/tmp") /
+                        ("flutterscan-hostile-mqtt-" + std::to_string(getpid()));
+  fs::remove_all(base);
+  fs::create_directories(base);
+  const fs::path everyone = base / "password-everyone", owner = base / "password-owner";
+  std::ofstream(everyone) << "secret\n";
+  std::ofstream(owner) << "secret\n";
+  fs::permissions(everyone, fs::perms::owner_read | fs::perms::owner_write | fs::perms::group_read |
+                                fs::perms::others_read);
+  fs::permissions(owner, fs::perms::owner_read | fs::perms::owner_write);
+  ::unsetenv("FLUTTERSCAN_TEST_NO_SUCH_VARIABLE");
+  const std::string broker = "broker = \"mqtt://127.0.0.1:1883\"\n";
+  struct Case {
+    std::string table;  ///< after the "[results.mqtt]" line
+    std::string named;  ///< in the message
+    int line;           ///< of the file, in the message
+  };
+  const std::vector<Case> cases = {
+      {"topic = \"line3\"\n", "results.mqtt.broker must be given", 1},
+      {"broker = \"http://127.0.0.1\"\n", "results.mqtt.broker", 2},
+      {"broker = \"mqtt://127.0.0.1:70000\"\n", "results.mqtt.broker", 2},
+      {"broker = \"mqtt://:1883\"\n", "results.mqtt.broker", 2},
+      {"broker = \"mqtt://broker host\"\n", "results.mqtt.broker", 2},
+      {broker + "topic = \"line3/#\"\n", "results.mqtt.topic", 3},
+      {broker + "topic = \"\"\n", "results.mqtt.topic", 3},
+      {broker + "qos = 3\n", "results.mqtt.qos", 3},
+      {broker + "qos = -1\n", "results.mqtt.qos", 3},
+      {broker + "queue_limit = 0\n", "results.mqtt.queue_limit", 3},
+      {broker + "queue_limit = 1000000000000000\n", "results.mqtt.queue_limit", 3},
+      {broker + "queue_limit = -1\n", "results.mqtt.queue_limit", 3},
+      {broker + "queue_limit = \"many\"\n", "results.mqtt.queue_limit", 3},
+      {broker + "client_id = \"line 3\"\n", "results.mqtt.client_id", 3},
+      {broker + "password = \"secret\"\n", "unknown key results.mqtt.password", 3},
+      {broker + "username = \"u\"\npassword_file = \"" + everyone.string() + "\"\n",
+       "results.mqtt.password_file", 4},
+      {broker + "username = \"u\"\npassword_file = \"" + (base / "none").string() + "\"\n",
+       "results.mqtt.password_file", 4},
+      {broker + "username = \"u\"\npassword_env = \"FLUTTERSCAN_TEST_NO_SUCH_VARIABLE\"\n",
+       "results.mqtt.password_env", 4},
+      {broker + "password_file = \"" + owner.string() + "\"\n", "results.mqtt.username", 1},
+      {broker + "ca_file = \"" + owner.string() + "\"\n", "results.mqtt.ca_file", 3},
+      {"broker = \"mqtts://127.0.0.1\"\nca_file = \"" + (base / "none").string() + "\"\n",
+       "results.mqtt.ca_file", 3},
+      {"broker = \"mqtts://127.0.0.1\"\ncert_file = \"" + owner.string() + "\"\n",
+       "results.mqtt.key_file", 1},
+  };
+  for (const Case& c : cases) {
+    SCOPED_TRACE(c.table);
+    const fs::path config = base / "session.toml";
+    std::ofstream(config) << "[results.mqtt]\n" << c.table;
+    const RunResult r = run({"scan", "--config", config.string(), "--frames", "3", "--out",
+                             (base / "sessions").string(), "--no-progress"},
+                            base);
+    EXPECT_EQ(r.exit_code, 2) << r.out << r.err;
+    EXPECT_NE(r.err.find(config.string() + ":" + std::to_string(c.line) + ": " + c.named),
+              std::string::npos)
+        << r.err;
+    EXPECT_EQ(r.err.find("secret"), std::string::npos) << "the password was printed: " << r.err;
+    EXPECT_FALSE(fs::exists(base / "sessions")) << "refused, yet a session folder was made";
+  }
+  // Not a table.
+  std::ofstream(base / "session.toml") << "[results]\nmqtt = 3\n";
+  const RunResult r = run({"scan", "--config", (base / "session.toml").string(), "--frames", "3",
+                           "--out", (base / "sessions").string(), "--no-progress"},
+                          base);
+  EXPECT_EQ(r.exit_code, 2);
+  EXPECT_NE(r.err.find(":2: results.mqtt must be a table"), std::string::npos) << r.err;
+  if (!HasFailure()) fs::remove_all(base);
 }
 
 std::vector<std::string> swept_keys() {
