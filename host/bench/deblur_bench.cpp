@@ -24,8 +24,8 @@ constexpr int kWindowWidth = 700;
 constexpr int kWindowHeight = 250;
 
 bench::SpeedFrame seed_frame(int width, int height) {
-  return bench::make_speed_frame(
-      width, height, codes::to_code(*codes::find_library_code("seed-maxmin-1")), 52);
+  return bench::make_speed_frame(width, height,
+                                 codes::to_code(*codes::find_library_code("seed-maxmin-1")), 52);
 }
 
 const bench::SpeedFrame& frame() {
@@ -103,9 +103,13 @@ void run_total_variation(benchmark::State& state, const bench::SpeedFrame& f) {
   state.counters["padded_length"] = tv.padded_length();
 }
 
-void TotalVariation(benchmark::State& state) { run_total_variation(state, frame()); }
+void TotalVariation(benchmark::State& state) {
+  run_total_variation(state, frame());
+}
 
-void TotalVariationWindow(benchmark::State& state) { run_total_variation(state, window()); }
+void TotalVariationWindow(benchmark::State& state) {
+  run_total_variation(state, window());
+}
 
 }  // namespace
 
