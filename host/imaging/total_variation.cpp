@@ -24,7 +24,7 @@ Step step_of(const TotalVariationSettings& settings, int k) {
             static_cast<float>(settings.box_penalty)};
   }
   // Half-quadratic L0: hard threshold sqrt(2 mu / beta), beta from 2 mu / threshold^2 upward.
-  const double growth = std::pow(settings.l0_growth, k - 1);
+  const double growth = std::min(std::pow(settings.l0_growth, k - 1), settings.l0_most_growth);
   const double rho_along =
       2 * settings.weight_along / (settings.threshold_along * settings.threshold_along) * growth;
   const double rho_across =
@@ -69,7 +69,7 @@ TotalVariationSettings l0_settings() {
   settings.weight_across = 8.0;
   settings.threshold_along = 0.3;
   settings.threshold_across = 0.3;
-  settings.l0_growth = 1.25;
+  settings.l0_growth = 1.7;
   settings.relaxation = 1;  // half-quadratic splitting keeps no duals to relax
   return settings;
 }

@@ -26,8 +26,8 @@
 // gradients (a two-tone / piecewise-constant prior in the spirit of Pan et
 // al. 2014), solved by half-quadratic splitting with a growing penalty.
 //
-// Solver: ADMM with splits z_along = D_along x, z_across = D_across x, w = x.
-// The x-update is solved exactly: its matrix, the data term plus
+// Solver: over-relaxed ADMM (relaxation 1.8) with splits z_along = D_along x,
+// z_across = D_across x, w = x. The x-update is solved exactly: its matrix, the data term plus
 // rho_along D_along^T D_along + rho_across D_across^T D_across + rho_box I,
 // is the same for every row (one PSF per channel) and circulant along it, so
 // in each row's FFT it falls apart into one real symmetric tridiagonal system
@@ -42,9 +42,9 @@
 // RowPool: the across-row splits, the row FFTs, the sweeps (bins split between
 // the threads), the inverse row FFTs with the along-row and box splits.
 // An earlier solver linearised the across-row term instead (a proximal term
-// 4 rho_across I, which kept the update row-separable): its steps were damped
-// by that term, and it needed 40 iterations for what the exact update reaches
-// in about 12 (docs/benchmarks.md).
+// 4 rho_across I, which kept the update row-separable but damped every step),
+// without relaxation and with thresholds of 2 sigma: it needed 40 iterations
+// for what this one reaches in 15 (docs/benchmarks.md, build/bin/tv_iterations).
 //
 // Warm start: the joint Wiener solution of the same periodic problem
 // (lambda = Settings::wiener_lambda), computed from the data spectra that the
@@ -61,9 +61,10 @@
 // at column n (registered at the start of slot 0), clipped to [0, 1].
 //
 // Parameters: the noise enters through v_c and sigma. kappa (0.5), the across
-// to along ratio (4), the ADMM thresholds (2 sigma, so rho = a / (2 sigma)), the box
-// penalty (100) and 40 iterations were fixed once from the Code 128 / EAN-13
-// / QR / Data Matrix / text label scenes (640x360, 52 px blur, found-mse and
+// to along ratio (4), the ADMM thresholds (0.8 sigma since issue 14, 2 sigma
+// before; rho = a / threshold), the box penalty (100) and the iterations (15;
+// 40 before) were fixed once from the Code 128 / EAN-13 / QR / Data Matrix /
+// text label scenes (640x360, 52 px blur, found-mse, found-joint and
 // Raskar-white, 300 to 10000 e-) and are constants, not per-image tuning.
 // Larger across ratios score still higher on those axis-aligned synthetic
 // labels but flatten rotated ones. L0 (fixed weights 2 and 8) scores 3 dB
@@ -112,11 +113,17 @@ struct TotalVariationSettings {
   double relaxation = 1.8;
   /// L0 only: the penalty grows by this factor per iteration (half-quadratic continuation).
   double l0_growth = 1.15;
+  /// L0 only: the penalty stops growing at this multiple of its first value. Beyond
+  /// about 1e12 the float right-hand side of the x-update (penalty times the splits)
+  /// swamps the data term in the low frequencies, and the estimate falls apart.
+  double l0_most_growth = 1e6;
   double wiener_lambda = 20.0;  ///< the warm start's gradient prior (1 / kLabelGradientVariance)
 };
 
 /// \brief The L0-gradient settings fixed from the label scenes (weights 2 and 8,
-/// first threshold 0.3, penalty growth 1.25 per iteration).
+/// first threshold 0.3, penalty growth 1.7 per iteration: with the exact x-update,
+/// 15 iterations scored 0.5-1.8 dB above 40 of the earlier solver at its growth of
+/// 1.25, which now needed 40 iterations, from 300 to 10000 e-).
 TotalVariationSettings l0_settings();
 
 /// \brief Joint edge-preserving deconvolution for rows of one width: plans,
