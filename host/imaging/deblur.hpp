@@ -33,7 +33,7 @@ inline constexpr double kLabelGradientVariance = 0.05;
 inline constexpr int kRichardsonLucyIterations = 20;
 /// \brief Iterations of tv when DeblurOptions::iterations is unset: the PSNR that 40
 /// iterations of the earlier solver reached on the label scenes, or more
-/// (docs/benchmarks.md, "tv: iterations against PSNR").
+/// (docs/benchmarks.md, "tv: exact x-update").
 inline constexpr int kTotalVariationIterations = 15;
 
 struct DeblurOptions {

@@ -27,7 +27,8 @@
 // al. 2014), solved by half-quadratic splitting with a growing penalty.
 //
 // Solver: over-relaxed ADMM (relaxation 1.8) with splits z_along = D_along x,
-// z_across = D_across x, w = x. The x-update is solved exactly: its matrix, the data term plus
+// z_across = D_across x, w = x. The x-update is solved exactly: its matrix,
+// the data term plus
 // rho_along D_along^T D_along + rho_across D_across^T D_across + rho_box I,
 // is the same for every row (one PSF per channel) and circulant along it, so
 // in each row's FFT it falls apart into one real symmetric tridiagonal system
@@ -98,9 +99,10 @@ struct TotalVariationSettings {
   double weight_across = 32.0;  ///< a_across
   /// TV with weight_per_noise > 0: the ADMM splits' soft threshold (a / rho) in units
   /// of sigma; it sets only how fast ADMM converges, not where. 0.8 with relaxation
-  /// 1.8: 15 iterations within 0.15 dB of 160 from 300 to 10000 e- on the label
-  /// scenes (0.5 and 1.0 were 0.1-0.2 dB slower on the Data Matrix label, which
-  /// converges last; a fixed 0.05 lost 3 dB at 300 e-).
+  /// 1.8: 15 iterations within 0.16 dB of 160 on average from 300 to 10000 e- on the
+  /// label scenes, 0.6 dB on the Data Matrix label, which converges last (picked from
+  /// 0.3-1.2 at 3000 e-: 0.5 was 0.3 dB lower there at 15 iterations, 1.0 on a par
+  /// there but 0.03 dB lower on average; a fixed 0.05 lost 3 dB at 300 e-).
   double threshold_per_noise = 0.8;
   /// TV: a / rho, the soft threshold of the ADMM splits (reflectance gradient).
   /// L0: the first hard threshold; it shrinks as the penalty grows.
