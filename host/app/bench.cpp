@@ -98,13 +98,14 @@ struct CostSeries {
 void write_cost_chart(const std::string& path, const std::string& title, const std::string& x_label,
                       const std::vector<double>& xs,
                       const std::function<bench::SpeedFrame(double)>& frame_at, int repeats) {
+  const std::string tv = "tv " + std::to_string(imaging::kTotalVariationIterations);
   const std::vector<CostSeries> series = {
       {"joint Wiener", joint_wiener_ms, 1, 1, {0.1, 0.25, 0.85}},
       {"joint Wiener", joint_wiener_ms, 2, 1, {0.1, 0.25, 0.85}},
       {"RL 20", richardson_lucy_ms, 1, 5, {0.85, 0.1, 0.1}},
       {"RL 20", richardson_lucy_ms, 2, 5, {0.85, 0.1, 0.1}},
-      {"tv 40", total_variation_ms, 1, 5, {0.1, 0.6, 0.15}},
-      {"tv 40", total_variation_ms, 2, 5, {0.1, 0.6, 0.15}},
+      {tv.c_str(), total_variation_ms, 1, 5, {0.1, 0.6, 0.15}},
+      {tv.c_str(), total_variation_ms, 2, 5, {0.1, 0.6, 0.15}},
   };
   plot::LineChart chart;
   chart.title = title;
@@ -121,8 +122,10 @@ void write_cost_chart(const std::string& path, const std::string& title, const s
     for (std::size_t i = 0; i < series.size(); ++i) {
       const auto& s = series[i];
       chart.series[i].x.push_back(x);
-      chart.series[i].y.push_back(s.time_ms(frame, s.threads, std::max(1, repeats / s.repeats_divisor)));
-      std::fprintf(stderr, "  %g: %s %.2f ms\n", x, chart.series[i].label.c_str(), chart.series[i].y.back());
+      chart.series[i].y.push_back(
+          s.time_ms(frame, s.threads, std::max(1, repeats / s.repeats_divisor)));
+      std::fprintf(stderr, "  %g: %s %.2f ms\n", x, chart.series[i].label.c_str(),
+                   chart.series[i].y.back());
     }
   }
   if (auto error = plot::write_png(chart, path); !error.empty()) throw RuntimeFailure(error);
@@ -155,7 +158,8 @@ void run_speed(const SpeedOptions& options) {
   medians["joint-wiener/1-thread"] = joint_wiener_ms(frame, 1, options.repeats);
   medians["joint-wiener/2-threads"] = joint_wiener_ms(frame, 2, options.repeats);
   medians["rl-20/2-threads"] = richardson_lucy_ms(frame, 2, std::max(3, options.repeats / 5));
-  medians["tv-40/2-threads"] = total_variation_ms(frame, 2, std::max(3, options.repeats / 5));
+  medians["tv-" + std::to_string(imaging::kTotalVariationIterations) + "/2-threads"] =
+      total_variation_ms(frame, 2, std::max(3, options.repeats / 5));
   cv::setNumThreads(2);
   bench::OpenCvWiener baseline(frame);
   medians["opencv-dft-wiener/2-threads"] =
@@ -248,7 +252,8 @@ void add_bench(CLI::App& app) {
   stability_command->callback([stability] {
     std::error_code error;
     std::filesystem::create_directories(stability->out_dir, error);
-    if (error) throw RuntimeFailure("cannot create '" + stability->out_dir + "': " + error.message());
+    if (error)
+      throw RuntimeFailure("cannot create '" + stability->out_dir + "': " + error.message());
     if (const auto problem = bench::run_stability_study(*stability, stdout); !problem.empty())
       throw RuntimeFailure("bench stability: " + problem);
   });

@@ -1,6 +1,8 @@
 // Deblurring speed on a 1920x1080 RGB8 frame, frame in memory to fused grey
 // latent, against the OpenCV way a user would write it (bench::OpenCvWiener,
-// cv::setNumThreads(2)). Medians of repeated runs (Google Benchmark).
+// cv::setNumThreads(2)); and tv on a 700x250 label window on one thread (what
+// a session deblurs when it restores one label's window, not the frame).
+// Medians of repeated runs (Google Benchmark).
 
 #include <benchmark/benchmark.h>
 
@@ -18,10 +20,21 @@ using imaging::Plane;
 
 constexpr int kWidth = 1920;
 constexpr int kHeight = 1080;
+constexpr int kWindowWidth = 700;
+constexpr int kWindowHeight = 250;
+
+bench::SpeedFrame seed_frame(int width, int height) {
+  return bench::make_speed_frame(width, height,
+                                 codes::to_code(*codes::find_library_code("seed-maxmin-1")), 52);
+}
 
 const bench::SpeedFrame& frame() {
-  static const bench::SpeedFrame made = bench::make_speed_frame(
-      kWidth, kHeight, codes::to_code(*codes::find_library_code("seed-maxmin-1")), 52);
+  static const bench::SpeedFrame made = seed_frame(kWidth, kHeight);
+  return made;
+}
+
+const bench::SpeedFrame& window() {
+  static const bench::SpeedFrame made = seed_frame(kWindowWidth, kWindowHeight);
   return made;
 }
 
@@ -71,22 +84,31 @@ void RichardsonLucy20(benchmark::State& state) {
   }
 }
 
-void TotalVariation(benchmark::State& state) {
-  const auto& f = frame();
+/// tv with the default settings on `f`, `state.range(0)` threads.
+void run_total_variation(benchmark::State& state, const bench::SpeedFrame& f) {
+  const int width = f.rgb8.cols, height = f.rgb8.rows;
   imaging::TotalVariationSettings settings;
   settings.iterations = imaging::kTotalVariationIterations;
   settings.wiener_lambda = 1.0 / imaging::kLabelGradientVariance;
-  imaging::TotalVariation tv(f.psfs, kWidth, settings, imaging::PlanEffort::kMeasure);
+  imaging::TotalVariation tv(f.psfs, width, settings, imaging::PlanEffort::kMeasure);
   imaging::RowPool pool(static_cast<int>(state.range(0)));
-  Plane latent(kWidth, kHeight);
+  Plane latent(width, height);
   const auto load = bench::rgb8_row_loader(f);
   const Plane warm_start;  // empty: the joint Wiener start made inside the solver
   for (auto _ : state) {
-    tv.deconvolve(load, kHeight, warm_start, latent, pool);
+    tv.deconvolve(load, height, warm_start, latent, pool);
     benchmark::DoNotOptimize(latent.pixels.data());
   }
   state.counters["iterations"] = settings.iterations;
   state.counters["padded_length"] = tv.padded_length();
+}
+
+void TotalVariation(benchmark::State& state) {
+  run_total_variation(state, frame());
+}
+
+void TotalVariationWindow(benchmark::State& state) {
+  run_total_variation(state, window());
 }
 
 }  // namespace
@@ -118,4 +140,11 @@ BENCHMARK(TotalVariation)
     ->ReportAggregatesOnly(true)
     ->UseRealTime()
     ->Iterations(3);
+BENCHMARK(TotalVariationWindow)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->Repetitions(9)
+    ->ReportAggregatesOnly(true)
+    ->UseRealTime()
+    ->Iterations(10);
 BENCHMARK_MAIN();

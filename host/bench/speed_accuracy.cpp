@@ -126,6 +126,7 @@ int main(int argc, char** argv) {
       {"rl 20", imaging::Method::kRichardsonLucy, 20},
       {"rl 40", imaging::Method::kRichardsonLucy, 40},
       {"tv 10", imaging::Method::kTotalVariation, 10},
+      {"tv 15", imaging::Method::kTotalVariation, 15},
       {"tv 20", imaging::Method::kTotalVariation, 20},
       {"tv 40", imaging::Method::kTotalVariation, 40},
       {"tv 80", imaging::Method::kTotalVariation, 80},

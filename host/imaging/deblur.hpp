@@ -31,9 +31,10 @@ inline constexpr double kLabelGradientVariance = 0.05;
 
 /// \brief Iterations of rl when DeblurOptions::iterations is unset.
 inline constexpr int kRichardsonLucyIterations = 20;
-/// \brief Iterations of tv when DeblurOptions::iterations is unset (converged to
-/// 0.05 dB on the label scenes; 230-260 ms for 1080p RGB on 2 threads).
-inline constexpr int kTotalVariationIterations = 40;
+/// \brief Iterations of tv when DeblurOptions::iterations is unset: the PSNR that 40
+/// iterations of the earlier solver reached on the label scenes, or more
+/// (docs/benchmarks.md, "tv: exact x-update").
+inline constexpr int kTotalVariationIterations = 15;
 
 struct DeblurOptions {
   Method method = Method::kJointWiener;

@@ -11,7 +11,7 @@ namespace {
 struct Step {
   float rho_along, threshold_along;
   float rho_across, threshold_across;
-  float rho_box, tau;
+  float rho_box;
 };
 
 /// Step `k` (1-based) of `settings`: constant for ADMM, growing for L0.
@@ -19,15 +19,12 @@ Step step_of(const TotalVariationSettings& settings, int k) {
   if (settings.prior == EdgePrior::kTotalVariation) {
     const double rho_along = settings.weight_along / settings.threshold_along;
     const double rho_across = settings.weight_across / settings.threshold_across;
-    return {static_cast<float>(rho_along),
-            static_cast<float>(settings.threshold_along),
-            static_cast<float>(rho_across),
-            static_cast<float>(settings.threshold_across),
-            static_cast<float>(settings.box_penalty),
-            static_cast<float>(4.0 * rho_across)};
+    return {static_cast<float>(rho_along), static_cast<float>(settings.threshold_along),
+            static_cast<float>(rho_across), static_cast<float>(settings.threshold_across),
+            static_cast<float>(settings.box_penalty)};
   }
   // Half-quadratic L0: hard threshold sqrt(2 mu / beta), beta from 2 mu / threshold^2 upward.
-  const double growth = std::pow(settings.l0_growth, k - 1);
+  const double growth = std::min(std::pow(settings.l0_growth, k - 1), settings.l0_most_growth);
   const double rho_along =
       2 * settings.weight_along / (settings.threshold_along * settings.threshold_along) * growth;
   const double rho_across =
@@ -36,8 +33,30 @@ Step step_of(const TotalVariationSettings& settings, int k) {
           static_cast<float>(std::sqrt(2 * settings.weight_along / rho_along)),
           static_cast<float>(rho_across),
           static_cast<float>(std::sqrt(2 * settings.weight_across / rho_across)),
-          static_cast<float>(settings.box_penalty),
-          static_cast<float>(4.0 * rho_across)};
+          static_cast<float>(settings.box_penalty)};
+}
+
+/// One relaxed ADMM update of a split of d = D x (Eckstein-Bertsekas over-relaxation):
+/// with z = s + u the split's previous value, v = alpha d + (1 - alpha) z + u,
+/// z <- v - clamp(v, low, high) (soft threshold; the box's clip is clamp itself,
+/// `clip`), u <- v - z, and s <- z - u, the value the next x-update pulls D x to.
+template <bool clip>
+inline void relaxed_split(float d, float& s, float& u, float alpha, float low, float high) {
+  const float v = alpha * d + (1 - alpha) * (s + u) + u;
+  const float clamped = v < low ? low : (v > high ? high : v);  // by value: vectorises
+  const float z = clip ? clamped : v - clamped;
+  u = v - z;
+  s = z - u;
+}
+
+/// L0's half-quadratic split: d where |d| > t, else 0.
+inline float hard_threshold(float d, float t) {
+  return d > t || d < -t ? d : 0.0f;
+}
+
+/// x clipped to [0, 1] (by value, so that the loops vectorise).
+inline float clip_unit(float x) {
+  return x < 0.0f ? 0.0f : (x > 1.0f ? 1.0f : x);
 }
 
 }  // namespace
@@ -50,7 +69,8 @@ TotalVariationSettings l0_settings() {
   settings.weight_across = 8.0;
   settings.threshold_along = 0.3;
   settings.threshold_across = 0.3;
-  settings.l0_growth = 1.25;
+  settings.l0_growth = 1.7;
+  settings.relaxation = 1;  // half-quadratic splitting keeps no duals to relax
   return settings;
 }
 
@@ -92,16 +112,16 @@ TotalVariation::TotalVariation(std::span<const ChannelPsf> channels, int width,
     settings_.threshold_along = settings_.threshold_per_noise * std::sqrt(posterior_variance);
     settings_.threshold_across = settings_.threshold_along;
   }
-  inverse_.resize(bins);
   blend_ = periodic_blend(width, n);
   stride_ = static_cast<std::size_t>(n);
+  spectrum_stride_ = (2 * bins + 15) / 16 * 16;
 }
 
 void TotalVariation::prepare(int height, int threads) {
   const auto n = stride_;
   const auto complex_floats = static_cast<std::size_t>(2 * fft_.bins());
   while (static_cast<int>(workers_.size()) < threads) {
-    Scratch s{{}, {}, AlignedFloats(n), AlignedFloats(n), AlignedFloats(complex_floats)};
+    Scratch s{{}, {}, AlignedFloats(n), AlignedFloats(complex_floats)};
     for (std::size_t c = 0; c < filters_.size(); ++c) {
       s.padded.emplace_back(n);
       s.rows.push_back(s.padded.back().span().first(static_cast<std::size_t>(width_)));
@@ -112,8 +132,12 @@ void TotalVariation::prepare(int height, int threads) {
   height_ = height;
   const auto h = static_cast<std::size_t>(height);
   data_ = AlignedFloats(complex_floats * h);
-  for (AlignedFloats* a : {&x_, &dual_along_, &dual_box_, &partial_, &dual_across_, &across_})
+  for (AlignedFloats* a :
+       {&x_, &dual_along_, &split_along_, &dual_box_, &split_box_, &dual_across_, &split_across_})
     *a = AlignedFloats(n * h);
+  spectra_ = AlignedFloats(spectrum_stride_ * h);
+  pivots_ = AlignedFloats(static_cast<std::size_t>(fft_.bins()) * h);
+  factored_ = {0, 0, 0};
 }
 
 void TotalVariation::load_data(int y, const RowLoader& load, Scratch& s, bool wiener_start) {
@@ -131,72 +155,157 @@ void TotalVariation::load_data(int y, const RowLoader& load, Scratch& s, bool wi
   fft_.inverse(s.spectrum.complex(), s.real.data());
 }
 
-void TotalVariation::finish_row(int y, const float* x_new, Scratch& s, float rho_along,
-                                float threshold_along, float rho_box, float tau, bool zero_duals) {
+void TotalVariation::split_row(int y, float threshold, bool restart) {
   const std::size_t n = stride_;
   const std::size_t at = static_cast<std::size_t>(y) * n;
-  float* __restrict x = x_.data() + at;
+  const float* __restrict x = x_.data() + at;
   float* __restrict dual_along = dual_along_.data() + at;
+  float* __restrict split_along = split_along_.data() + at;
   float* __restrict dual_box = dual_box_.data() + at;
-  float* __restrict partial = partial_.data() + at;
-  float* __restrict split = s.split.data();
-  if (x_new != x) std::copy(x_new, x_new + n, x);
-  const bool admm = settings_.prior == EdgePrior::kTotalVariation;
-  if (zero_duals) {
+  float* __restrict split_box = split_box_.data() + at;
+  const float t = threshold;
+  const std::size_t last = n - 1;  // the along-row difference wraps here (periodic latent row)
+  if (settings_.prior == EdgePrior::kL0Gradient) {
+#pragma omp simd
+    for (std::size_t i = 0; i < last; ++i) {
+      split_along[i] = hard_threshold(x[i + 1] - x[i], t);
+      split_box[i] = clip_unit(x[i]);
+    }
+    split_along[last] = hard_threshold(x[0] - x[last], t);
+    split_box[last] = clip_unit(x[last]);
+    return;
+  }
+  if (restart) {  // no previous split: z = D x, u = 0
     std::fill(dual_along, dual_along + n, 0.0f);
     std::fill(dual_box, dual_box + n, 0.0f);
-  }
-  const float t = threshold_along;
-  // Along the row: z = prox(D x + u); u <- D x + u - z; split = z - u.
-  for (std::size_t i = 0; i < n; ++i) {
-    const float d = (i + 1 < n ? x[i + 1] : x[0]) - x[i];
-    if (admm) {
-      const float v = d + dual_along[i];
-      const float z = v - std::clamp(v, -t, t);
-      dual_along[i] = v - z;
-      split[i] = 2 * z - v;
-    } else {
-      split[i] = std::abs(d) > t ? d : 0.0f;
+#pragma omp simd
+    for (std::size_t i = 0; i < last; ++i) {
+      split_along[i] = x[i + 1] - x[i];
+      split_box[i] = x[i];
     }
+    split_along[last] = x[0] - x[last];
+    split_box[last] = x[last];
   }
-  // partial = rho D^T split + rho_box (w - u_box) + tau x, D^T s [i] = s[i-1] - s[i].
-  for (std::size_t i = 0; i < n; ++i) {
-    const float back = (i > 0 ? split[i - 1] : split[n - 1]) - split[i];
-    float box;
-    if (admm) {
-      const float v = x[i] + dual_box[i];
-      const float w = std::clamp(v, 0.0f, 1.0f);
-      dual_box[i] = v - w;
-      box = 2 * w - v;
-    } else {
-      box = std::clamp(x[i], 0.0f, 1.0f);
-    }
-    partial[i] = rho_along * back + rho_box * box + tau * x[i];
-  }
+  const float alpha = restart ? 1.0f : static_cast<float>(settings_.relaxation);
+#pragma omp simd
+  for (std::size_t i = 0; i < last; ++i)
+    relaxed_split<false>(x[i + 1] - x[i], split_along[i], dual_along[i], alpha, -t, t);
+  relaxed_split<false>(x[0] - x[last], split_along[last], dual_along[last], alpha, -t, t);
+#pragma omp simd
+  for (std::size_t i = 0; i < n; ++i)
+    relaxed_split<true>(x[i], split_box[i], dual_box[i], alpha, 0.0f, 1.0f);
 }
 
-void TotalVariation::split_across(int edge, float threshold, bool zero_duals) {
+void TotalVariation::split_edge(int edge, float threshold, bool restart) {
   const std::size_t n = stride_;
   const std::size_t at = static_cast<std::size_t>(edge) * n;
   const float* __restrict upper = x_.data() + at;
   const float* __restrict lower = upper + n;
   float* __restrict dual = dual_across_.data() + at;
-  float* __restrict across = across_.data() + at;
+  float* __restrict split = split_across_.data() + at;
   const float t = threshold;
-  if (settings_.prior == EdgePrior::kTotalVariation) {
-    if (zero_duals) std::fill(dual, dual + n, 0.0f);
-    // q = D x - z + u_new with z = shrink(D x + u), u_new = D x + u - z.
-    for (std::size_t i = 0; i < n; ++i) {
-      const float d = lower[i] - upper[i];
-      const float v = d + dual[i];
-      const float z = v - std::clamp(v, -t, t);
-      dual[i] = v - z;
-      across[i] = d + v - 2 * z;
+  if (settings_.prior == EdgePrior::kL0Gradient) {
+#pragma omp simd
+    for (std::size_t i = 0; i < n; ++i) split[i] = hard_threshold(lower[i] - upper[i], t);
+    return;
+  }
+  if (restart) {
+    std::fill(dual, dual + n, 0.0f);
+#pragma omp simd
+    for (std::size_t i = 0; i < n; ++i) split[i] = lower[i] - upper[i];
+  }
+  const float alpha = restart ? 1.0f : static_cast<float>(settings_.relaxation);
+#pragma omp simd
+  for (std::size_t i = 0; i < n; ++i)
+    relaxed_split<false>(lower[i] - upper[i], split[i], dual[i], alpha, -t, t);
+}
+
+void TotalVariation::transform_row(int y, Scratch& s, const Penalties& rho) {
+  const std::size_t n = stride_;
+  const auto bins = static_cast<std::size_t>(fft_.bins());
+  const std::size_t at = static_cast<std::size_t>(y) * n;
+  float* __restrict real = s.real.data();
+  const float* __restrict along = split_along_.data() + at;
+  const float* __restrict box = split_box_.data() + at;
+  // The x-update's right-hand side beside the data: rho_along D_along^T s_along +
+  // rho_box s_box + rho_across D_across^T s_across, D^T s [i] = s[i-1] - s[i] (wrapping
+  // along the row, none beyond the first and last row across).
+  real[0] = rho.along * (along[n - 1] - along[0]) + rho.box * box[0];
+#pragma omp simd
+  for (std::size_t i = 1; i < n; ++i)
+    real[i] = rho.along * (along[i - 1] - along[i]) + rho.box * box[i];
+  if (y > 0) {
+    const float* __restrict above = split_across_.data() + at - n;
+#pragma omp simd
+    for (std::size_t i = 0; i < n; ++i) real[i] += rho.across * above[i];
+  }
+  if (y + 1 < height_) {
+    const float* __restrict below = split_across_.data() + at;
+#pragma omp simd
+    for (std::size_t i = 0; i < n; ++i) real[i] -= rho.across * below[i];
+  }
+  float* __restrict spectrum = spectra_.data() + static_cast<std::size_t>(y) * spectrum_stride_;
+  fft_.forward(real, reinterpret_cast<std::complex<float>*>(spectrum));
+  // Plus the data part, over N (the inverse FFT is unnormalised).
+  const float* __restrict data = data_.data() + static_cast<std::size_t>(y) * 2 * bins;
+  const float scale = 1.0f / static_cast<float>(n);
+  for (std::size_t j = 0; j < 2 * bins; ++j) spectrum[j] = (spectrum[j] + data[j]) * scale;
+}
+
+void TotalVariation::factor_across(const Penalties& rho) {
+  const std::size_t n = stride_;
+  const auto bins = static_cast<std::size_t>(fft_.bins());
+  // Bin j's system: (d_j + rho_across k_y) x_y - rho_across (x_{y-1} + x_{y+1}) = r_y, with
+  // d_j = A_j + rho_along P_j + rho_box and k_y the row's neighbour count. Pivots:
+  // p_0 = d_j + rho k_0, p_y = d_j + rho k_y - rho^2 / p_{y-1}; all >= d_j > 0.
+  std::vector<double> diagonal(bins), pivot(bins);
+  for (std::size_t j = 0; j < bins; ++j) {
+    const double w = 2.0 * std::numbers::pi * static_cast<double>(j) / static_cast<double>(n);
+    diagonal[j] = data_power_[j] + rho.along * (2.0 - 2.0 * std::cos(w)) + rho.box;
+  }
+  const double across = rho.across;
+  for (int y = 0; y < height_; ++y) {
+    const double neighbours = (y > 0 ? 1.0 : 0.0) + (y + 1 < height_ ? 1.0 : 0.0);
+    float* __restrict inverse = pivots_.data() + static_cast<std::size_t>(y) * bins;
+    for (std::size_t j = 0; j < bins; ++j) {
+      pivot[j] = diagonal[j] + across * neighbours - (y > 0 ? across * across / pivot[j] : 0.0);
+      inverse[j] = static_cast<float>(1.0 / pivot[j]);
     }
-  } else {
-    for (std::size_t i = 0; i < n; ++i) {
-      const float d = lower[i] - upper[i];
-      across[i] = std::abs(d) > t ? 0.0f : d;
+  }
+  factored_ = rho;
+}
+
+void TotalVariation::solve_across(int first_bin, int last_bin, float rho_across) {
+  const auto bins = static_cast<std::size_t>(fft_.bins());
+  const std::size_t stride = spectrum_stride_;
+  const auto from = static_cast<std::size_t>(first_bin), to = static_cast<std::size_t>(last_bin);
+  const float rho = rho_across;
+  // Down: r_y += rho / p_{y-1} r_{y-1} (L^{-1}).
+  for (int y = 1; y < height_; ++y) {
+    const float* __restrict previous = spectra_.data() + static_cast<std::size_t>(y - 1) * stride;
+    float* __restrict row = spectra_.data() + static_cast<std::size_t>(y) * stride;
+    const float* __restrict inverse = pivots_.data() + static_cast<std::size_t>(y - 1) * bins;
+    for (std::size_t j = from; j < to; ++j) {
+      const float m = rho * inverse[j];
+      row[2 * j] += m * previous[2 * j];
+      row[2 * j + 1] += m * previous[2 * j + 1];
+    }
+  }
+  // Up: x_y = (r_y + rho x_{y+1}) / p_y.
+  for (int y = height_ - 1; y >= 0; --y) {
+    float* __restrict row = spectra_.data() + static_cast<std::size_t>(y) * stride;
+    const float* __restrict inverse = pivots_.data() + static_cast<std::size_t>(y) * bins;
+    if (y + 1 == height_) {
+      for (std::size_t j = from; j < to; ++j) {
+        row[2 * j] *= inverse[j];
+        row[2 * j + 1] *= inverse[j];
+      }
+      continue;
+    }
+    const float* __restrict next = row + stride;
+    for (std::size_t j = from; j < to; ++j) {
+      row[2 * j] = (row[2 * j] + rho * next[2 * j]) * inverse[j];
+      row[2 * j + 1] = (row[2 * j + 1] + rho * next[2 * j + 1]) * inverse[j];
     }
   }
 }
@@ -212,55 +321,41 @@ void TotalVariation::deconvolve(const RowLoader& load, int height, const Plane& 
     Scratch& s = workers_[static_cast<std::size_t>(worker)];
     for (int y = from; y < to; ++y) {
       load_data(y, load, s, own_start);
-      if (!own_start) {
+      float* x = x_.data() + static_cast<std::size_t>(y) * n;
+      if (own_start) {
+        std::copy(s.real.data(), s.real.data() + n, x);
+      } else {
         const auto row = warm_start.row(y);
-        std::copy(row.begin(), row.end(), s.real.data());
-        extend_row_periodically(s.real.span(), width_, blend_);
+        std::copy(row.begin(), row.end(), x);
+        extend_row_periodically({x, n}, width_, blend_);
       }
-      finish_row(y, s.real.data(), s, first.rho_along, first.threshold_along, first.rho_box,
-                 first.tau, true);
+      split_row(y, first.threshold_along, true);
     }
   });
+  constexpr int kBinsPerShare = 16;  // the sweeps' unit of work: 128 bytes of each spectrum row
+  const int shares = (static_cast<int>(bins) + kBinsPerShare - 1) / kBinsPerShare;
   for (int k = 1; k <= settings_.iterations; ++k) {
     const Step now = step_of(settings_, k);
     const Step next = step_of(settings_, k + 1);
-    for (std::size_t j = 0; j < bins; ++j) {
-      const double w = 2.0 * std::numbers::pi * static_cast<double>(j) / static_cast<double>(n);
-      const double denominator =
-          data_power_[j] + now.rho_along * (2.0 - 2.0 * std::cos(w)) + now.rho_box + now.tau;
-      inverse_[j] = static_cast<float>(1.0 / (denominator * static_cast<double>(n)));
-    }
+    const Penalties rho{now.rho_along, now.rho_across, now.rho_box};
+    if (!(rho == factored_)) factor_across(rho);
     pool.run(height - 1, [&](int from, int to, int) {
-      for (int edge = from; edge < to; ++edge) split_across(edge, now.threshold_across, k == 1);
+      for (int edge = from; edge < to; ++edge) split_edge(edge, now.threshold_across, k == 1);
     });
     pool.run(height, [&](int from, int to, int worker) {
       Scratch& s = workers_[static_cast<std::size_t>(worker)];
-      float* __restrict real = s.real.data();
-      const float rho = now.rho_across;
+      for (int y = from; y < to; ++y) transform_row(y, s, rho);
+    });
+    pool.run(shares, [&](int from, int to, int) {
+      solve_across(from * kBinsPerShare, std::min(static_cast<int>(bins), to * kBinsPerShare),
+                   now.rho_across);
+    });
+    pool.run(height, [&](int from, int to, int) {
       for (int y = from; y < to; ++y) {
-        const std::size_t at = static_cast<std::size_t>(y) * n;
-        const float* __restrict partial = partial_.data() + at;
-        const float* __restrict above = y > 0 ? across_.data() + at - n : nullptr;
-        const float* __restrict below = y + 1 < height ? across_.data() + at : nullptr;
-        // r = partial - rho D_across^T q, D^T q [y] = q[y-1] - q[y].
-        if (above && below)
-          for (std::size_t i = 0; i < n; ++i) real[i] = partial[i] - rho * (above[i] - below[i]);
-        else if (above)
-          for (std::size_t i = 0; i < n; ++i) real[i] = partial[i] - rho * above[i];
-        else if (below)
-          for (std::size_t i = 0; i < n; ++i) real[i] = partial[i] + rho * below[i];
-        else
-          std::copy(partial, partial + n, real);
-        fft_.forward(real, s.spectrum.complex());
-        float* __restrict spectrum = s.spectrum.data();
-        const float* __restrict data = data_.data() + static_cast<std::size_t>(y) * 2 * bins;
-        const float* __restrict inverse = inverse_.data();
-        for (std::size_t j = 0; j < bins; ++j) {
-          spectrum[2 * j] = (spectrum[2 * j] + data[2 * j]) * inverse[j];
-          spectrum[2 * j + 1] = (spectrum[2 * j + 1] + data[2 * j + 1]) * inverse[j];
-        }
-        fft_.inverse(s.spectrum.complex(), real);
-        finish_row(y, real, s, next.rho_along, next.threshold_along, next.rho_box, next.tau, false);
+        auto* spectrum = reinterpret_cast<std::complex<float>*>(
+            spectra_.data() + static_cast<std::size_t>(y) * spectrum_stride_);
+        fft_.inverse(spectrum, x_.data() + static_cast<std::size_t>(y) * n);
+        split_row(y, next.threshold_along, false);
       }
     });
   }

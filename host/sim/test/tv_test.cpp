@@ -53,6 +53,16 @@ Plane code128_label() {
   return scene.ok() ? scene.value() : Plane(spec.width, spec.height, 0.5f);
 }
 
+/// A Data Matrix label: edges across the rows as well as along them (tv converges last here).
+Plane data_matrix_label() {
+  SceneSpec spec;
+  spec.kind = SceneKind::kDataMatrix;
+  spec.content = "LOT-2611";
+  const auto scene = render_scene(spec);
+  EXPECT_TRUE(scene.ok()) << (scene.ok() ? "" : scene.error());
+  return scene.ok() ? scene.value() : Plane(spec.width, spec.height, 0.5f);
+}
+
 Plane deblurred(const Plane& scene, const CaptureModel& m, const DeblurOptions& options) {
   const auto frame = imaging::dn_to_electrons(record_frame(expected_electrons(scene, m), m, 1), m);
   const auto result = imaging::deblur(frame, m, options);
@@ -160,6 +170,28 @@ TEST(TotalVariation, MoreIterationsDoNotDiverge) {
   const double four_times = score(scene, deblurred(scene, m, tv_options(4 * iterations)), m);
   EXPECT_GT(twice, once - 0.3);
   EXPECT_GT(four_times, twice - 0.3);
+}
+
+// The default iterations stop close to the minimum even on the label that converges
+// last: here 15 iterations were 0.59 dB below 160 (on tv_iterations' scenes 0.6 dB
+// on the Data Matrix, 0.0-0.1 dB on the barcodes, as 40 of the earlier solver were).
+TEST(TotalVariation, DefaultIterationsLandNearTheMinimumOnADataMatrix) {
+  const Plane scene = data_matrix_label();
+  const CaptureModel m = label_capture();
+  const double standard = score(scene, deblurred(scene, m, tv_options()), m);
+  const double converged = score(scene, deblurred(scene, m, tv_options(160)), m);
+  EXPECT_GT(standard, converged - 0.8) << "160 iterations: " << converged << " dB";
+}
+
+// Rows are split between the threads, and so are the frequency bins of the solve
+// across the rows: every row and every bin is computed the same way on any thread.
+TEST(TotalVariation, ThreadCountDoesNotChangeTheResult) {
+  const Plane scene = data_matrix_label();
+  const CaptureModel m = label_capture();
+  DeblurOptions one = tv_options(), three = tv_options();
+  one.threads = 1;
+  three.threads = 3;
+  EXPECT_EQ(deblurred(scene, m, one).pixels, deblurred(scene, m, three).pixels);
 }
 
 }  // namespace
