@@ -363,7 +363,8 @@ int main(int argc, char** argv) {
       std::cerr << "session_bench: " << c.name << ": " << outcome.error << "\n";
       return 1;
     }
-    runs.push_back({c.name, outcome.summary, stage_medians(out / "session.jsonl")});
+    runs.push_back(
+        {c.name, outcome.summary, stage_medians(fs::path(outcome.folder) / "session.jsonl")});
   }
   std::cout << "| input | frames in | processed | dropped | seconds | fps out | latency p50 ms | "
                "p99 ms |\n"
