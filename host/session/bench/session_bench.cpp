@@ -7,6 +7,7 @@
 //   session_bench [--frames N] [--width W --height H] [--csv FILE] [--stages-only]
 //                 [--stage-repeats N]   (the stage table's runs, default 9; more for `perf`)
 //                 [--cascade]           (only the cascade against tv on every frame, dim light)
+//                 [--live-view]         (only the live view's cost: live_view_runs.hpp)
 
 #include <algorithm>
 #include <chrono>
@@ -36,6 +37,7 @@
 #include "reader/code_measure.hpp"
 #include "reader/code_reading.hpp"
 #include "reader/reader_options.hpp"
+#include "session/bench/live_view_runs.hpp"
 #include "session/read_record.hpp"
 #include "session/session.hpp"
 
@@ -274,6 +276,53 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
   return out;
 }
 
+/// The live view's cost: each input without and with it, alternating, three times; medians.
+int live_view_table(int width, int height, int frames, const fs::path& out) {
+  const auto unit = bench::live_view_update_costs();
+  std::cout << "live view, results thread: " << unit["update_us_per_frame"]
+            << " us per frame (median); one state for the page: " << unit["state_us"]
+            << " us (median)\n\n";
+  std::cout
+      << "| input | live view | fps out | dropped | latency p50 ms | process CPU ms per frame | "
+         "states per s | pictures per s | picture CPU ms |\n"
+      << "|---|---|---|---|---|---|---|---|---|\n";
+  const struct {
+    const char* name;
+    bool paced;
+    int period_us;
+  } cases[] = {{"as fast as possible", false, 16667}, {"60 fps input", true, 16667}};
+  for (const auto& c : cases) {
+    std::map<bool, std::map<std::string, std::vector<double>>> samples;
+    for (int repeat = 0; repeat < 3; ++repeat)
+      for (const bool live : {false, true}) {
+        fs::remove_all(out);
+        const auto run = bench::run_live_view_case(
+            bench_config(width, height, frames, c.paced, c.period_us, out), live);
+        if (!run.error.empty()) {
+          std::cerr << "session_bench: " << c.name << ": " << run.error << "\n";
+          return 1;
+        }
+        auto& m = samples[live];
+        m["fps"].push_back(run.summary["fps"].get<double>());
+        m["dropped"].push_back(run.summary["frames_dropped"].get<double>());
+        m["p50"].push_back(run.summary["latency_ms_p50"].get<double>());
+        m["cpu"].push_back(run.process_cpu_ms_per_frame);
+        m["states"].push_back(run.states_per_s);
+        m["pictures"].push_back(run.pictures_per_s);
+        m["picture_cpu"].push_back(run.picture_cpu_ms);
+      }
+    for (const bool live : {false, true}) {
+      auto& m = samples[live];
+      std::cout << "| " << c.name << " | " << (live ? "on" : "off") << " | " << median(m["fps"])
+                << " | " << median(m["dropped"]) << " | " << median(m["p50"]) << " | "
+                << median(m["cpu"]) << " | " << median(m["states"]) << " | "
+                << median(m["pictures"]) << " | " << median(m["picture_cpu"]) << " |\n";
+    }
+  }
+  fs::remove_all(out);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -282,6 +331,7 @@ int main(int argc, char** argv) {
   bool stages_only = false;
   int stage_repeats = 9;
   bool cascade_only = false;
+  bool live_view = false;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     auto next = [&]() -> std::string {
@@ -305,6 +355,8 @@ int main(int argc, char** argv) {
       stage_repeats = std::atoi(next().c_str());
     else if (arg == "--cascade")
       cascade_only = true;
+    else if (arg == "--live-view")
+      live_view = true;
     else {
       std::cerr << "session_bench: unknown argument '" << arg << "'\n";
       return 2;
@@ -345,6 +397,7 @@ int main(int argc, char** argv) {
                  "alone): "
               << it->second << " ms\n\n";
   if (stages_only) return 0;
+  if (live_view) return live_view_table(width, height, frames, out);
 
   std::vector<Run> runs;
   const struct {
