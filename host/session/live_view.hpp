@@ -71,6 +71,10 @@ class LiveView {
   std::string folder() const;
   /// \brief The latest pictures (null before the first).
   std::shared_ptr<const LivePicture> picture() const { return pictures_.latest(); }
+  /// \brief The pictures of frame `sequence`, while they are among the last few (else null).
+  std::shared_ptr<const LivePicture> picture_of(std::uint64_t sequence) const {
+    return pictures_.of_frame(sequence);
+  }
 
  private:
   mutable std::mutex mutex_;

@@ -22,11 +22,12 @@ h2 { font-size: 1.05em; margin: 1.2em 0 0.4em 0; }
           min-width: 8em; }
 .figure .value { font-size: 1.4em; font-weight: bold; }
 .figure .label { font-size: 0.8em; color: #666; }
-.pictures { display: flex; flex-wrap: wrap; gap: 1em; }
-.picture { position: relative; }
-.picture img { display: block; max-width: 48vw; background: #000; }
-.picture svg { position: absolute; left: 0; top: 0; width: 100%; height: 100%; }
-.picture .caption { font-size: 0.85em; color: #555; }
+.pictures { display: grid; grid-template-columns: 1fr 1fr; gap: 1em; max-width: 1400px; }
+.frame { position: relative; }
+.frame img { display: block; width: 100%; background: #000; }
+.frame img:not([src]) { visibility: hidden; }
+.frame svg { position: absolute; left: 0; top: 0; width: 100%; height: 100%; }
+.caption { font-size: 0.85em; color: #555; }
 polygon { fill: none; stroke: #0f0; stroke-width: 3; vector-effect: non-scaling-stroke; }
 text { fill: #0f0; font-size: 14px; paint-order: stroke; stroke: #000; stroke-width: 3px; }
 table { border-collapse: collapse; font-size: 0.9em; background: #fff; }
@@ -66,10 +67,10 @@ footer { margin-top: 1.5em; font-size: 0.8em; color: #777; }
 
 <h2>Latest frame</h2>
 <div class="pictures">
-  <div class="picture"><img id="captured" alt="latest frame as captured">
+  <div><div class="frame"><img id="captured" alt="latest frame as captured"></div>
     <div class="caption">as captured</div></div>
-  <div class="picture"><img id="fused" alt="latest frame fused">
-    <svg id="overlay" preserveAspectRatio="none"></svg>
+  <div><div class="frame"><img id="fused" alt="latest frame fused">
+    <svg id="overlay" preserveAspectRatio="none"></svg></div>
     <div class="caption">fused, with the codes read</div></div>
 </div>
 <div class="caption" id="picture-caption">no frame yet</div>
@@ -175,7 +176,9 @@ function showPicture(p) {
 function showFlags(s) {
   const body = $("flags");
   body.replaceChildren();
-  for (const [flag, count] of Object.entries(s.flags)) {
+  const flags = Object.entries(s.flags);
+  if (flags.length === 0) flags.push(["none", 0]);
+  for (const [flag, count] of flags) {
     const row = document.createElement("tr");
     cell(row, flag);
     cell(row, count);

@@ -49,7 +49,14 @@ void LivePictures::encode(capture::Frame frame, imaging::Plane latent, nlohmann:
 
 std::shared_ptr<const LivePicture> LivePictures::latest() const {
   std::lock_guard lock(mutex_);
-  return latest_;
+  return kept_.empty() ? nullptr : kept_.back();
+}
+
+std::shared_ptr<const LivePicture> LivePictures::of_frame(std::uint64_t sequence) const {
+  std::lock_guard lock(mutex_);
+  for (const auto& picture : kept_)
+    if (picture->sequence == sequence) return picture;
+  return nullptr;
 }
 
 std::uint64_t LivePictures::encoded() const {
@@ -94,7 +101,8 @@ void LivePictures::run() {
     lock.lock();
     encode_cpu_ms_ += cpu_ms;
     if (picture) {
-      latest_ = std::move(picture);
+      kept_.push_back(std::move(picture));
+      if (kept_.size() > kKept) kept_.pop_front();
       ++encoded_;
     }
     busy_ = false;

@@ -11,6 +11,7 @@
 
 #include <condition_variable>
 #include <cstdint>
+#include <deque>
 #include <memory>
 #include <mutex>
 #include <optional>
@@ -48,6 +49,10 @@ class LivePictures {
   void encode(capture::Frame frame, imaging::Plane latent, nlohmann::json about);
   /// \brief The latest pictures (null before the first).
   std::shared_ptr<const LivePicture> latest() const;
+  /// \brief The pictures of frame `sequence` while they are among the last
+  /// kKept (a page that read the state asks for the pictures it describes), else null.
+  std::shared_ptr<const LivePicture> of_frame(std::uint64_t sequence) const;
+  static constexpr std::size_t kKept = 3;
   /// \brief Waits until idle (tests, the end of a session).
   void wait_idle() const;
   /// \brief Pictures encoded so far, and the picture thread's CPU time on them (ms).
@@ -68,7 +73,7 @@ class LivePictures {
   std::optional<Job> pending_;
   bool busy_ = false;
   bool stopping_ = false;
-  std::shared_ptr<const LivePicture> latest_;
+  std::deque<std::shared_ptr<const LivePicture>> kept_;  ///< the last kKept, newest last
   std::uint64_t encoded_ = 0;
   double encode_cpu_ms_ = 0;
   std::thread thread_;  ///< last: started once the rest is made

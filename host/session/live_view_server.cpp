@@ -1,8 +1,8 @@
 #include "session/live_view_server.hpp"
 
 #include <arpa/inet.h>
-#include <sys/socket.h>
 #include <sys/resource.h>
+#include <sys/socket.h>
 #include <unistd.h>
 
 #include <httplib.h>
@@ -141,10 +141,18 @@ LiveViewServer::LiveViewServer(const LiveView& view)
   });
   s.Get(R"(/frame/(captured|fused)\.png)", [this](const httplib::Request& req,
                                                   httplib::Response& res) {
-    const auto picture = view_.picture();
+    // ?frame=N: the pictures the page's state describes (the codes drawn over them).
+    std::shared_ptr<const LivePicture> picture;
+    if (!req.has_param("frame")) {
+      picture = view_.picture();
+    } else if (const std::string n = req.get_param_value("frame");
+               !n.empty() && n.size() <= 19 &&
+               n.find_first_not_of("0123456789") == std::string::npos) {
+      picture = view_.picture_of(std::stoull(n));
+    }
     if (!picture) {
       res.status = 404;
-      res.set_content("no frame yet\n", "text/plain");
+      res.set_content("no such picture (yet, or any longer)\n", "text/plain");
       return;
     }
     const auto& png = req.matches[1] == "captured" ? picture->captured_png : picture->fused_png;

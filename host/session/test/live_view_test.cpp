@@ -176,6 +176,22 @@ TEST(LiveView, PicturesAreTakenAtMostOncePerIntervalAndEncodedOffThePath) {
   EXPECT_EQ(view.state()["picture"]["sequence"], 7);
 }
 
+TEST(LivePictures, TheLastThreeAreKeptForThePageToAskBySequence) {
+  LivePictures pictures(64);
+  for (std::uint64_t sequence = 1; sequence <= 4; ++sequence) {
+    FrameOutcome f = frame_with_pixels(sequence, 100, 40);
+    pictures.encode(std::move(f.frame), std::move(f.latent), {});
+    pictures.wait_idle();
+  }
+  EXPECT_EQ(pictures.encoded(), 4u);
+  EXPECT_EQ(pictures.latest()->sequence, 4u);
+  EXPECT_FALSE(pictures.of_frame(1));
+  for (std::uint64_t sequence = 2; sequence <= 4; ++sequence) {
+    ASSERT_TRUE(pictures.of_frame(sequence));
+    EXPECT_EQ(pictures.of_frame(sequence)->sequence, sequence);
+  }
+}
+
 TEST(LiveViewAddress, ParsesAddressPortAndOff) {
   auto off = parse_http_address("off");
   ASSERT_TRUE(off.ok());
@@ -315,6 +331,9 @@ TEST(LiveViewServer, ServesThePageStateMetricsPicturesAndFiles) {
     EXPECT_EQ(png->get_header_value("Content-Type"), "image/png");
     EXPECT_EQ(png->body.substr(1, 3), "PNG") << path;
   }
+  auto gone = client.Get("/frame/fused.png?frame=4");  // not among the last pictures
+  ASSERT_TRUE(gone);
+  EXPECT_EQ(gone->status, 404);
   auto summary = client.Get("/files/summary.json");
   ASSERT_TRUE(summary);
   EXPECT_EQ(summary->status, 200);
