@@ -9,8 +9,8 @@
 
 namespace flutterscan::session {
 
-Preview make_preview(std::uint64_t sequence, const imaging::Image& dn, const imaging::Plane& fused,
-                     int max_width) {
+Preview make_preview(std::uint64_t sequence, const imaging::Image& dn,
+                     const imaging::Plane& fused) {
   Preview p;
   p.sequence = sequence;
   // Display only: the brightest sample maps to white.
@@ -19,7 +19,7 @@ Preview make_preview(std::uint64_t sequence, const imaging::Image& dn, const ima
     for (float v : plane.pixels) brightest = std::max(brightest, v);
   const double scale = 255.0 / brightest;
   const int width = dn.width(), height = dn.height();
-  const int out_width = std::min(width, max_width);
+  const int out_width = std::min(width, 960);
   const double shrink = static_cast<double>(out_width) / width;
   cv::Mat before;
   if (dn.channel_count() == 3) {

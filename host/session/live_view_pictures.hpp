@@ -3,9 +3,10 @@
 // as captured and fused, side by side, with the codes read on it. The results
 // thread hands a frame over only when the picture thread is idle and the last
 // pictures are old enough (LiveView decides: a few a second, never per frame);
-// the frame's DN planes are made again and both pictures encoded as PNG here,
-// on this class's own thread at lowered priority, off the workers' and the
-// results thread's path.
+// here, on this class's own thread at lowered priority, off the workers' and
+// the results thread's path, the frame is thinned to every n-th pixel (at most
+// max_width wide), its DN planes made again, the latent area-averaged to the
+// same size, and both encoded as PNG (frame_preview.hpp).
 
 #include <nlohmann/json.hpp>
 

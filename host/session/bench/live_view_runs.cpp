@@ -1,12 +1,11 @@
 #include "session/bench/live_view_runs.hpp"
 
 #include <httplib.h>
-#include <sys/resource.h>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <ctime>
+#include <optional>
 #include <thread>
 #include <vector>
 
@@ -18,47 +17,39 @@ namespace flutterscan::bench {
 
 namespace {
 
-double process_cpu_ms() {
-  rusage u{};
-  getrusage(RUSAGE_SELF, &u);
-  return static_cast<double>(u.ru_utime.tv_sec + u.ru_stime.tv_sec) * 1e3 +
-         static_cast<double>(u.ru_utime.tv_usec + u.ru_stime.tv_usec) * 1e-3;
-}
-
-double thread_cpu_ms() {
-  timespec t{};
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) * 1e3 + static_cast<double>(t.tv_nsec) * 1e-6;
-}
-
 double median(std::vector<double> v) {
   std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(v.size() / 2), v.end());
   return v[v.size() / 2];
 }
 
-/// Polls the live view on `port` as the page does until `done`; counts what it got.
+/// Polls the live view on `port` as the page does until `done`; counts what it
+/// got while the session was armed (its frames streaming), and for how long.
 struct PageClient {
   std::uint64_t states = 0, pictures = 0;
-  double cpu_ms = 0;
+  double armed_s = 0;
   void run(int port, const std::atomic<bool>& done) {
-    const double start = thread_cpu_ms();
     httplib::Client client("127.0.0.1", port);
     std::int64_t shown = -1;
+    std::optional<std::chrono::steady_clock::time_point> first;
     while (!done) {
       if (auto r = client.Get("/state.json"); r && r->status == 200) {
-        ++states;
         const auto s = nlohmann::json::parse(r->body, nullptr, false);
-        if (!s.is_discarded() && s["picture"].is_object() &&
-            s["picture"]["sequence"].get<std::int64_t>() != shown) {
-          shown = s["picture"]["sequence"].get<std::int64_t>();
-          client.Get("/frame/captured.png");
-          client.Get("/frame/fused.png");
-          ++pictures;
+        if (!s.is_discarded() && s["state"] == "armed") {
+          const auto now = std::chrono::steady_clock::now();
+          if (!first) first = now;
+          armed_s = std::chrono::duration<double>(now - *first).count();
+          ++states;
+          if (s["picture"].is_object() && s["picture"]["sequence"].get<std::int64_t>() != shown) {
+            shown = s["picture"]["sequence"].get<std::int64_t>();
+            const std::string query = "?frame=" + std::to_string(shown);
+            client.Get("/frame/captured.png" + query);
+            client.Get("/frame/fused.png" + query);
+            ++pictures;
+          }
         }
       }
       std::this_thread::sleep_for(std::chrono::milliseconds(250));
     }
-    cpu_ms = thread_cpu_ms() - start;
   }
 };
 
@@ -81,21 +72,22 @@ LiveViewRun run_live_view_case(const session::SessionConfig& config, bool live) 
     client = std::thread([&] { page.run(server.port(), done); });
   }
   std::atomic<bool> stop{false};
-  const double cpu_start = process_cpu_ms();
   const auto outcome = session::run_session(config, stop, hooks);
-  const double cpu_ms = process_cpu_ms() - cpu_start;
   done = true;
   if (client.joinable()) client.join();
   run.error = outcome.error;
   run.summary = outcome.summary;
-  const double frames = outcome.summary.value("frames_processed", 0.0);
-  const double seconds = outcome.summary.value("duration_s", 0.0);
-  run.process_cpu_ms_per_frame = frames > 0 ? (cpu_ms - page.cpu_ms) / frames : 0;
-  if (seconds > 0) {
-    run.states_per_s = static_cast<double>(page.states) / seconds;
-    run.pictures_per_s = static_cast<double>(page.pictures) / seconds;
+  if (page.armed_s > 0) {
+    // n answers span n - 1 intervals.
+    run.states_per_s = static_cast<double>(page.states - 1) / page.armed_s;
+    run.pictures_per_s = static_cast<double>(page.pictures) / page.armed_s;
   }
-  if (live) run.picture_cpu_ms = view.state()["live_view"]["picture_cpu_ms_mean"].get<double>();
+  if (live) {
+    const auto s = view.state();
+    const double seconds = outcome.summary.value("duration_s", 0.0);
+    if (seconds > 0) run.encoded_per_s = s["live_view"]["pictures"].get<double>() / seconds;
+    run.picture_cpu_ms = s["live_view"]["picture_cpu_ms_mean"].get<double>();
+  }
   return run;
 }
 

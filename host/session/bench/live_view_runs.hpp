@@ -3,8 +3,8 @@
 // pipeline. The same session run without and with it, a client polling it as
 // the page does (state four times a second, both pictures each time a newer
 // frame was encoded) on its own thread; and the live view's own work timed
-// apart: a picture on its thread, the results thread's per-frame update, one
-// state for the page.
+// apart: a picture on its thread (CPU time), the results thread's per-frame
+// update, one state for the page.
 
 #include <nlohmann/json.hpp>
 
@@ -16,10 +16,10 @@ namespace flutterscan::bench {
 
 struct LiveViewRun {
   nlohmann::json summary;
-  double process_cpu_ms_per_frame = 0;  ///< the whole process's CPU time, less the client's
-  double states_per_s = 0;              ///< state.json answers the client had, per second
-  double pictures_per_s = 0;            ///< newer pictures the client fetched, per second
-  double picture_cpu_ms = 0;            ///< the picture thread's CPU time per picture
+  double states_per_s = 0;    ///< state.json answers while armed, per second
+  double pictures_per_s = 0;  ///< newer pictures the client fetched while armed, per second
+  double encoded_per_s = 0;   ///< pictures the live view encoded, per second of the session
+  double picture_cpu_ms = 0;  ///< the picture thread's CPU time per picture
   std::string error;
 };
 

@@ -156,6 +156,24 @@ FrameOutcome frame_with_pixels(std::uint64_t sequence, int width, int height) {
   return f;
 }
 
+/// The width in a PNG's header (IHDR, big-endian at byte 16).
+int png_width(const std::vector<std::uint8_t>& png) {
+  if (png.size() < 24) return -1;
+  return (png[16] << 24) | (png[17] << 16) | (png[18] << 8) | png[19];
+}
+
+TEST(LivePictures, ABayerMosaicIsThinnedByWholeCells) {
+  LivePictures pictures(640);
+  FrameOutcome f = frame_with_pixels(3, 1280, 40);
+  f.frame.format.pixel_format = capture::PixelFormat::kBayerRggb8;
+  pictures.encode(std::move(f.frame), std::move(f.latent), {});
+  pictures.wait_idle();
+  ASSERT_TRUE(pictures.latest());
+  EXPECT_EQ(png_width(pictures.latest()->captured_png), 640);  // 2 of every 4 columns
+  EXPECT_EQ(png_width(pictures.latest()->fused_png), 640);
+  EXPECT_EQ(pictures.latest()->width, 1280);  // the codes' corners stay in the frame's pixels
+}
+
 TEST(LiveView, PicturesAreTakenAtMostOncePerIntervalAndEncodedOffThePath) {
   LiveView view(60'000);  // one picture a minute
   FrameOutcome first = frame_with_pixels(7, 1200, 90);
@@ -172,6 +190,9 @@ TEST(LiveView, PicturesAreTakenAtMostOncePerIntervalAndEncodedOffThePath) {
   EXPECT_EQ(picture->width, 1200);
   ASSERT_GT(picture->fused_png.size(), 8u);
   EXPECT_EQ(picture->fused_png[1], 'P');  // \x89PNG
+  // Thinned to every 2nd pixel (at most 640 wide), the latent averaged to the same size.
+  EXPECT_EQ(png_width(picture->captured_png), 600);
+  EXPECT_EQ(png_width(picture->fused_png), 600);
   EXPECT_EQ(picture->about["windows"], 2);
   EXPECT_EQ(view.state()["picture"]["sequence"], 7);
 }
