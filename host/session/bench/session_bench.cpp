@@ -9,6 +9,8 @@
 //                 [--cascade]           (only the cascade against tv on every frame, dim light)
 //                 [--live-view]         (only the live view's cost: live_view_runs.hpp)
 
+#include <unistd.h>
+
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -280,7 +282,9 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
 /// times (medians); the live view's CPU as a share of one core: the pictures
 /// it encoded per second times their CPU time, the states served and the
 /// results thread's updates (at 60 fps the same share of a 16.7 ms frame budget).
-int live_view_table(int width, int height, int frames, const fs::path& out) {
+int live_view_table(int width, int height, int frames, const fs::path& shared_out) {
+  // A folder of this process's own: another bench running beside it must not share it.
+  const fs::path out = shared_out.string() + "_live_view_" + std::to_string(::getpid());
   const auto unit = bench::live_view_update_costs();
   const double update_us = unit["update_us_per_frame"], state_us = unit["state_us"];
   std::cout << "live view, results thread: " << update_us
