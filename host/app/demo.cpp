@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "app/commands.hpp"
+#include "app/live_view_option.hpp"
 #include "app/session_command.hpp"
 #include "session/session_config.hpp"
 
@@ -16,6 +17,7 @@ namespace {
 struct DemoOptions {
   std::string out = "flutterscan-demo";
   std::uint64_t frames = 240;
+  std::optional<std::string> http;
   bool no_progress = false;
 };
 
@@ -56,8 +58,10 @@ void add_demo(CLI::App& app) {
   command->add_option("--frames", o->frames, "frames to run")
       ->check(CLI::Range(1, 100000))
       ->capture_default_str();
+  add_http_option(command, o->http);
   command->add_flag("--no-progress", o->no_progress, "no progress line");
-  command->callback([o] { run_session_command(demo_config(o->out, o->frames), !o->no_progress); });
+  command->callback(
+      [o] { run_session_command(demo_config(o->out, o->frames), !o->no_progress, o->http); });
 }
 
 }  // namespace flutterscan::app

@@ -7,6 +7,7 @@
 
 #include "app/cli_errors.hpp"
 #include "app/commands.hpp"
+#include "app/live_view_option.hpp"
 #include "app/session_command.hpp"
 #include "imaging/deblur.hpp"
 #include "session/session_config.hpp"
@@ -27,6 +28,7 @@ struct ScanOptions {
   std::optional<int> tcp_port;
   std::optional<std::string> serial;
   std::vector<std::string> camera_options;
+  std::optional<std::string> http;
   bool no_progress = false;
 };
 
@@ -59,7 +61,7 @@ void run(const ScanOptions& o) {
   if (auto problem = session::check_config(checked); !problem.empty())
     throw UsageError((o.config.empty() ? std::string("config") : "--config " + o.config) + ": " +
                      problem);
-  run_session_command(config, !o.no_progress);
+  run_session_command(config, !o.no_progress, o.http);
 }
 
 }  // namespace
@@ -91,6 +93,7 @@ void add_scan(CLI::App& app) {
   command->add_option("--serial", o->serial, "results over this serial port too");
   command->add_option("--camera-option", o->camera_options,
                       "backend option KEY=VALUE (repeatable; e.g. the sim's speed_px_per_s)");
+  add_http_option(command, o->http);
   command->add_flag("--no-progress", o->no_progress, "no progress line");
   command->callback([o] { run(*o); });
 }

@@ -9,6 +9,7 @@
 #include <iostream>
 
 #include "app/cli_errors.hpp"
+#include "app/live_view_option.hpp"
 #include "session/session.hpp"
 
 namespace flutterscan::app {
@@ -40,7 +41,11 @@ std::string failed_flags(const nlohmann::json& summary) {
 
 }  // namespace
 
-void run_session_command(session::SessionConfig config, bool progress) {
+void run_session_command(session::SessionConfig config, bool progress,
+                         const std::optional<std::string>& http) {
+  session::LiveView live_view;
+  session::LiveViewServer live_server(live_view);  // stops before live_view goes
+  const bool live = start_live_view(http, live_server);
   stop_requested = false;
   std::signal(SIGINT, on_sigint);
   std::signal(SIGTERM, on_sigint);
@@ -50,6 +55,7 @@ void run_session_command(session::SessionConfig config, bool progress) {
   hooks.listening = [](int port) {
     std::cerr << "flutterscan: results on TCP port " << port << " (one JSON line per object)\n";
   };
+  if (live) hooks.live_view = &live_view;
   double last_line_s = -10;
   if (progress)
     hooks.progress = [&](const session::Progress& p) {

@@ -8,6 +8,7 @@
 #include "capture/frame_pixels.hpp"
 #include "session/frame_preview.hpp"
 #include "session/mqtt_publisher.hpp"
+#include "session/live_view.hpp"
 #include "session/read_record.hpp"
 #include "session/session_clock.hpp"
 
@@ -60,6 +61,7 @@ void ResultsStage::handle(FrameOutcome& f) {
     handle_processed(f);
   else if (!f.log.contains("flags"))
     f.log["flags"] = nlohmann::json::array({"error"});
+  if (live_view_) live_view_->frame_done(f, pipeline_);
   folder_.log(f.log);
 }
 
@@ -128,6 +130,7 @@ void ResultsStage::handle_processed(FrameOutcome& f) {
     results_.previews.push_back(std::move(p));
     (f.decode_failed ? previews_failed_ : previews_read_) += 1;
   }
+  if (live_view_) live_view_->offer_picture(f);  // last: it may take the frame and latent
 }
 
 void ResultsStage::count_truth_checks(const std::vector<ReadTruthCheck>& checks) {
@@ -171,6 +174,7 @@ void ResultsStage::publish(std::vector<ObjectResult> finished) {
     const std::string line = result_line(o);
     server_.publish(line);
     if (mqtt_ != nullptr) mqtt_->publish(line);
+    if (live_view_) live_view_->object_done(o);
     results_.objects.push_back(std::move(o));
   }
 }

@@ -5,7 +5,7 @@
 // (each finished object published as one result line), its session.jsonl
 // line, its files (the first frames, and failures) and its report preview;
 // counts of models chosen and flags for the summary; a progress line about
-// twice a second.
+// twice a second; the live view's snapshot, when there is one (live_view.hpp).
 
 #include <cstdint>
 #include <functional>
@@ -25,6 +25,7 @@
 namespace flutterscan::session {
 
 class MqttPublisher;
+class LiveView;
 
 /// \brief The read record against the simulator's truth (sim sessions): how
 /// many reads had their label found, and how many of those were within the
@@ -96,6 +97,8 @@ class ResultsStage {
   void take(FrameOutcome outcome);
   /// \brief Every object still on the belt finished and published (the end).
   void finish();
+  /// \brief Also shows every frame and object on `view` (set before run()).
+  void show_on(LiveView& view) { live_view_ = &view; }
 
   /// \brief Complete after run() or finish().
   const SessionResults& results() const { return results_; }
@@ -121,6 +124,7 @@ class ResultsStage {
   int previews_read_ = 0;
   int previews_failed_ = 0;
   SessionResults results_;
+  LiveView* live_view_ = nullptr;
 };
 
 }  // namespace flutterscan::session

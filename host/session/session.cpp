@@ -12,6 +12,7 @@
 #include "session/capture_stage.hpp"
 #include "session/light_probe.hpp"
 #include "session/line_devices.hpp"
+#include "session/live_view.hpp"
 #include "session/matching_stage.hpp"
 #include "session/mqtt_publisher.hpp"
 #include "session/pipeline.hpp"
@@ -111,6 +112,11 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   WorkerPool workers(pipeline, config, flat_field);
   ResultsStage results(config, imaging::length_along_motion(direction, format.width, format.height),
                        start_ns, pipeline, folder, server, config.results.mqtt ? &mqtt : nullptr);
+  if (hooks.live_view) {
+    hooks.live_view->begin(folder_path,
+                           live_line(config, camera->name(), link.description, scheme_light));
+    results.show_on(*hooks.live_view);
+  }
   std::thread results_thread([&] { results.run(hooks.progress); });
   MatchingStage matching(config.processing.match_tolerance_us, config.optics);
   const CaptureEnd capture_end =
@@ -124,6 +130,7 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   // LEDs off before anything else can fail.
   const auto disarmed = link.client->disarm();
   if (!disarmed.ok()) say("warning: controller Disarm failed: " + disarmed.error().message);
+  if (hooks.live_view) hooks.live_view->set_state(disarmed.ok() ? "disarmed" : "disarm failed");
   const capture::CameraCounters camera_counters = camera->counters();
   const double duration_s = ms_between(start_ns, now_ns()) * 1e-3;
   server.close();

@@ -27,6 +27,8 @@ class VirtualController;
 
 namespace flutterscan::session {
 
+class LiveView;
+
 /// \brief Counters for a progress line.
 struct Progress {
   std::uint64_t frames_captured = 0;
@@ -44,6 +46,8 @@ struct SessionHooks {
   std::function<void(int port)> listening;          ///< the results TCP port, once open
   /// The virtual controller for controller spec "sim" (made here when null).
   std::shared_ptr<device::VirtualController> virtual_controller;
+  /// The live view the session keeps up to date (live_view.hpp), or none.
+  LiveView* live_view = nullptr;
 };
 
 struct SessionOutcome {

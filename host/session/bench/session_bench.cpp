@@ -7,6 +7,9 @@
 //   session_bench [--frames N] [--width W --height H] [--csv FILE] [--stages-only]
 //                 [--stage-repeats N]   (the stage table's runs, default 9; more for `perf`)
 //                 [--cascade]           (only the cascade against tv on every frame, dim light)
+//                 [--live-view]         (only the live view's cost: live_view_runs.hpp)
+
+#include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
@@ -36,6 +39,7 @@
 #include "reader/code_measure.hpp"
 #include "reader/code_reading.hpp"
 #include "reader/reader_options.hpp"
+#include "session/bench/live_view_runs.hpp"
 #include "session/read_record.hpp"
 #include "session/session.hpp"
 
@@ -274,6 +278,60 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
   return out;
 }
 
+/// The live view's cost: each input without and with it, alternating, three
+/// times (medians); the live view's CPU as a share of one core: the pictures
+/// it encoded per second times their CPU time, the states served and the
+/// results thread's updates (at 60 fps the same share of a 16.7 ms frame budget).
+int live_view_table(int width, int height, int frames, const fs::path& shared_out) {
+  // A folder of this process's own: another bench running beside it must not share it.
+  const fs::path out = shared_out.string() + "_live_view_" + std::to_string(::getpid());
+  const auto unit = bench::live_view_update_costs();
+  const double update_us = unit["update_us_per_frame"], state_us = unit["state_us"];
+  std::cout << "live view, results thread: " << update_us
+            << " us per frame (median); one state for the page: " << state_us << " us (median)\n\n"
+            << "| input | live view | fps out | dropped | latency p50 ms | states per s | pictures "
+               "per s | picture CPU ms | live view CPU, % of one core |\n"
+            << "|---|---|---|---|---|---|---|---|---|\n";
+  const struct {
+    const char* name;
+    bool paced;
+    int period_us;
+  } cases[] = {{"60 fps input", true, 16667}, {"30 fps input", true, 33333}};
+  for (const auto& c : cases) {
+    std::map<bool, std::map<std::string, std::vector<double>>> samples;
+    for (int repeat = 0; repeat < 3; ++repeat)
+      for (const bool live : {false, true}) {
+        fs::remove_all(out);
+        const auto run = bench::run_live_view_case(
+            bench_config(width, height, frames, c.paced, c.period_us, out), live);
+        if (!run.error.empty()) {
+          std::cerr << "session_bench: " << c.name << ": " << run.error << "\n";
+          return 1;
+        }
+        auto& m = samples[live];
+        m["fps"].push_back(run.summary["fps"].get<double>());
+        m["dropped"].push_back(run.summary["frames_dropped"].get<double>());
+        m["p50"].push_back(run.summary["latency_ms_p50"].get<double>());
+        m["states"].push_back(run.states_per_s);
+        m["pictures"].push_back(run.pictures_per_s);
+        m["picture_cpu"].push_back(run.picture_cpu_ms);
+        const double fps = run.summary["fps"].get<double>();
+        m["share"].push_back((run.encoded_per_s * run.picture_cpu_ms +
+                              run.states_per_s * state_us * 1e-3 + fps * update_us * 1e-3) /
+                             10);
+      }
+    for (const bool live : {false, true}) {
+      auto& m = samples[live];
+      std::cout << "| " << c.name << " | " << (live ? "on" : "off") << " | " << median(m["fps"])
+                << " | " << median(m["dropped"]) << " | " << median(m["p50"]) << " | "
+                << median(m["states"]) << " | " << median(m["pictures"]) << " | "
+                << median(m["picture_cpu"]) << " | " << (live ? median(m["share"]) : 0.0) << " |\n";
+    }
+  }
+  fs::remove_all(out);
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -282,6 +340,7 @@ int main(int argc, char** argv) {
   bool stages_only = false;
   int stage_repeats = 9;
   bool cascade_only = false;
+  bool live_view = false;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     auto next = [&]() -> std::string {
@@ -305,6 +364,8 @@ int main(int argc, char** argv) {
       stage_repeats = std::atoi(next().c_str());
     else if (arg == "--cascade")
       cascade_only = true;
+    else if (arg == "--live-view")
+      live_view = true;
     else {
       std::cerr << "session_bench: unknown argument '" << arg << "'\n";
       return 2;
@@ -345,6 +406,7 @@ int main(int argc, char** argv) {
                  "alone): "
               << it->second << " ms\n\n";
   if (stages_only) return 0;
+  if (live_view) return live_view_table(width, height, frames, out);
 
   std::vector<Run> runs;
   const struct {

@@ -1,11 +1,15 @@
 // The real binary: Ctrl-C (SIGINT) mid-session leaves a valid, complete
 // session folder; report.html loads in headless Chromium without console
-// errors, and a screenshot of it is taken; bad configuration exits 2.
+// errors, and a screenshot of it is taken; bad configuration exits 2. The
+// live view (--http): served while the session runs, an address asked for
+// that is taken exits 2, the default one taken only warns; its page in
+// headless Chromium shows the figures the session's summary reports.
 #include <signal.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
 #include <gtest/gtest.h>
+#include <httplib.h>
 #include <nlohmann/json.hpp>
 
 #include <array>
@@ -15,6 +19,9 @@
 #include <fstream>
 #include <thread>
 
+#include "session/live_view.hpp"
+#include "session/live_view_server.hpp"
+#include "session/session.hpp"
 #include "session/test/session_test_support.hpp"
 
 namespace flutterscan::session {
@@ -119,15 +126,26 @@ int shell(const std::string& command, std::string& output) {
   return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
 }
 
+/// Debian's chromium command; exits 77 (skipped) when it is not installed.
+std::string chromium_or_skip() {
+  std::string output;
+  for (const char* candidate : {"chromium", "chromium-browser"})
+    if (shell(std::string("command -v ") + candidate, output) == 0) return candidate;
+  std::cerr << "skipped: Debian's chromium is not installed (tools/install-deps installs it)\n";
+  std::exit(77);
+}
+
+/// Headless chromium's command line, its profile under `out`, before the page's options.
+std::string headless(const std::string& browser, const fs::path& out) {
+  return "timeout 120 " + browser +
+         " --headless --no-sandbox --disable-gpu --disable-dev-shm-usage"
+         " --no-first-run --user-data-dir=" +
+         (out / "profile").string();
+}
+
 TEST(SessionReport, LoadsInHeadlessChromiumWithoutConsoleErrors) {
   std::string output;
-  std::string browser;
-  for (const char* candidate : {"chromium", "chromium-browser"})
-    if (shell(std::string("command -v ") + candidate, output) == 0) browser = candidate;
-  if (browser.empty()) {
-    std::cerr << "skipped: Debian's chromium is not installed (tools/install-deps installs it)\n";
-    std::exit(77);
-  }
+  const std::string browser = chromium_or_skip();
   const ScratchFolder scratch("chromium");
   const fs::path& out = scratch.path();
   const pid_t pid = spawn({"demo", "--frames", "40", "--out", out.string(), "--no-progress"}, out);
@@ -135,11 +153,7 @@ TEST(SessionReport, LoadsInHeadlessChromiumWithoutConsoleErrors) {
   const fs::path report = only_session(out) / "report.html";
   ASSERT_TRUE(fs::exists(report));
   const fs::path shot = out / "report.png";
-  const std::string profile = (out / "profile").string();
-  const int code = shell("timeout 120 " + browser +
-                             " --headless --no-sandbox --disable-gpu --disable-dev-shm-usage"
-                             " --no-first-run --user-data-dir=" +
-                             profile +
+  const int code = shell(headless(browser, out) +
                              " --enable-logging=stderr --v=0 --window-size=1280,2400"
                              " --screenshot=" +
                              shot.string() + " file://" + report.string(),
@@ -159,6 +173,163 @@ TEST(SessionReport, LoadsInHeadlessChromiumWithoutConsoleErrors) {
   EXPECT_EQ(html.find("src=\"http"), std::string::npos);
   EXPECT_EQ(html.find("src=\"file"), std::string::npos);
   EXPECT_NE(html.find("data:image/png;base64,"), std::string::npos);
+  std::cout << "screenshot: " << shot << "\n";
+}
+
+/// The port of the live view the binary announced on stderr ("live view on
+/// http://127.0.0.1:PORT/"), waiting up to a minute; 0 if it never did.
+int announced_port(const fs::path& stderr_path) {
+  const std::string announcement = "live view on http://127.0.0.1:";
+  for (int i = 0; i < 600; ++i) {
+    const std::string err = read_text(stderr_path);
+    if (const auto at = err.find(announcement); at != std::string::npos)
+      return std::atoi(err.c_str() + at + announcement.size());
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  return 0;
+}
+
+TEST(LiveViewCli, TheDemoServesItsLiveViewWhileItRuns) {
+  const ScratchFolder scratch("live_cli");
+  const fs::path& out = scratch.path();
+  const pid_t pid = spawn({"demo", "--frames", "100000", "--http", "127.0.0.1:0", "--out",
+                           out.string(), "--no-progress"},
+                          out);
+  const int port = announced_port(out / "stderr.txt");
+  ASSERT_GT(port, 0) << read_text(out / "stderr.txt");
+  EXPECT_NE(read_text(out / "stderr.txt").find("(read-only)"), std::string::npos);
+  EXPECT_EQ(read_text(out / "stderr.txt").find("reachable from the network"), std::string::npos);
+  httplib::Client client("127.0.0.1", port);
+  nlohmann::json state;
+  for (int i = 0; i < 600; ++i) {
+    if (auto r = client.Get("/state.json"); r && r->status == 200) {
+      state = nlohmann::json::parse(r->body);
+      if (state["frames"]["processed"].get<int>() >= 5) break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  }
+  ASSERT_GE(state["frames"]["processed"].get<int>(), 5) << state.dump();
+  EXPECT_EQ(state["state"], "armed");
+  EXPECT_EQ(state["line"]["code"], "seed-maxmin-1");
+  EXPECT_EQ(fs::path(state["folder"].get<std::string>()).parent_path(), out);
+  auto metrics = client.Get("/metrics");
+  ASSERT_TRUE(metrics);
+  EXPECT_NE(metrics->body.find("flutterscan_frames_processed_total "), std::string::npos);
+  auto page = client.Get("/");
+  ASSERT_TRUE(page);
+  EXPECT_EQ(page->status, 200);
+  auto post = client.Post("/state.json", "{\"state\":\"disarmed\"}", "application/json");
+  ASSERT_TRUE(post);
+  EXPECT_EQ(post->status, 405);
+  ASSERT_EQ(::kill(pid, SIGINT), 0);
+  EXPECT_EQ(wait_exit(pid), 0) << read_text(out / "stderr.txt");
+}
+
+TEST(LiveViewCli, AnAddressAskedForThatIsTakenOrBadExitsTwoBeforeTheLine) {
+  const ScratchFolder scratch("live_cli_taken");
+  const fs::path& out = scratch.path();
+  LiveView view;
+  LiveViewServer taken(view);
+  ASSERT_EQ(taken.listen({"127.0.0.1", 0}), "");
+  const std::string address = "127.0.0.1:" + std::to_string(taken.port());
+  const pid_t pid = spawn(
+      {"demo", "--frames", "3", "--http", address, "--out", out.string(), "--no-progress"}, out);
+  EXPECT_EQ(wait_exit(pid), 2);
+  const std::string err = read_text(out / "stderr.txt");
+  EXPECT_NE(err.find("cannot listen on " + address + ": the port is in use"), std::string::npos)
+      << err;
+  EXPECT_TRUE(only_session(out).empty());  // no session started
+  const pid_t bad = spawn(
+      {"demo", "--frames", "3", "--http", "8090", "--out", out.string(), "--no-progress"}, out);
+  EXPECT_EQ(wait_exit(bad), 2);
+  EXPECT_NE(read_text(out / "stderr.txt").find("--http '8090' must be ADDR:PORT"),
+            std::string::npos)
+      << read_text(out / "stderr.txt");
+}
+
+TEST(LiveViewCli, TheDefaultAddressTakenOnlyWarnsAndTheSessionRuns) {
+  const ScratchFolder scratch("live_cli_default");
+  const fs::path& out = scratch.path();
+  LiveView view;
+  LiveViewServer taken(view);
+  if (!taken.listen({kLiveViewDefaultHost, kLiveViewDefaultPort}).empty())
+    GTEST_SKIP() << "the default port is held by another process: it may let go any time";
+  const pid_t pid = spawn({"demo", "--frames", "5", "--out", out.string(), "--no-progress"}, out);
+  EXPECT_EQ(wait_exit(pid), 0) << read_text(out / "stderr.txt");
+  EXPECT_NE(read_text(out / "stderr.txt")
+                .find("warning: live view: cannot listen on 127.0.0.1:8090: the port is in use; "
+                      "the session runs without it"),
+            std::string::npos)
+      << read_text(out / "stderr.txt");
+  EXPECT_TRUE(fs::exists(only_session(out) / "summary.json"));
+}
+
+/// The text of the element with `id` in `dom` (its first text, up to the next tag).
+std::string element_text(const std::string& dom, const std::string& id) {
+  const std::string opening = "id=\"" + id + "\"";
+  const auto at = dom.find(opening);
+  if (at == std::string::npos) return "(no #" + id + ")";
+  const auto start = dom.find('>', at) + 1;
+  return dom.substr(start, dom.find('<', start) - start);
+}
+
+std::string percent_text(double share) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f%%", 100 * share);
+  return text;
+}
+
+TEST(LiveViewPage, ShowsTheFiguresOfTheSessionInHeadlessChromium) {
+  const std::string browser = chromium_or_skip();
+  const ScratchFolder scratch("live_chromium");
+  const fs::path& out = scratch.path();
+  LiveView view;
+  LiveViewServer server(view);
+  ASSERT_EQ(server.listen({"127.0.0.1", 0}), "");
+  SessionHooks hooks;
+  hooks.live_view = &view;
+  std::atomic<bool> stop{false};
+  const SessionOutcome outcome =
+      run_session(testing::small_sim_config(out / "session", 90), stop, hooks);
+  ASSERT_EQ(outcome.error, "");
+  const auto& summary = outcome.summary;
+  const std::string url = "http://127.0.0.1:" + std::to_string(server.port()) + "/";
+  // The DOM after 4 s of the page's (virtual) time, and chromium's log with it.
+  std::string dom;
+  const int code = shell(headless(browser, out) +
+                             " --enable-logging=stderr --v=0 --virtual-time-budget=4000"
+                             " --dump-dom " +
+                             url,
+                         dom);
+  if (code != 0 && dom.find("<html") == std::string::npos) {
+    std::cerr << "skipped: chromium could not start here (exit " << code << "):\n" << dom;
+    std::exit(77);
+  }
+  // No console message: the script ran without error, nothing was refused or missing.
+  EXPECT_EQ(dom.find(":CONSOLE("), std::string::npos) << dom;
+  EXPECT_EQ(dom.find("Uncaught"), std::string::npos) << dom;
+  // The page updated itself from /state.json: the figures are the summary's.
+  EXPECT_NE(element_text(dom, "updates"), "0") << dom;
+  EXPECT_EQ(element_text(dom, "state"), "disarmed");
+  EXPECT_EQ(element_text(dom, "frames-processed"), summary["frames_processed"].dump());
+  EXPECT_EQ(element_text(dom, "frames-captured"), summary["frames_captured"].dump());
+  EXPECT_EQ(element_text(dom, "frames-dropped"), summary["frames_dropped"].dump());
+  EXPECT_EQ(element_text(dom, "objects-read"), summary["objects_read"].dump());
+  EXPECT_EQ(element_text(dom, "objects"), summary["objects"].dump());
+  EXPECT_EQ(element_text(dom, "read-rate"), percent_text(summary["object_read_rate"]));
+  EXPECT_EQ(element_text(dom, "decode-rate"), percent_text(summary["mean_decode_rate_per_object"]));
+  EXPECT_NE(element_text(dom, "picture-caption").find("code(s) read"), std::string::npos);
+  EXPECT_NE(dom.find("src=\"frame/fused.png?frame="), std::string::npos);
+  // A screenshot, kept in the test's working folder for a look.
+  const fs::path shot = fs::current_path() / "live_view.png";
+  fs::remove(shot);
+  std::string output;
+  shell(headless(browser, out) +
+            " --window-size=1280,1400 --virtual-time-budget=4000 --screenshot=" + shot.string() +
+            " " + url,
+        output);
+  ASSERT_TRUE(fs::exists(shot)) << output;
+  EXPECT_GT(fs::file_size(shot), 20'000u);  // the page with its pictures, not a blank
   std::cout << "screenshot: " << shot << "\n";
 }
 
