@@ -7,8 +7,8 @@
 
 #include "capture/frame_pixels.hpp"
 #include "session/frame_preview.hpp"
-#include "session/mqtt_publisher.hpp"
 #include "session/live_view.hpp"
+#include "session/mqtt_publisher.hpp"
 #include "session/read_record.hpp"
 #include "session/session_clock.hpp"
 
