@@ -22,9 +22,7 @@ struct DemoOptions {
 };
 
 /// \brief The demo's session: 800x300 frames at 60 fps of virtual time, a belt
-/// moving 52 px per 5.2 ms exposure, the seed's max-min triplet in 100 us slots,
-/// on a dim line (500 e- per channel of white): joint Wiener misses a few labels
-/// there, and the summary's cascade line says which windows tv read again.
+/// moving 52 px per 5.2 ms exposure, the seed's max-min triplet in 100 us slots.
 /// The camera itself stops after `frames` exposures, so no exposure is left
 /// without its frame.
 session::SessionConfig demo_config(const std::string& out, std::uint64_t frames) {
@@ -37,13 +35,12 @@ session::SessionConfig demo_config(const std::string& out, std::uint64_t frames)
                       {"frame_period_us", "16667"},
                       {"exposure_us", "6000"},
                       {"counts_per_px", "2"},
-                      {"electrons", "500"},
+                      {"electrons", "3000"},
                       {"seed", "1"}};
   c.controller.spec = "sim";
   c.controller.code = "seed-maxmin-1";
   c.controller.slot_time_us = 100;
   c.optics.px_per_count = 0.5;
-  c.optics.electrons = 500;
   c.output.dir = out;
   return c;
 }
