@@ -122,7 +122,8 @@ int cascade_against_tv(int width, int height, int frames, const fs::path& out) {
       fs::remove_all(out);
       session::SessionConfig c = bench_config(width, height, frames, cascade, 16667, out);
       c.camera.options.push_back({"electrons", std::to_string(electrons)});
-      c.camera.options.push_back({"ring_frames", std::to_string(frames)});
+      for (auto& [key, value] : c.camera.options)  // every frame rendered once: no object repeats
+        if (key == "ring_frames") value = std::to_string(frames);
       c.optics.electrons = electrons;
       if (!cascade) {
         c.processing.cascade = false;
