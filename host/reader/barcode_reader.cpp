@@ -72,13 +72,16 @@ DecodedCode decoded_code(const ZXing::Result& result, int offset_x, int offset_y
 
 /// Windows may overlap: a symbol in two of them is one symbol.
 bool already_read(const std::vector<DecodedCode>& codes, const DecodedCode& code) {
-  return std::any_of(codes.begin(), codes.end(), [&](const DecodedCode& c) {
-    return c.text == code.text && c.format == code.format &&
-           std::abs(c.centre_x - code.centre_x) < 4 && std::abs(c.centre_y - code.centre_y) < 4;
-  });
+  return std::any_of(codes.begin(), codes.end(),
+                     [&](const DecodedCode& c) { return same_symbol(c, code); });
 }
 
 }  // namespace
+
+bool same_symbol(const DecodedCode& a, const DecodedCode& b) {
+  return a.text == b.text && a.format == b.format && std::abs(a.centre_x - b.centre_x) < 4 &&
+         std::abs(a.centre_y - b.centre_y) < 4;
+}
 
 BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& symbologies,
                              bool try_rotate, std::span<const DecodeWindow> windows) {

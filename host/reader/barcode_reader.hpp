@@ -60,6 +60,10 @@ struct BarcodeReadout {
 /// \brief The texts of `readout`'s codes, in the order they were read.
 std::vector<std::string> code_texts(const BarcodeReadout& readout);
 
+/// \brief Whether `a` and `b` are one symbol read twice (overlapping windows,
+/// or a window read again): same text and format, centres within 4 px.
+bool same_symbol(const DecodedCode& a, const DecodedCode& b);
+
 /// \brief A rectangle of the latent image to decode: columns [x, x + width), rows [y, y + height).
 struct DecodeWindow {
   int x = 0, y = 0, width = 0, height = 0;

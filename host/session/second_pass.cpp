@@ -39,11 +39,6 @@ std::pair<int, int> camera_point(imaging::Direction direction, int n, int line, 
   return {n, line};
 }
 
-bool same_code(const reader::DecodedCode& a, const reader::DecodedCode& b) {
-  return a.text == b.text && a.format == b.format && std::abs(a.centre_x - b.centre_x) < 4 &&
-         std::abs(a.centre_y - b.centre_y) < 4;
-}
-
 bool inside(const reader::DecodeWindow& w, double x, double y) {
   return x >= w.x && x < w.x + w.width && y >= w.y && y < w.y + w.height;
 }
@@ -216,7 +211,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
                                                            options.try_rotate, {&retry.window, 1});
       for (reader::DecodedCode& code : again.codes) {
         if (std::any_of(readout.codes.begin(), readout.codes.end(),
-                        [&](const reader::DecodedCode& c) { return same_code(c, code); }))
+                        [&](const reader::DecodedCode& c) { return reader::same_symbol(c, code); }))
           continue;
         retry.read.push_back(code.text);
         reads.add(imaging::position_along_motion(direction, code.centre_x, code.centre_y,

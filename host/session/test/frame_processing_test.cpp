@@ -147,29 +147,31 @@ TEST(FrameProcessing, ARawBayerFrameIsDeblurredOnItsPlanesAndReadInEitherDirecti
   }
 }
 
-/// A frame at `electrons` whose label joint Wiener alone does not read
-/// (searched over the first frames with a whole label), or none.
-std::optional<FrameJob> frame_joint_wiener_misses(SessionConfig config, double electrons) {
-  config.optics.electrons = electrons;
-  config.processing.cascade = false;
-  for (int skip = 0; skip < 6; ++skip) {
-    FrameJob job = job_with_a_label(config, skip);
-    FrameJob copy = job;
-    WorkerShared shared(config);
-    const FrameOutcome out = process_frame(copy, config, shared, nullptr);
-    if (out.processed && out.decode_failed) return job;
+/// A frame whose label joint Wiener alone does not read, at 400 e- or else
+/// 300 e- (the first frames with a whole label searched), with
+/// config.optics.electrons set to its light; none if every label read.
+std::optional<FrameJob> frame_joint_wiener_misses(SessionConfig& config) {
+  for (const double electrons : {400.0, 300.0}) {
+    SessionConfig plain = config;
+    plain.optics.electrons = electrons;
+    plain.processing.cascade = false;
+    for (int skip = 0; skip < 6; ++skip) {
+      FrameJob job = job_with_a_label(plain, skip);
+      FrameJob copy = job;
+      WorkerShared shared(plain);
+      const FrameOutcome out = process_frame(copy, plain, shared, nullptr);
+      if (out.processed && out.decode_failed) {
+        config.optics.electrons = electrons;
+        return job;
+      }
+    }
   }
   return std::nullopt;
 }
 
 TEST(FrameProcessing, TheCascadeReadsAWindowJointWienerMissedByDeblurringItAgainWithTv) {
   SessionConfig config = small_config();
-  std::optional<FrameJob> missed;
-  for (double electrons : {400.0, 300.0})
-    if ((missed = frame_joint_wiener_misses(config, electrons))) {
-      config.optics.electrons = electrons;
-      break;
-    }
+  std::optional<FrameJob> missed = frame_joint_wiener_misses(config);
   ASSERT_TRUE(missed) << "joint Wiener read every label at 400 and 300 e-";
   const std::vector<std::string> truth = missed->frame.truth;
   config.processing.cascade = true;
@@ -214,12 +216,7 @@ TEST(FrameProcessing, TheCascadeReadsAWindowJointWienerMissedByDeblurringItAgain
 
 TEST(FrameProcessing, AWindowTheBudgetCannotPayForIsFlaggedAndStaysANoRead) {
   SessionConfig config = small_config();
-  std::optional<FrameJob> missed;
-  for (double electrons : {400.0, 300.0})
-    if ((missed = frame_joint_wiener_misses(config, electrons))) {
-      config.optics.electrons = electrons;
-      break;
-    }
+  std::optional<FrameJob> missed = frame_joint_wiener_misses(config);
   ASSERT_TRUE(missed);
   config.processing.second_pass_ms = 0;
   ASSERT_EQ(check_config(config), "");
