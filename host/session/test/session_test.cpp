@@ -271,6 +271,32 @@ TEST(SessionConfigFile, ReadsTheAnnotatedExampleAndNamesBadKeys) {
       << bad_area.error();
   EXPECT_TRUE(config.processing.try_rotate);  // the annotated example keeps it on
 
+  // The method: "cascade" (the example's and the default) or one method everywhere; the
+  // cascade's budget "auto" or ms per frame within 0..1e6.
+  EXPECT_TRUE(config.processing.cascade);
+  EXPECT_EQ(config.processing.second_pass_ms, -1);
+  const auto tv = parse_config("[processing]\nmethod = \"tv\"\n", "line3.toml");
+  ASSERT_TRUE(tv.ok()) << tv.error();
+  EXPECT_FALSE(tv.value().processing.cascade);
+  EXPECT_EQ(tv.value().processing.method, imaging::Method::kTotalVariation);
+  const auto bad_method = parse_config("[processing]\nmethod = \"fast\"\n", "line3.toml");
+  ASSERT_FALSE(bad_method.ok());
+  EXPECT_NE(bad_method.error().find("processing.method 'fast' is none of cascade"),
+            std::string::npos)
+      << bad_method.error();
+  const auto fixed = parse_config("[processing]\nsecond_pass_ms = 5\n", "line3.toml");
+  ASSERT_TRUE(fixed.ok()) << fixed.error();
+  EXPECT_EQ(fixed.value().processing.second_pass_ms, 5);
+  const auto bad_word = parse_config("[processing]\nsecond_pass_ms = \"lots\"\n", "line3.toml");
+  ASSERT_FALSE(bad_word.ok());
+  EXPECT_NE(bad_word.error().find("line3.toml:2: processing.second_pass_ms"), std::string::npos)
+      << bad_word.error();
+  SessionConfig negative;
+  negative.processing.second_pass_ms = -5;
+  EXPECT_NE(check_config(negative).find("processing.second_pass_ms"), std::string::npos);
+  negative.processing.second_pass_ms = 2e6;
+  EXPECT_NE(check_config(negative).find("processing.second_pass_ms"), std::string::npos);
+
   // Code "auto": optics.electrons is optional (the session measures the light).
   EXPECT_TRUE(config.optics.electrons_given);  // the example gives it
   const auto auto_light = parse_config(
