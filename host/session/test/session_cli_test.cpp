@@ -135,12 +135,14 @@ std::string chromium_or_skip() {
   std::exit(77);
 }
 
-/// Headless chromium's command line, its profile under `out`, before the page's options.
-std::string headless(const std::string& browser, const fs::path& out) {
+/// Headless chromium's command line, before the page's options. Each run gets its own
+/// profile folder: a second run on the same profile can wait on the first one's leftover
+/// processes (their lock on the profile) until `timeout` kills it.
+std::string headless(const std::string& browser, const fs::path& profile) {
   return "timeout 120 " + browser +
          " --headless --no-sandbox --disable-gpu --disable-dev-shm-usage"
          " --no-first-run --user-data-dir=" +
-         (out / "profile").string();
+         profile.string();
 }
 
 TEST(SessionReport, LoadsInHeadlessChromiumWithoutConsoleErrors) {
@@ -153,7 +155,7 @@ TEST(SessionReport, LoadsInHeadlessChromiumWithoutConsoleErrors) {
   const fs::path report = only_session(out) / "report.html";
   ASSERT_TRUE(fs::exists(report));
   const fs::path shot = out / "report.png";
-  const int code = shell(headless(browser, out) +
+  const int code = shell(headless(browser, out / "profile") +
                              " --enable-logging=stderr --v=0 --window-size=1280,2400"
                              " --screenshot=" +
                              shot.string() + " file://" + report.string(),
@@ -296,7 +298,7 @@ TEST(LiveViewPage, ShowsTheFiguresOfTheSessionInHeadlessChromium) {
   const std::string url = "http://127.0.0.1:" + std::to_string(server.port()) + "/";
   // The DOM after 4 s of the page's (virtual) time, and chromium's log with it.
   std::string dom;
-  const int code = shell(headless(browser, out) +
+  const int code = shell(headless(browser, out / "profile-dom") +
                              " --enable-logging=stderr --v=0 --virtual-time-budget=4000"
                              " --dump-dom " +
                              url,
@@ -324,8 +326,8 @@ TEST(LiveViewPage, ShowsTheFiguresOfTheSessionInHeadlessChromium) {
   const fs::path shot = fs::current_path() / "live_view.png";
   fs::remove(shot);
   std::string output;
-  shell(headless(browser, out) +
-            " --window-size=1280,1400 --virtual-time-budget=4000 --screenshot=" + shot.string() +
+  shell(headless(browser, out / "profile-screenshot") +
+            " --window-size=1280,1400 --virtual-time-budget=1500 --screenshot=" + shot.string() +
             " " + url,
         output);
   ASSERT_TRUE(fs::exists(shot)) << output;
