@@ -8,7 +8,7 @@
 
 #include "session/read_record.hpp"
 #include "session/session_clock.hpp"
-#include "session/session_summary.hpp"
+#include "session/value_distribution.hpp"
 
 namespace flutterscan::session {
 
@@ -59,7 +59,7 @@ nlohmann::json live_line(const SessionConfig& config, const std::string& camera,
   nlohmann::json line = {{"camera", camera},
                          {"controller", controller},
                          {"code", config.controller.code},
-                         {"method", imaging::method_name(config.processing.method)}};
+                         {"method", processing_method_name(config.processing)}};
   if (const auto& scheme = config.controller.scheme)
     line["scheme"] = {{"scheme", scheme->scheme}, {"expected_margin_db", scheme->margin_db}};
   if (scheme_light) line["light"] = describe_scheme_light(*scheme_light);

@@ -69,16 +69,16 @@ void ResultsStage::handle_processed(FrameOutcome& f) {
   const std::int64_t done = now_ns();
   f.latency_ms = ms_between(f.arrival_ns, done);
   f.log["latency_ms"] = std::round(f.latency_ms * 100) / 100;
-  results_.latency_ms.push_back(f.latency_ms);
+  results_.latency_ms.add(f.latency_ms);
   if (const auto motion = f.log.find("motion"); motion != f.log.end() && motion->is_object()) {
     if (motion->value("used", false))
-      results_.refined_minus_encoder_px.push_back(motion->value("refined_blur_px", 0.0) -
-                                                  motion->value("encoder_blur_px", 0.0));
+      results_.refined_minus_encoder_px.add(motion->value("refined_blur_px", 0.0) -
+                                            motion->value("encoder_blur_px", 0.0));
     else if (!motion->value("edges", true))
       ++results_.frames_without_motion_edges;
   }
   count_second_pass(f.log);
-  results_.processed_at_s.push_back(ms_between(start_ns_, done) * 1e-3);
+  results_.processed.add(ms_between(start_ns_, done) * 1e-3);
   ++pipeline_.frames_processed;
   for (const auto& t : f.truth) results_.truth_seen.insert(t);
   for (const auto& t : f.truth_in_view) results_.truth_in_view.insert(t);
@@ -157,7 +157,7 @@ void ResultsStage::count_second_pass(const nlohmann::json& frame_log) {
   t.frames += windows.empty() ? 0 : 1;
   for (const nlohmann::json& w : windows) {
     ++t.windows;
-    t.window_ms.push_back(w.value("ms", 0.0));
+    t.window_ms.add(w.value("ms", 0.0));
     const nlohmann::json& read = w["read"];
     t.windows_read += read.empty() ? 0 : 1;
     t.codes_read += read.size();
@@ -169,13 +169,24 @@ void ResultsStage::count_second_pass(const nlohmann::json& frame_log) {
   t.frames_skipping += skipped > 0 ? 1 : 0;
 }
 
+void ObjectTally::add(ObjectResult object, bool with_truth) {
+  ++objects;
+  read += object.read() ? 1 : 0;
+  decode_rate_sum += object.decode_rate();
+  if (with_truth && object.read()) values_read.insert(object.value);
+  latest.push_back(std::move(object));
+  if (latest.size() > kObjectsListed) latest.pop_front();
+}
+
 void ResultsStage::publish(std::vector<ObjectResult> finished) {
   for (auto& o : finished) {
-    const std::string line = result_line(o);
+    nlohmann::json record = read_record(o);
+    const std::string line = record.dump();
     server_.publish(line);
     if (mqtt_ != nullptr) mqtt_->publish(line);
     if (live_view_) live_view_->object_done(o);
-    results_.objects.push_back(std::move(o));
+    folder_.log({{"object_result", std::move(record)}});
+    results_.objects.add(std::move(o), !results_.truth_in_view.empty());
   }
 }
 
@@ -184,9 +195,8 @@ Progress ResultsStage::progress(std::int64_t now) const {
   p.frames_captured = pipeline_.frames_captured;
   p.frames_processed = pipeline_.frames_processed;
   p.frames_dropped = pipeline_.frames_dropped;
-  p.objects = results_.objects.size();
-  p.objects_read = static_cast<std::uint64_t>(std::count_if(
-      results_.objects.begin(), results_.objects.end(), [](const auto& x) { return x.read(); }));
+  p.objects = results_.objects.objects;
+  p.objects_read = results_.objects.read;
   p.elapsed_s = ms_between(start_ns_, now) * 1e-3;
   p.fps = p.elapsed_s > 0 ? static_cast<double>(p.frames_processed) / p.elapsed_s : 0;
   return p;

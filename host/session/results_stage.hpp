@@ -8,6 +8,7 @@
 // twice a second; the live view's snapshot, when there is one (live_view.hpp).
 
 #include <cstdint>
+#include <deque>
 #include <functional>
 #include <map>
 #include <set>
@@ -16,11 +17,13 @@
 
 #include "session/object_tracker.hpp"
 #include "session/pipeline.hpp"
+#include "session/rate_timeline.hpp"
 #include "session/results_server.hpp"
 #include "session/session.hpp"
 #include "session/session_config.hpp"
 #include "session/session_folder.hpp"
 #include "session/session_report.hpp"
+#include "session/value_distribution.hpp"
 
 namespace flutterscan::session {
 
@@ -48,17 +51,32 @@ struct SecondPassTally {
   std::uint64_t codes_read = 0;       ///< codes they read
   std::uint64_t windows_skipped = 0;  ///< left as they were: the budget was spent
   std::uint64_t frames_skipping = 0;  ///< frames with such a window (flag second-pass-budget)
-  std::vector<double> window_ms;      ///< each window's deblur and decode
+  ValueDistribution window_ms;        ///< each window's deblur and decode
   /// The first few values they read (at most kSecondPassValuesKept, in order).
   std::vector<std::string> values;
 };
 inline constexpr std::size_t kSecondPassValuesKept = 20;
 
-/// \brief What the results stage gathered for the summary and the report.
+/// \brief The objects of the session: every one counted; the records of the
+/// latest kept for the summary and the report (every record is in session.jsonl).
+struct ObjectTally {
+  std::uint64_t objects = 0;
+  std::uint64_t read = 0;
+  double decode_rate_sum = 0;         ///< of every object: decoded frames / frames seen
+  std::deque<ObjectResult> latest;    ///< the last kObjectsListed, in the order published
+  std::set<std::string> values_read;  ///< sim sessions (with truth) only: every value read
+
+  /// \brief Counts `object` and keeps it among the latest; `with_truth`: its value too.
+  void add(ObjectResult object, bool with_truth);
+};
+inline constexpr std::size_t kObjectsListed = 500;
+
+/// \brief What the results stage gathered for the summary and the report; its
+/// memory stays bounded however long the session runs (but for the sim's truth sets).
 struct SessionResults {
-  std::vector<ObjectResult> objects;   ///< in the order they were published
-  std::vector<double> latency_ms;      ///< per processed frame: arrival to result
-  std::vector<double> processed_at_s;  ///< per processed frame: seconds since the start
+  ObjectTally objects;
+  ValueDistribution latency_ms;  ///< per processed frame: arrival to result
+  RateTimeline processed;        ///< processed frames over the session
   std::vector<Preview> previews;
   std::set<std::string> truth_seen;     ///< sim: labels whole in some frame
   std::set<std::string> truth_in_view;  ///< sim: labels at least partly in some frame
@@ -68,7 +86,7 @@ struct SessionResults {
   std::map<std::string, std::uint64_t> frames_flagged;  ///< by flag
   /// Motion refinement: refined - encoder blur (px) of every frame deblurred with
   /// its refined blur, and how many frames had no edges to refine it on.
-  std::vector<double> refined_minus_encoder_px;
+  ValueDistribution refined_minus_encoder_px;
   std::uint64_t frames_without_motion_edges = 0;
   ReadRecordTruth read_record_truth;
   /// Reads by indicative grade ("A" .. "F"), every frame.

@@ -43,28 +43,26 @@ std::vector<std::uint8_t> read_bytes(const std::string& path) {
   return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
-/// A histogram as a step line: bin edges on x, counts on y.
-plot::Series histogram(const std::vector<double>& values, int bins, const std::string& label,
+/// A histogram of `values` in `bins` bins over their range, as a step line:
+/// bin edges on x, counts on y.
+plot::Series histogram(const ValueDistribution& values, int bins, const std::string& label,
                        plot::Rgb colour) {
   plot::Series s;
   s.label = label;
   s.colour = colour;
   s.line_width = 2;
-  if (values.empty()) return s;
-  const auto [lo_it, hi_it] = std::minmax_element(values.begin(), values.end());
-  const double lo = *lo_it;
-  const double hi = *hi_it > lo ? *hi_it : lo + 1;
+  if (values.count() == 0) return s;
+  const double lo = values.min();
+  const double hi = values.max() > lo ? values.max() : lo + 1;
   const double width = (hi - lo) / bins;
-  std::vector<int> counts(static_cast<std::size_t>(bins), 0);
-  for (double v : values)
-    ++counts[static_cast<std::size_t>(std::clamp(static_cast<int>((v - lo) / width), 0, bins - 1))];
+  const std::vector<std::uint64_t> counts = values.histogram(bins);
   s.x.push_back(lo);
   s.y.push_back(0);
   for (int b = 0; b < bins; ++b) {
     s.x.push_back(lo + b * width);
-    s.y.push_back(counts[static_cast<std::size_t>(b)]);
+    s.y.push_back(static_cast<double>(counts[static_cast<std::size_t>(b)]));
     s.x.push_back(lo + (b + 1) * width);
-    s.y.push_back(counts[static_cast<std::size_t>(b)]);
+    s.y.push_back(static_cast<double>(counts[static_cast<std::size_t>(b)]));
   }
   s.x.push_back(hi);
   s.y.push_back(0);
@@ -113,7 +111,7 @@ std::string write_report(const std::string& folder, const ReportInputs& in) {
     return {};
   };
 
-  if (!in.latency_ms.empty()) {
+  if (in.latency_ms.count() > 0) {
     plot::LineChart chart;
     chart.title = "Latency: frame arrival to result";
     chart.x_label = "latency (ms)";
@@ -122,7 +120,7 @@ std::string write_report(const std::string& folder, const ReportInputs& in) {
     chart.series.push_back(histogram(in.latency_ms, 30, "", {0.1, 0.3, 0.7}));
     if (auto p = draw(chart, "latency.png"); !p.empty()) return p;
   }
-  if (!in.frames_per_second.empty()) {
+  if (in.frames_per_second.count() > 0) {
     plot::LineChart chart;
     chart.title = "Throughput: frames processed in each second";
     chart.x_label = "frames per second";

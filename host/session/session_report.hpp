@@ -12,6 +12,7 @@
 
 #include "flutterscan/common/led_code.hpp"
 #include "session/object_tracker.hpp"
+#include "session/value_distribution.hpp"
 
 namespace flutterscan::session {
 
@@ -25,10 +26,10 @@ struct Preview {
 
 struct ReportInputs {
   nlohmann::json summary;
-  std::vector<ObjectResult> objects;
+  std::vector<ObjectResult> objects;  ///< the latest (summary.json's object_results)
   std::vector<Preview> previews;
-  std::vector<double> latency_ms;         ///< per processed frame: arrival to result
-  std::vector<double> frames_per_second;  ///< processed frames in each second of the run
+  ValueDistribution latency_ms;         ///< per processed frame: arrival to result
+  ValueDistribution frames_per_second;  ///< processed frames per second, each span of the run
   LedCode code;
 };
 

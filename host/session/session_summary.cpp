@@ -35,23 +35,10 @@ SessionCounts count_session(const Pipeline& pipeline, const MatchingStage& match
   return counts;
 }
 
-double percentile(std::vector<double> values, double p) {
-  if (values.empty()) return 0;
-  std::sort(values.begin(), values.end());
-  const double rank = p / 100.0 * static_cast<double>(values.size() - 1);
-  const auto lo = static_cast<std::size_t>(std::floor(rank));
-  const auto hi = std::min(lo + 1, values.size() - 1);
-  return values[lo] + (values[hi] - values[lo]) * (rank - static_cast<double>(lo));
-}
-
 nlohmann::json session_summary(const SessionConfig& config, const SessionCounts& counts,
                                const SessionResults& results) {
-  const auto& objects = results.objects;
+  const ObjectTally& objects = results.objects;
   nlohmann::json s;
-  const auto read = static_cast<std::uint64_t>(
-      std::count_if(objects.begin(), objects.end(), [](const auto& x) { return x.read(); }));
-  double rate_sum = 0;
-  for (const auto& o : objects) rate_sum += o.decode_rate();
   s["format"] = "flutterscan-session-summary";
   s["version"] = 1;
   s["camera"] = counts.camera;
@@ -78,23 +65,26 @@ nlohmann::json session_summary(const SessionConfig& config, const SessionCounts&
   s["events_received"] = counts.events_received;
   s["events_missing_by_counter"] = counts.events_missing_by_counter;
   s["camera_frames_lost"] = counts.camera_frames_lost;
-  s["objects"] = objects.size();
-  s["objects_read"] = read;
-  s["object_read_rate"] = objects.empty() ? 0.0 : static_cast<double>(read) / objects.size();
-  s["mean_decode_rate_per_object"] = objects.empty() ? 0.0 : rate_sum / objects.size();
+  const auto n_objects = static_cast<double>(objects.objects);
+  s["objects"] = objects.objects;
+  s["objects_read"] = objects.read;
+  s["object_read_rate"] =
+      objects.objects == 0 ? 0.0 : static_cast<double>(objects.read) / n_objects;
+  s["mean_decode_rate_per_object"] =
+      objects.objects == 0 ? 0.0 : objects.decode_rate_sum / n_objects;
   const double duration_s = counts.duration_s;
   s["duration_s"] = std::round(duration_s * 1000) / 1000;
   s["fps"] = duration_s > 0 ? std::round(counts.frames_processed / duration_s * 10) / 10 : 0.0;
-  s["latency_ms_p50"] = std::round(percentile(results.latency_ms, 50) * 10) / 10;
-  s["latency_ms_p99"] = std::round(percentile(results.latency_ms, 99) * 10) / 10;
+  s["latency_ms_p50"] = std::round(results.latency_ms.percentile(50) * 10) / 10;
+  s["latency_ms_p99"] = std::round(results.latency_ms.percentile(99) * 10) / 10;
   // Motion refinement (processing.blur_tolerance): how far the frames moved the encoder's blur.
   const auto& delta = results.refined_minus_encoder_px;
   const auto px = [](double v) { return std::round(v * 1000) / 1000; };
-  s["motion_refinement"] = {{"frames_refined", delta.size()},
+  s["motion_refinement"] = {{"frames_refined", delta.count()},
                             {"frames_without_edges", results.frames_without_motion_edges},
-                            {"refined_minus_encoder_px_p5", px(percentile(delta, 5))},
-                            {"refined_minus_encoder_px_p50", px(percentile(delta, 50))},
-                            {"refined_minus_encoder_px_p95", px(percentile(delta, 95))}};
+                            {"refined_minus_encoder_px_p5", px(delta.percentile(5))},
+                            {"refined_minus_encoder_px_p50", px(delta.percentile(50))},
+                            {"refined_minus_encoder_px_p95", px(delta.percentile(95))}};
   if (config.processing.cascade) {
     const SecondPassTally& t = results.second_pass;
     s["cascade"] = {{"frames_with_second_pass", t.frames},
@@ -104,8 +94,8 @@ nlohmann::json session_summary(const SessionConfig& config, const SessionCounts&
                     {"values_read_first", t.values},
                     {"windows_over_budget", t.windows_skipped},
                     {"frames_over_budget", t.frames_skipping},
-                    {"window_ms_p50", std::round(percentile(t.window_ms, 50) * 10) / 10},
-                    {"window_ms_p99", std::round(percentile(t.window_ms, 99) * 10) / 10}};
+                    {"window_ms_p50", std::round(t.window_ms.percentile(50) * 10) / 10},
+                    {"window_ms_p99", std::round(t.window_ms.percentile(99) * 10) / 10}};
   }
   s["clock_drift_ppm"] = std::round(counts.clocks.drift_ppm() * 10) / 10;
   s["clock_fit_points"] = counts.clocks.points;
@@ -129,9 +119,7 @@ nlohmann::json session_summary(const SessionConfig& config, const SessionCounts&
                   {"clients_dropped", counts.clients_dropped},
                   {"serial_lines_lost", counts.serial_lines_lost}};
   if (!results.truth_seen.empty()) {
-    std::set<std::string> values;
-    for (const auto& o : objects)
-      if (o.read()) values.insert(o.value);
+    const std::set<std::string>& values = objects.values_read;
     nlohmann::json missed = nlohmann::json::array(), wrong = nlohmann::json::array();
     for (const auto& t : results.truth_seen)
       if (!values.count(t)) missed.push_back(t);
@@ -153,8 +141,9 @@ nlohmann::json session_summary(const SessionConfig& config, const SessionCounts&
   }
   s["reads_by_grade"] = results.reads_by_grade;
   nlohmann::json object_list = nlohmann::json::array();
-  for (const auto& o : objects) object_list.push_back(read_record(o));
+  for (const auto& o : objects.latest) object_list.push_back(read_record(o));
   s["object_results"] = object_list;
+  s["object_results_omitted"] = objects.objects - objects.latest.size();
   if (!counts.capture_error.empty()) s["error"] = counts.capture_error;
   if (!results.save_error.empty()) s["save_error"] = results.save_error;
   return s;
@@ -164,16 +153,10 @@ ReportInputs report_inputs(const nlohmann::json& summary, SessionResults& result
                            const LedCode& code) {
   ReportInputs inputs;
   inputs.summary = summary;
-  inputs.objects = results.objects;
+  inputs.objects.assign(results.objects.latest.begin(), results.objects.latest.end());
   inputs.previews = std::move(results.previews);
   inputs.latency_ms = results.latency_ms;
-  const auto& processed_at_s = results.processed_at_s;
-  if (!processed_at_s.empty()) {
-    std::vector<double> per_second(static_cast<std::size_t>(processed_at_s.back()) + 1, 0.0);
-    for (double t : processed_at_s) per_second[static_cast<std::size_t>(t)] += 1;
-    if (per_second.size() > 1) per_second.pop_back();  // the last second is partial
-    inputs.frames_per_second = per_second;
-  }
+  for (double rate : results.processed.per_second()) inputs.frames_per_second.add(rate);
   inputs.code = code;
   return inputs;
 }

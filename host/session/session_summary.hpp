@@ -61,9 +61,6 @@ SessionCounts count_session(const Pipeline& pipeline, const MatchingStage& match
                             const CaptureEnd& capture_end, const SessionFolder& folder,
                             const ResultsServer& server);
 
-/// \brief The `p`th percentile (0-100) of `values`, linear between ranks; 0 when empty.
-double percentile(std::vector<double> values, double p);
-
 /// \brief summary.json of a session under `config`.
 nlohmann::json session_summary(const SessionConfig& config, const SessionCounts& counts,
                                const SessionResults& results);

@@ -25,6 +25,7 @@
 
 #include "session/mqtt_publisher.hpp"
 #include "session/test/mosquitto_broker.hpp"
+#include "session/value_distribution.hpp"
 
 namespace {
 
@@ -72,13 +73,6 @@ void on_message(mosquitto*, void* user, const mosquitto_message* message) {
 
 void on_subscribe(mosquitto*, void* user, int, int, const int*) {
   static_cast<Arrivals*>(user)->subscribed = true;
-}
-
-double percentile(std::vector<double> v, double p) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const auto i = static_cast<std::size_t>(p / 100 * static_cast<double>(v.size() - 1) + 0.5);
-  return v[std::min(i, v.size() - 1)];
 }
 
 struct Figures {
@@ -149,8 +143,8 @@ Figures measure(const flutterscan::session::testing::MosquittoBroker& broker, in
           std::chrono::duration<double, std::milli>(arrivals.at[i] - sent[i]).count());
   Figures f;
   f.received = latency_ms.size();
-  f.p50 = percentile(latency_ms, 50);
-  f.p99 = percentile(latency_ms, 99);
+  f.p50 = flutterscan::session::percentile(latency_ms, 50);
+  f.p99 = flutterscan::session::percentile(latency_ms, 99);
   f.max = latency_ms.empty() ? 0 : *std::max_element(latency_ms.begin(), latency_ms.end());
   return f;
 }

@@ -8,6 +8,7 @@
 //                 [--stage-repeats N]   (the stage table's runs, default 9; more for `perf`)
 //                 [--cascade]           (only the cascade against tv on every frame, dim light)
 //                 [--live-view]         (only the live view's cost: live_view_runs.hpp)
+//                 [--soak MINUTES]      (only memory over a long 60 fps session: soak_run.hpp)
 
 #include <unistd.h>
 
@@ -40,6 +41,7 @@
 #include "reader/code_reading.hpp"
 #include "reader/reader_options.hpp"
 #include "session/bench/live_view_runs.hpp"
+#include "session/bench/soak_run.hpp"
 #include "session/read_record.hpp"
 #include "session/session.hpp"
 
@@ -342,6 +344,7 @@ int main(int argc, char** argv) {
   int stage_repeats = 9;
   bool cascade_only = false;
   bool live_view = false;
+  double soak_minutes = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
     auto next = [&]() -> std::string {
@@ -367,19 +370,28 @@ int main(int argc, char** argv) {
       cascade_only = true;
     else if (arg == "--live-view")
       live_view = true;
+    else if (arg == "--soak")
+      soak_minutes = std::atof(next().c_str());
     else {
       std::cerr << "session_bench: unknown argument '" << arg << "'\n";
       return 2;
     }
   }
-  if (frames < 10 || width < 640 || height < 240 || stage_repeats < 1) {
+  if (frames < 10 || width < 640 || height < 240 || stage_repeats < 1 || soak_minutes < 0) {
     std::cerr << "session_bench: --frames >= 10, --width >= 640, --height >= 240, "
-                 "--stage-repeats >= 1\n";
+                 "--stage-repeats >= 1, --soak >= 0\n";
     return 2;
   }
   const fs::path out = fs::temp_directory_path() / "flutterscan_session_bench";
   std::cout << "CPU: " << bench::cpu_model() << "\n\n";
   if (cascade_only) return cascade_against_tv(width, height, std::min(frames, 120), out);
+  if (soak_minutes > 0) {
+    const int soak_frames = static_cast<int>(soak_minutes * 60 * 60);
+    auto config = bench_config(width, height, soak_frames, true, 16667, out);
+    const int code = bench::soak_table(config, 5.0, csv);
+    fs::remove_all(out);
+    return code;
+  }
   std::cout << "session pipeline, " << width << "x" << height
             << " RGB 12-bit frames from a ring of 8 pre-rendered sim frames, joint-wiener, "
                "2 workers x 1 thread, queue 4\n\n";

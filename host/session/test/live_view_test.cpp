@@ -444,6 +444,7 @@ TEST(LiveViewSession, TheLiveFiguresEndEqualToTheSummary) {
   EXPECT_EQ(s["state"], "disarmed");
   EXPECT_EQ(s["folder"], outcome.folder);
   EXPECT_EQ(s["line"]["code"], summary["code"]);
+  EXPECT_EQ(s["line"]["method"], summary["method"]);  // "cascade" by default, as run
   EXPECT_EQ(s["frames"]["captured"], summary["frames_captured"]);
   EXPECT_EQ(s["frames"]["processed"], summary["frames_processed"]);
   EXPECT_EQ(s["frames"]["dropped"], summary["frames_dropped"]);

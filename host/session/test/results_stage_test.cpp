@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include "session/read_record.hpp"
 #include "session/test/session_test_support.hpp"
 #include "session/test/stage_test_support.hpp"
 
@@ -56,19 +57,20 @@ TEST(ResultsStage, OutcomesAreHandledInCaptureOrderAndObjectsPublishedOnce) {
   stage.take(processed(3, 300, 460, "ABC"));
   stage.take(processed(1, 100, 260, ""));
   stage.take(dropped(2));
-  EXPECT_TRUE(stage.results().latency_ms.empty());  // waiting for frame 0
+  EXPECT_EQ(stage.results().latency_ms.count(), 0u);  // waiting for frame 0
   stage.take(processed(0, 0, 160, "ABC"));
   stage.finish();
   folder.close();
 
   const SessionResults& r = stage.results();
   EXPECT_EQ(pipeline.frames_processed, 3u);
-  EXPECT_EQ(r.latency_ms.size(), 3u);
-  EXPECT_EQ(r.processed_at_s.size(), 3u);
-  ASSERT_EQ(r.objects.size(), 1u);
-  EXPECT_EQ(r.objects[0].value, "ABC");
-  EXPECT_EQ(r.objects[0].frames_seen, 3);
-  EXPECT_EQ(r.objects[0].frames_decoded, 2);
+  EXPECT_EQ(r.latency_ms.count(), 3u);
+  EXPECT_EQ(r.objects.objects, 1u);
+  EXPECT_EQ(r.objects.read, 1u);
+  ASSERT_EQ(r.objects.latest.size(), 1u);
+  EXPECT_EQ(r.objects.latest[0].value, "ABC");
+  EXPECT_EQ(r.objects.latest[0].frames_seen, 3);
+  EXPECT_EQ(r.objects.latest[0].frames_decoded, 2);
   EXPECT_EQ(r.models_chosen.at("global"), 3u);
   EXPECT_EQ(r.frames_flagged.at("no-read"), 1u);
   EXPECT_EQ(r.frames_flagged.at("dropped"), 1u);
@@ -79,10 +81,14 @@ TEST(ResultsStage, OutcomesAreHandledInCaptureOrderAndObjectsPublishedOnce) {
   int bad_lines = 0;
   const auto lines = testing::read_jsonl(scratch.path() / "session.jsonl", bad_lines);
   EXPECT_EQ(bad_lines, 0);
-  ASSERT_EQ(lines.size(), 4u);
-  for (std::size_t i = 0; i < lines.size(); ++i) EXPECT_EQ(lines[i]["index"], i);
+  // The four frames in order, then the object, finished at the end: its record
+  // as the results line carried it.
+  ASSERT_EQ(lines.size(), 5u);
+  for (std::size_t i = 0; i < 4; ++i) EXPECT_EQ(lines[i]["index"], i);
   EXPECT_TRUE(lines[0].contains("latency_ms"));
   EXPECT_FALSE(lines[2].contains("latency_ms"));
+  EXPECT_EQ(lines[4]["object_result"], read_record(r.objects.latest[0]));
+  EXPECT_EQ(lines[4]["object_result"]["value"], "ABC");
 }
 
 TEST(ResultsStage, AFrameThatFailedWithoutFlagsIsLoggedAsAnError) {

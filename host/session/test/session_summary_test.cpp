@@ -16,13 +16,6 @@ ObjectResult object(const std::string& value, int seen, int decoded) {
   return o;
 }
 
-TEST(SessionSummary, PercentilesInterpolateBetweenRanks) {
-  EXPECT_EQ(percentile({}, 50), 0);
-  EXPECT_DOUBLE_EQ(percentile({4, 1, 3, 2}, 50), 2.5);
-  EXPECT_DOUBLE_EQ(percentile({4, 1, 3, 2}, 100), 4);
-  EXPECT_DOUBLE_EQ(percentile({10, 20}, 99), 19.9);
-}
-
 TEST(SessionSummary, CountsWhatEachStageCounted) {
   Pipeline pipeline(4);
   pipeline.frames_captured = 10;
@@ -71,8 +64,9 @@ TEST(SessionSummary, ReportsTheStagesCountsAndJudgesTheGroundTruth) {
   counts.stopped_by = "max_frames";
   counts.capture_error = "camera gone";
   SessionResults results;
-  results.objects = {object("A", 4, 4), object("", 2, 0), object("Z", 2, 1)};
-  results.latency_ms = {10, 20, 30};
+  for (auto o : {object("A", 4, 4), object("", 2, 0), object("Z", 2, 1)})
+    results.objects.add(o, true);
+  for (double ms : {10, 20, 30}) results.latency_ms.add(ms);
   results.truth_seen = {"A", "B"};
   results.truth_in_view = {"A", "B", "C"};
   results.models_chosen["global"] = 8;
@@ -96,17 +90,44 @@ TEST(SessionSummary, ReportsTheStagesCountsAndJudgesTheGroundTruth) {
   EXPECT_EQ(s["ground_truth"]["missed"], nlohmann::json::array({"B"}));
   EXPECT_EQ(s["ground_truth"]["wrong_values"], nlohmann::json::array({"Z"}));
   EXPECT_EQ(s["object_results"].size(), 3u);
+  EXPECT_EQ(s["object_results_omitted"], 0);
   EXPECT_FALSE(s.contains("save_error"));
 }
 
 TEST(SessionSummary, TheReportCountsWholeSecondsOnly) {
   SessionResults results;
-  results.processed_at_s = {0.1, 0.5, 1.2, 2.9, 3.1};
-  results.objects = {object("A", 1, 1)};
+  for (double t : {0.1, 0.5, 1.2, 2.9, 3.1}) results.processed.add(t);
+  results.objects.add(object("A", 1, 1), false);
   const ReportInputs inputs = report_inputs({{"objects", 1}}, results, LedCode{});
-  EXPECT_EQ(inputs.frames_per_second, (std::vector<double>{2, 1, 1}));  // second 3 is partial
+  // Seconds 0, 1 and 2: 2, 1 and 1 frames (second 3 is partial).
+  EXPECT_EQ(inputs.frames_per_second.count(), 3u);
+  EXPECT_EQ(inputs.frames_per_second.min(), 1);
+  EXPECT_EQ(inputs.frames_per_second.max(), 2);
+  EXPECT_EQ(inputs.frames_per_second.percentile(50), 1);
   EXPECT_EQ(inputs.objects.size(), 1u);
   EXPECT_EQ(inputs.summary["objects"], 1);
+}
+
+TEST(SessionSummary, ListsTheLatestObjectsAndCountsEveryOne) {
+  SessionConfig config;
+  SessionResults results;
+  const std::size_t n = kObjectsListed + 37;
+  for (std::size_t i = 0; i < n; ++i) {
+    const bool read = i % 4 != 0;
+    ObjectResult o = object(read ? std::to_string(i) : "", 3, read ? 3 : 0);
+    o.id = i + 1;
+    results.objects.add(o, false);
+  }
+  const nlohmann::json s = session_summary(config, SessionCounts{}, results);
+  EXPECT_EQ(s["objects"], n);
+  EXPECT_EQ(s["objects_read"], n - (n + 3) / 4);
+  EXPECT_DOUBLE_EQ(s["mean_decode_rate_per_object"].get<double>(),
+                   static_cast<double>(n - (n + 3) / 4) / static_cast<double>(n));
+  ASSERT_EQ(s["object_results"].size(), kObjectsListed);
+  EXPECT_EQ(s["object_results_omitted"], 37);
+  EXPECT_EQ(s["object_results"][0]["object"], 38);  // the first 37 are in session.jsonl only
+  EXPECT_EQ(s["object_results"].back()["object"], n);
+  EXPECT_TRUE(results.objects.values_read.empty());  // kept only with the sim's truth
 }
 
 }  // namespace

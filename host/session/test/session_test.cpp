@@ -68,11 +68,14 @@ TEST(SimSession, EveryLabelReadEqualsItsGroundTruthAtNominalNoise) {
   EXPECT_EQ(record["corners_within_2px"], record["reads_checked"]) << record.dump();
   EXPECT_EQ(record["modules_within_10pct"], record["reads_checked"]) << record.dump();
   EXPECT_EQ(record["symbology_ids_matching"], record["reads_checked"]) << record.dump();
-  // The folder: one log line per frame, the first frames' files, summary, report.
+  // The folder: one log line per frame and one per object (its result, as
+  // summary.json lists it), the first frames' files, summary, report.
   int bad = 0;
   const auto lines = read_jsonl(out / "session.jsonl", bad);
   EXPECT_EQ(bad, 0);
-  EXPECT_EQ(lines.size(), 90u);
+  EXPECT_EQ(frame_lines(lines).size(), 90u);
+  EXPECT_EQ(nlohmann::json(object_lines(lines)), s["object_results"]);
+  EXPECT_EQ(s["object_results_omitted"], 0);
   EXPECT_TRUE(fs::exists(out / "frames" / "f00000000.png"));
   EXPECT_TRUE(fs::exists(out / "frames" / "f00000000.json"));
   EXPECT_TRUE(fs::exists(out / "frames" / "f00000000.fused.png"));
@@ -126,10 +129,10 @@ TEST(SimSession, OverloadDropsAtTheQueueAndCountsEveryDrop) {
   int bad = 0;
   const auto lines = read_jsonl(out / "session.jsonl", bad);
   EXPECT_EQ(count_flag(lines, "dropped"), dropped);
-  EXPECT_EQ(lines.size(), 40u);
+  EXPECT_EQ(frame_lines(lines).size(), 40u);
   if (HasFailure()) {
     // What went otherwise than processed or dropped, for the record.
-    for (const auto& l : lines)
+    for (const auto& l : frame_lines(lines))
       if (count_flag({l}, "dropped") == 0 && !l.contains("latency_ms")) ADD_FAILURE() << l.dump();
     ADD_FAILURE() << s.dump();
   }
@@ -161,7 +164,7 @@ TEST(SimSession, FrameFilesRotateWithinTheDiskBudgetAndTheLogNever) {
   EXPECT_TRUE(fs::exists(out / "frames" / "f00000023.png"));
   EXPECT_EQ(rotation["first_sequence_rotated"], 0);
   int bad = 0;
-  EXPECT_EQ(read_jsonl(out / "session.jsonl", bad).size(), 24u);
+  EXPECT_EQ(frame_lines(read_jsonl(out / "session.jsonl", bad)).size(), 24u);
 }
 
 /// Reads lines from a TCP connection until the server closes it.

@@ -81,6 +81,22 @@ inline std::vector<nlohmann::json> read_jsonl(const std::filesystem::path& path,
   return lines;
 }
 
+/// \brief The lines of session.jsonl that are about frames (not an object's result).
+inline std::vector<nlohmann::json> frame_lines(const std::vector<nlohmann::json>& lines) {
+  std::vector<nlohmann::json> frames;
+  for (const auto& l : lines)
+    if (!l.contains("object_result")) frames.push_back(l);
+  return frames;
+}
+
+/// \brief The object results in session.jsonl, in the order they were published.
+inline std::vector<nlohmann::json> object_lines(const std::vector<nlohmann::json>& lines) {
+  std::vector<nlohmann::json> objects;
+  for (const auto& l : lines)
+    if (l.contains("object_result")) objects.push_back(l["object_result"]);
+  return objects;
+}
+
 inline int count_flag(const std::vector<nlohmann::json>& lines, const std::string& flag) {
   int n = 0;
   for (const auto& l : lines)
