@@ -1,7 +1,9 @@
 #include "session/session_report.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <sstream>
@@ -9,6 +11,7 @@
 #include "codes/spectrum.hpp"
 #include "plot/line_chart.hpp"
 #include "session/read_record.hpp"
+#include "session/report_findings.hpp"
 
 namespace flutterscan::session {
 namespace {
@@ -73,6 +76,199 @@ std::string image_tag(const std::vector<std::uint8_t>& png, const std::string& a
   return "<img alt=\"" + escape(alt) + "\" src=\"data:image/png;base64," + base64(png) + "\">";
 }
 
+/// The summary's figures in words, in the order the report lists them; `percent`: a
+/// share shown as a percentage.
+struct FigureName {
+  const char* key;
+  const char* words;
+  bool percent = false;
+};
+constexpr FigureName kFigureNames[] = {
+    {"camera", "Camera"},
+    {"controller", "Controller"},
+    {"code", "Code"},
+    {"method", "Deblur method"},
+    {"frame_size", "Frame size"},
+    {"duration_s", "Duration (s)"},
+    {"stopped_by", "Stopped by"},
+    {"frames_captured", "Frames captured"},
+    {"frames_processed", "Frames processed"},
+    {"frames_dropped", "Frames dropped (processing behind)"},
+    {"frames_failed", "Frames that failed"},
+    {"frames_without_event", "Frames without an exposure event"},
+    {"events_without_frame", "Exposures without a frame"},
+    {"camera_frames_lost", "Frames the camera lost"},
+    {"objects", "Objects"},
+    {"objects_read", "Objects read"},
+    {"object_read_rate", "Read rate", true},
+    {"mean_decode_rate_per_object", "Frames read per object (mean share)", true},
+    {"fps", "Frames per second"},
+    {"latency_ms_p50", "Latency, median (ms)"},
+    {"latency_ms_p99", "Latency, 99th percentile (ms)"},
+    {"clock_drift_ppm", "Camera against controller clock (ppm)"},
+};
+
+std::string figure_text(const nlohmann::json& value, bool percent) {
+  if (value.is_string()) return value.get<std::string>();
+  if (percent && value.is_number()) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.1f%%", 100 * value.get<double>());
+    return text;
+  }
+  return value.dump();
+}
+
+/// Rows of the per-object table shown before the rest is folded away.
+constexpr std::size_t kObjectRowsShown = 20;
+
+void object_row(std::ostringstream& html, const ObjectResult& o) {
+  const nlohmann::json r = read_record(o);
+  html << "<tr" << (o.read() ? "" : " class=\"noread\"") << "><td>" << o.id << "</td><td>"
+       << (o.read() ? "READ" : "NO-READ") << "</td><td style=\"text-align:left\">"
+       << escape(o.value) << "</td><td>" << escape(o.format) << "</td><td>"
+       << escape(r.value("symbology_id", "")) << "</td><td>" << o.frames_decoded << " / "
+       << o.frames_seen << "</td><td>"
+       << (r.contains("quality") && r["quality"].contains("grade")
+               ? escape(r["quality"]["grade"].get<std::string>())
+               : "")
+       << "</td><td>" << (r.contains("module_px") ? escape(r["module_px"].dump()) : "")
+       << "</td><td>" << std::lround(o.belt_px) << "</td><td>" << escape(r.value("time", ""))
+       << "</td><td>" << escape(r.value("frame_file", "")) << "</td></tr>\n";
+}
+
+void object_table(std::ostringstream& html, const std::vector<const ObjectResult*>& objects) {
+  html << "<table><tr><th>object</th><th>result</th><th>value</th><th>format</th>"
+       << "<th>identifier</th><th>frames read / seen</th><th>grade (indicative)</th>"
+       << "<th>module px</th><th>belt px</th><th>time (UTC)</th><th>kept frame</th></tr>\n";
+  for (const ObjectResult* o : objects) object_row(html, *o);
+  html << "</table>\n";
+}
+
+/// The first kObjectRowsShown of `objects` as a table, the rest folded under `more`.
+void folded_object_table(std::ostringstream& html, const std::vector<const ObjectResult*>& objects,
+                         const std::string& more) {
+  const std::size_t shown = std::min(objects.size(), kObjectRowsShown);
+  object_table(html, {objects.begin(), objects.begin() + static_cast<std::ptrdiff_t>(shown)});
+  if (objects.size() > shown) {
+    html << "<details><summary>" << objects.size() - shown << " " << escape(more) << "</summary>\n";
+    object_table(html, {objects.begin() + static_cast<std::ptrdiff_t>(shown), objects.end()});
+    html << "</details>\n";
+  }
+}
+
+struct Chart {
+  std::string title;
+  std::string file;
+};
+
+std::string report_page(const ReportInputs& in, const std::vector<Chart>& charts) {
+  std::ostringstream html;
+  const auto& s = in.summary;
+  const auto objects = s.value("objects", std::uint64_t{0});
+  const auto read = s.value("objects_read", std::uint64_t{0});
+  const auto dropped = s.value("frames_dropped", std::uint64_t{0});
+  const double rate = s.value("object_read_rate", 0.0);
+  const std::vector<Finding> findings = report_findings(s);
+  const char* verdict = findings.front().severity == Finding::Severity::kProblem   ? "problem"
+                        : findings.front().severity == Finding::Severity::kWarning ? "warning"
+                                                                                   : "good";
+  html << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
+       << "<title>flutterscan session report</title><style>"
+       << "body{font-family:sans-serif;margin:2em;max-width:1200px;color:#222}"
+       << "table{border-collapse:collapse;margin-bottom:.5em}td,th{border:1px solid #bbb;"
+          "padding:2px 8px;text-align:right}th{background:#eee}.noread{background:#fdd}"
+       << "img{max-width:100%;border:1px solid #ccc}.sub{color:#555;margin-top:-.5em}"
+       << ".pair{display:grid;grid-template-columns:1fr 1fr;gap:8px;margin-bottom:1em}"
+       << ".verdict{font-size:1.5em;padding:.5em .8em;border-radius:6px;margin:1em 0}"
+       << ".verdict.good{background:#d8f0d8}.verdict.warning{background:#fbeec8}"
+       << ".verdict.problem{background:#f7d4d4}"
+       << ".cards{display:flex;flex-wrap:wrap;gap:8px}.card{border:1px solid #ccc;"
+          "border-radius:6px;padding:.4em .8em;min-width:9em}.card b{font-size:1.6em;"
+          "display:block}"
+       << ".findings li{margin:.4em 0}.findings .problem b{color:#a00}"
+          ".findings .warning b{color:#a60}.findings .good b{color:#070}"
+       << ".todo{color:#444}details{margin:.5em 0}summary{cursor:pointer;color:#036}"
+       << "</style></head><body>\n<h1>flutterscan session report</h1>\n";
+  html << "<p class=\"sub\">" << escape(s.value("camera", "")) << " &middot; "
+       << escape(s.value("controller", "")) << " &middot; code " << escape(s.value("code", ""))
+       << " &middot; " << escape(s.value("method", "")) << " &middot; "
+       << escape(s.value("frame_size", "")) << " &middot; "
+       << std::lround(s.value("duration_s", 0.0)) << " s, stopped by "
+       << escape(s.value("stopped_by", "")) << "</p>\n";
+  html << "<div class=\"verdict " << verdict << "\" id=\"verdict\">Read rate "
+       << figure_text(rate, true) << ": " << read << " of " << objects << " objects read, "
+       << objects - read << " NO-READ" << (objects - read == 1 ? "" : "s") << ", " << dropped
+       << " frame" << (dropped == 1 ? "" : "s") << " dropped</div>\n";
+  auto card = [&](const std::string& value, const std::string& words) {
+    html << "<div class=\"card\"><b>" << escape(value) << "</b>" << escape(words) << "</div>";
+  };
+  html << "<div class=\"cards\">";
+  card(figure_text(rate, true), "read rate");
+  card(std::to_string(objects - read), "NO-READs");
+  card(figure_text(s.value("fps", 0.0), false), "frames per second");
+  card(figure_text(s.value("latency_ms_p50", 0.0), false) + " / " +
+           figure_text(s.value("latency_ms_p99", 0.0), false) + " ms",
+       "latency, median / 99th percentile");
+  card(std::to_string(dropped) + " / " + std::to_string(s.value("frames_captured", 0)),
+       "frames dropped / captured");
+  html << "</div>\n<h2>What went wrong, and what to do</h2>\n<ul class=\"findings\">\n";
+  for (const Finding& f : findings) {
+    std::string name = severity_name(f.severity);
+    name[0] = static_cast<char>(std::toupper(name[0]));
+    html << "<li class=\"" << severity_name(f.severity) << "\"><b>" << name << ":</b> "
+         << escape(f.what);
+    if (!f.to_do.empty()) html << "<br><span class=\"todo\">" << escape(f.to_do) << "</span>";
+    html << "</li>\n";
+  }
+  html << "</ul>\n";
+
+  std::vector<const ObjectResult*> listed, no_reads;
+  for (const auto& o : in.objects) {
+    listed.push_back(&o);
+    if (!o.read()) no_reads.push_back(&o);
+  }
+  const auto omitted = s.value("object_results_omitted", std::uint64_t{0});
+  if (!no_reads.empty()) {
+    html << "<h2>NO-READs</h2>\n";
+    folded_object_table(html, no_reads, "more NO-READs");
+  }
+
+  html << "<h2>Before and after</h2>\n";
+  if (in.previews.empty()) html << "<p>No frames were kept.</p>\n";
+  for (const auto& p : in.previews) {
+    html << "<h3>" << escape(p.caption) << "</h3><div class=\"pair\"><div>"
+         << image_tag(p.before_png, "captured frame " + std::to_string(p.sequence))
+         << "<br>captured (coded blur)</div><div>"
+         << image_tag(p.after_png, "fused frame " + std::to_string(p.sequence))
+         << "<br>deblurred and fused</div></div>\n";
+  }
+
+  html << "<h2>Charts</h2>\n";
+  for (const auto& c : charts)
+    html << "<h3>" << escape(c.title) << "</h3>" << image_tag(read_bytes(c.file), c.title) << "\n";
+
+  // Each object's read record (read_record.hpp), as the result lines carry it.
+  html << "<h2>Objects</h2>\n";
+  if (omitted > 0)
+    html << "<p>The latest " << listed.size() << " objects; the " << omitted
+         << " before them are in session.jsonl (its object_result lines).</p>\n";
+  if (listed.empty()) html << "<p>No objects.</p>\n";
+  folded_object_table(html, listed, "more objects");
+
+  html << "<h2>All figures</h2><table>";
+  for (const FigureName& f : kFigureNames)
+    if (s.contains(f.key))
+      html << "<tr><th style=\"text-align:left\">" << f.words << "</th><td>"
+           << escape(figure_text(s[f.key], f.percent)) << "</td></tr>";
+  html << "</table>\n";
+  if (s.contains("rotation") && s["rotation"].value("frames_rotated", 0) > 0)
+    html << "<p>Frame files rotated away to stay within the disk budget: "
+         << s["rotation"]["frames_rotated"] << " frames.</p>\n";
+  html << "<p>Every figure of the session is in summary.json, every frame and object in "
+          "session.jsonl.</p>\n</body></html>\n";
+  return html.str();
+}
+
 }  // namespace
 
 std::string base64(const std::vector<std::uint8_t>& bytes) {
@@ -99,10 +295,6 @@ std::string write_report(const std::string& folder, const ReportInputs& in) {
   fs::create_directories(charts, ec);
   if (ec) return "cannot create '" + charts.string() + "': " + ec.message();
 
-  struct Chart {
-    std::string title;
-    std::string file;
-  };
   std::vector<Chart> made;
   auto draw = [&](const plot::LineChart& chart, const std::string& name) -> std::string {
     const std::string path = (charts / name).string();
@@ -149,72 +341,12 @@ std::string write_report(const std::string& folder, const ReportInputs& in) {
     if (auto p = draw(chart, "spectrum.png"); !p.empty()) return p;
   }
 
-  std::ostringstream html;
-  const auto& s = in.summary;
-  html << "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
-       << "<title>flutterscan session report</title><style>"
-       << "body{font-family:sans-serif;margin:2em;max-width:1200px}"
-       << "table{border-collapse:collapse}td,th{border:1px solid #bbb;padding:2px "
-          "8px;text-align:right}"
-       << "th{background:#eee}.noread{background:#fdd}img{max-width:100%;border:1px solid #ccc}"
-       << ".pair{display:grid;grid-template-columns:1fr 1fr;gap:8px;margin-bottom:1em}"
-       << "</style></head><body>\n<h1>flutterscan session report</h1>\n";
-  html << "<h2>Summary</h2><table>";
-  auto row = [&](const std::string& name, const nlohmann::json& value) {
-    html << "<tr><th style=\"text-align:left\">" << escape(name) << "</th><td>"
-         << escape(value.is_string() ? value.get<std::string>() : value.dump()) << "</td></tr>";
-  };
-  for (const char* key :
-       {"camera", "controller", "code", "method", "frames_captured", "frames_processed",
-        "frames_dropped", "frames_without_event", "events_without_frame", "camera_frames_lost",
-        "objects", "objects_read", "object_read_rate", "fps", "latency_ms_p50", "latency_ms_p99",
-        "clock_drift_ppm", "stopped_by", "duration_s"})
-    if (s.contains(key)) row(key, s[key]);
-  html << "</table>\n";
-  if (s.contains("rotation") && s["rotation"].value("frames_rotated", 0) > 0)
-    html << "<p>Frame files rotated away to stay within the disk budget: "
-         << s["rotation"]["frames_rotated"] << " frames (see summary.json).</p>\n";
-
-  html << "<h2>Before and after</h2>\n";
-  if (in.previews.empty()) html << "<p>No frames were kept.</p>\n";
-  for (const auto& p : in.previews) {
-    html << "<h3>" << escape(p.caption) << "</h3><div class=\"pair\"><div>"
-         << image_tag(p.before_png, "captured frame " + std::to_string(p.sequence))
-         << "<br>captured (coded blur)</div><div>"
-         << image_tag(p.after_png, "fused frame " + std::to_string(p.sequence))
-         << "<br>deblurred and fused</div></div>\n";
-  }
-
-  // The table shows each object's read record (read_record.hpp), as the result lines carry it.
-  html << "<h2>Decodes per object</h2><table><tr><th>object</th><th>belt px</th><th>frames</th>"
-       << "<th>decoded</th><th>rate</th><th>status</th><th>format</th><th>identifier</th>"
-       << "<th>value</th><th>module px</th><th>grade (indicative)</th><th>time (UTC)</th>"
-       << "<th>kept frame</th></tr>\n";
-  for (const auto& o : in.objects) {
-    const nlohmann::json r = read_record(o);
-    html << "<tr" << (o.read() ? "" : " class=\"noread\"") << "><td>" << o.id << "</td><td>"
-         << std::lround(o.belt_px) << "</td><td>" << o.frames_seen << "</td><td>"
-         << o.frames_decoded << "</td><td>" << std::lround(100 * o.decode_rate()) << "%</td><td>"
-         << (o.read() ? "READ" : "NO-READ") << "</td><td>" << escape(o.format) << "</td><td>"
-         << escape(r.value("symbology_id", "")) << "</td><td style=\"text-align:left\">"
-         << escape(o.value) << "</td><td>"
-         << (r.contains("module_px") ? escape(r["module_px"].dump()) : "") << "</td><td>"
-         << (r.contains("quality") && r["quality"].contains("grade")
-                 ? escape(r["quality"]["grade"].get<std::string>())
-                 : "")
-         << "</td><td>" << escape(r.value("time", "")) << "</td><td>"
-         << escape(r.value("frame_file", "")) << "</td></tr>\n";
-  }
-  html << "</table>\n<h2>Charts</h2>\n";
-  for (const auto& c : made)
-    html << "<h3>" << escape(c.title) << "</h3>" << image_tag(read_bytes(c.file), c.title) << "\n";
-  html << "</body></html>\n";
-
+  const std::string html = report_page(in, made);
   const fs::path target = fs::path(folder) / "report.html";
   const fs::path temporary = fs::path(folder) / ".report.html.tmp";
   {
     std::ofstream out(temporary, std::ios::binary);
-    out << html.str();
+    out << html;
     if (!out) return "cannot write '" + temporary.string() + "'";
   }
   fs::rename(temporary, target, ec);

@@ -1,8 +1,12 @@
 #pragma once
-// report.html: one self-contained page (no external resources; pictures and
-// charts are data URIs) with the session's figures, before/after pictures,
-// the decode table, throughput and latency histograms, and the code's
-// spectrum. Charts are drawn with host/plot into DIR/charts/ and embedded.
+// report.html: one self-contained page (no external resources, no script;
+// pictures and charts are data URIs) for the people on the line. Its first
+// screen says how the session went in words: the read rate, NO-READs and
+// drops, the figures that matter, and what went wrong with what to do about it
+// (report_findings.hpp). Then the NO-READs, before/after pictures, throughput
+// and latency histograms and the code's spectrum, the objects (the first rows,
+// the rest folded), and every figure named in words. Charts are drawn with
+// host/plot into DIR/charts/ and embedded.
 
 #include <nlohmann/json.hpp>
 

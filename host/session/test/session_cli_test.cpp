@@ -153,7 +153,8 @@ TEST(SessionReport, LoadsInHeadlessChromiumWithoutConsoleErrors) {
   const fs::path& out = scratch.path();
   const pid_t pid = spawn({"demo", "--frames", "40", "--out", out.string(), "--no-progress"}, out);
   ASSERT_EQ(wait_exit(pid), 0) << read_text(out / "stderr.txt");
-  const fs::path report = only_session(out) / "report.html";
+  const fs::path folder = only_session(out);
+  const fs::path report = folder / "report.html";
   ASSERT_TRUE(fs::exists(report));
   const fs::path shot = out / "report.png";
   const int code = shell(headless(browser, out / "profile") +
@@ -176,6 +177,14 @@ TEST(SessionReport, LoadsInHeadlessChromiumWithoutConsoleErrors) {
   EXPECT_EQ(html.find("src=\"http"), std::string::npos);
   EXPECT_EQ(html.find("src=\"file"), std::string::npos);
   EXPECT_NE(html.find("data:image/png;base64,"), std::string::npos);
+  // The page as chromium built it starts with the verdict in words, from the summary.
+  std::string dom;
+  shell(headless(browser, out / "profile-dom") + " --dump-dom file://" + report.string(), dom);
+  const auto summary = nlohmann::json::parse(read_text(folder / "summary.json"));
+  const std::string verdict = std::to_string(summary["objects_read"].get<int>()) + " of " +
+                              std::to_string(summary["objects"].get<int>()) + " objects read";
+  EXPECT_NE(dom.find(verdict), std::string::npos) << dom.substr(0, 3000);
+  EXPECT_LT(dom.find("id=\"verdict\""), dom.find("What went wrong, and what to do"));
   std::cout << "screenshot: " << shot << "\n";
 }
 
