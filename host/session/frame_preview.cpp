@@ -9,8 +9,8 @@
 
 namespace flutterscan::session {
 
-Preview make_preview(std::uint64_t sequence, const imaging::Image& dn,
-                     const imaging::Plane& fused) {
+Preview make_preview(std::uint64_t sequence, const imaging::Image& dn, const imaging::Plane& fused,
+                     PreviewEncoding encoding) {
   Preview p;
   p.sequence = sequence;
   // Display only: the brightest sample maps to white.
@@ -43,8 +43,14 @@ Preview make_preview(std::uint64_t sequence, const imaging::Image& dn,
     cv::resize(before, before, cv::Size(), shrink, shrink, cv::INTER_AREA);
     cv::resize(after, after, cv::Size(), shrink, shrink, cv::INTER_AREA);
   }
-  cv::imencode(".png", before, p.before_png);
-  cv::imencode(".png", after, p.after_png);
+  if (encoding == PreviewEncoding::kJpeg) {
+    const std::vector<int> quality = {cv::IMWRITE_JPEG_QUALITY, 85};
+    cv::imencode(".jpg", before, p.before, quality);
+    cv::imencode(".jpg", after, p.after, quality);
+  } else {
+    cv::imencode(".png", before, p.before);
+    cv::imencode(".png", after, p.after);
+  }
   return p;
 }
 

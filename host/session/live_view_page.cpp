@@ -148,8 +148,8 @@ function showFigures(s) {
 function showPicture(p) {
   if (!p || p.sequence === pictureShown) return;
   pictureShown = p.sequence;
-  $("captured").src = "frame/captured.png?frame=" + p.sequence;
-  $("fused").src = "frame/fused.png?frame=" + p.sequence;
+  $("captured").src = "frame/captured.jpg?frame=" + p.sequence;
+  $("fused").src = "frame/fused.jpg?frame=" + p.sequence;
   const svg = $("overlay");
   svg.setAttribute("viewBox", "0 0 " + p.width + " " + p.height);
   svg.replaceChildren();

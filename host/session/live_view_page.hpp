@@ -2,7 +2,7 @@
 // The live view's page (docs/session.md, "Live view"): one static HTML page
 // with its style and script inline, no external resource. It asks the server
 // for /state.json four times a second and shows the figures, the latest
-// pictures (/frame/captured.png, /frame/fused.png, fetched again only when a
+// pictures (/frame/captured.jpg, /frame/fused.jpg, fetched again only when a
 // newer frame was encoded) with the codes read drawn over the fused one, the
 // guard flags, the latest objects and the recent NO-READs with their kept
 // frames (/files/frames/...). Values read off labels are set as text, never

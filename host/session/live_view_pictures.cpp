@@ -144,13 +144,14 @@ void LivePictures::run() {
     const int step = (job.frame.format.width + max_width_ - 1) / max_width_;
     if (const auto dn = capture::frame_to_dn(thinned(job.frame, step)); dn.ok()) {
       Preview preview = make_preview(job.frame.sequence, dn.value(),
-                                     resized(job.latent, dn.value().width(), dn.value().height()));
+                                     resized(job.latent, dn.value().width(), dn.value().height()),
+                                     PreviewEncoding::kJpeg);
       picture = std::make_shared<LivePicture>();
       picture->sequence = job.frame.sequence;
       picture->width = job.latent.width;
       picture->height = job.latent.height;
-      picture->captured_png = std::move(preview.before_png);
-      picture->fused_png = std::move(preview.after_png);
+      picture->captured_jpeg = std::move(preview.before);
+      picture->fused_jpeg = std::move(preview.after);
       picture->about = std::move(job.about);
     }
     const double cpu_ms = thread_cpu_ms() - cpu_start;

@@ -28,8 +28,8 @@ namespace flutterscan::session {
 struct LivePicture {
   std::uint64_t sequence = 0;
   int width = 0, height = 0;  ///< the fused frame's size: the codes' corners are in it
-  std::vector<std::uint8_t> captured_png;
-  std::vector<std::uint8_t> fused_png;
+  std::vector<std::uint8_t> captured_jpeg;
+  std::vector<std::uint8_t> fused_jpeg;
   /// The frame's codes (text, format, corners: session.jsonl's "decoded"), flags and windows read.
   nlohmann::json about;
 };

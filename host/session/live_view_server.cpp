@@ -139,7 +139,7 @@ LiveViewServer::LiveViewServer(const LiveView& view)
   s.Get("/metrics", [this](const httplib::Request&, httplib::Response& res) {
     res.set_content(view_.metrics(), "text/plain; version=0.0.4; charset=utf-8");
   });
-  s.Get(R"(/frame/(captured|fused)\.png)", [this](const httplib::Request& req,
+  s.Get(R"(/frame/(captured|fused)\.jpg)", [this](const httplib::Request& req,
                                                   httplib::Response& res) {
     // ?frame=N: the pictures the page's state describes (the codes drawn over them).
     std::shared_ptr<const LivePicture> picture;
@@ -155,8 +155,8 @@ LiveViewServer::LiveViewServer(const LiveView& view)
       res.set_content("no such picture (yet, or any longer)\n", "text/plain");
       return;
     }
-    const auto& png = req.matches[1] == "captured" ? picture->captured_png : picture->fused_png;
-    res.set_content(reinterpret_cast<const char*>(png.data()), png.size(), "image/png");
+    const auto& jpeg = req.matches[1] == "captured" ? picture->captured_jpeg : picture->fused_jpeg;
+    res.set_content(reinterpret_cast<const char*>(jpeg.data()), jpeg.size(), "image/jpeg");
   });
   s.Get(R"(/files/(.*))", [this](const httplib::Request& req, httplib::Response& res) {
     const std::string name = req.matches[1];

@@ -5,8 +5,8 @@
 //   GET /                    the page (live_view_page.hpp)
 //   GET /state.json          LiveView::state()
 //   GET /metrics             LiveView::metrics(), Prometheus text format
-//   GET /frame/captured.png  the latest pictures (404 before the first); ?frame=N those of
-//   GET /frame/fused.png     frame N while they are among the last three (else 404)
+//   GET /frame/captured.jpg  the latest pictures (404 before the first); ?frame=N those of
+//   GET /frame/fused.jpg     frame N while they are among the last three (else 404)
 //   GET /files/NAME          a file of the session folder, whitelisted (session_file)
 //
 // Read-only: every other method is refused (405) and nothing here reaches

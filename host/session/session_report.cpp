@@ -237,9 +237,9 @@ std::string report_page(const ReportInputs& in, const std::vector<Chart>& charts
   if (in.previews.empty()) html << "<p>No frames were kept.</p>\n";
   for (const auto& p : in.previews) {
     html << "<h3>" << escape(p.caption) << "</h3><div class=\"pair\"><div>"
-         << image_tag(p.before_png, "captured frame " + std::to_string(p.sequence))
+         << image_tag(p.before, "captured frame " + std::to_string(p.sequence))
          << "<br>captured (coded blur)</div><div>"
-         << image_tag(p.after_png, "fused frame " + std::to_string(p.sequence))
+         << image_tag(p.after, "fused frame " + std::to_string(p.sequence))
          << "<br>deblurred and fused</div></div>\n";
   }
 

@@ -24,8 +24,8 @@ namespace flutterscan::session {
 struct Preview {
   std::uint64_t sequence = 0;
   std::string caption;
-  std::vector<std::uint8_t> before_png;
-  std::vector<std::uint8_t> after_png;
+  std::vector<std::uint8_t> before;  ///< encoded picture (PNG, or JPEG where asked)
+  std::vector<std::uint8_t> after;
 };
 
 struct ReportInputs {

@@ -42,8 +42,8 @@ struct PageClient {
           if (s["picture"].is_object() && s["picture"]["sequence"].get<std::int64_t>() != shown) {
             shown = s["picture"]["sequence"].get<std::int64_t>();
             const std::string query = "?frame=" + std::to_string(shown);
-            client.Get("/frame/captured.png" + query);
-            client.Get("/frame/fused.png" + query);
+            client.Get("/frame/captured.jpg" + query);
+            client.Get("/frame/fused.jpg" + query);
             ++pictures;
           }
         }

@@ -157,9 +157,16 @@ FrameOutcome frame_with_pixels(std::uint64_t sequence, int width, int height) {
 }
 
 /// The width in a PNG's header (IHDR, big-endian at byte 16).
-int png_width(const std::vector<std::uint8_t>& png) {
-  if (png.size() < 24) return -1;
-  return (png[16] << 24) | (png[17] << 16) | (png[18] << 8) | png[19];
+/// The width in a JPEG's start-of-frame segment (baseline or progressive), or -1.
+int jpeg_width(const std::vector<std::uint8_t>& jpeg) {
+  if (jpeg.size() < 4 || jpeg[0] != 0xFF || jpeg[1] != 0xD8) return -1;  // SOI
+  for (std::size_t at = 2; at + 9 < jpeg.size();) {
+    if (jpeg[at] != 0xFF) return -1;
+    const int marker = jpeg[at + 1];
+    if (marker == 0xC0 || marker == 0xC2) return (jpeg[at + 7] << 8) | jpeg[at + 8];
+    at += 2 + static_cast<std::size_t>((jpeg[at + 2] << 8) | jpeg[at + 3]);
+  }
+  return -1;
 }
 
 TEST(LivePictures, ABayerMosaicIsThinnedByWholeCells) {
@@ -169,8 +176,8 @@ TEST(LivePictures, ABayerMosaicIsThinnedByWholeCells) {
   pictures.encode(std::move(f.frame), std::move(f.latent), {});
   pictures.wait_idle();
   ASSERT_TRUE(pictures.latest());
-  EXPECT_EQ(png_width(pictures.latest()->captured_png), 640);  // 2 of every 4 columns
-  EXPECT_EQ(png_width(pictures.latest()->fused_png), 640);
+  EXPECT_EQ(jpeg_width(pictures.latest()->captured_jpeg), 640);  // 2 of every 4 columns
+  EXPECT_EQ(jpeg_width(pictures.latest()->fused_jpeg), 640);
   EXPECT_EQ(pictures.latest()->width, 1280);  // the codes' corners stay in the frame's pixels
 }
 
@@ -188,11 +195,9 @@ TEST(LiveView, PicturesAreTakenAtMostOncePerIntervalAndEncodedOffThePath) {
   ASSERT_TRUE(picture);
   EXPECT_EQ(picture->sequence, 7u);
   EXPECT_EQ(picture->width, 1200);
-  ASSERT_GT(picture->fused_png.size(), 8u);
-  EXPECT_EQ(picture->fused_png[1], 'P');  // \x89PNG
-  // Thinned to every 2nd pixel (at most 640 wide), the latent averaged to the same size.
-  EXPECT_EQ(png_width(picture->captured_png), 600);
-  EXPECT_EQ(png_width(picture->fused_png), 600);
+  // JPEG, thinned to every 2nd pixel (at most 640 wide), the latent averaged to the same size.
+  EXPECT_EQ(jpeg_width(picture->captured_jpeg), 600);
+  EXPECT_EQ(jpeg_width(picture->fused_jpeg), 600);
   EXPECT_EQ(picture->about["windows"], 2);
   EXPECT_EQ(view.state()["picture"]["sequence"], 7);
 }
@@ -318,7 +323,7 @@ TEST(LiveViewServer, ServesThePageStateMetricsPicturesAndFiles) {
   EXPECT_EQ(page->body.find("url("), std::string::npos);
   EXPECT_EQ(page->body.find("https://"), std::string::npos);
 
-  auto none = client.Get("/frame/fused.png");
+  auto none = client.Get("/frame/fused.jpg");
   ASSERT_TRUE(none);
   EXPECT_EQ(none->status, 404);  // no picture yet
 
@@ -345,14 +350,14 @@ TEST(LiveViewServer, ServesThePageStateMetricsPicturesAndFiles) {
   EXPECT_EQ(metrics->get_header_value("Content-Type"), "text/plain; version=0.0.4; charset=utf-8");
   EXPECT_EQ(sample(metrics->body, "flutterscan_reads_total"), 2);
 
-  for (const char* path : {"/frame/captured.png", "/frame/fused.png?frame=5"}) {
-    auto png = client.Get(path);
-    ASSERT_TRUE(png) << path;
-    EXPECT_EQ(png->status, 200) << path;
-    EXPECT_EQ(png->get_header_value("Content-Type"), "image/png");
-    EXPECT_EQ(png->body.substr(1, 3), "PNG") << path;
+  for (const char* path : {"/frame/captured.jpg", "/frame/fused.jpg?frame=5"}) {
+    auto jpeg = client.Get(path);
+    ASSERT_TRUE(jpeg) << path;
+    EXPECT_EQ(jpeg->status, 200) << path;
+    EXPECT_EQ(jpeg->get_header_value("Content-Type"), "image/jpeg");
+    EXPECT_EQ(jpeg->body.substr(0, 2), "\xFF\xD8") << path;  // JPEG's start of image
   }
-  auto gone = client.Get("/frame/fused.png?frame=4");  // not among the last pictures
+  auto gone = client.Get("/frame/fused.jpg?frame=4");  // not among the last pictures
   ASSERT_TRUE(gone);
   EXPECT_EQ(gone->status, 404);
   auto summary = client.Get("/files/summary.json");

@@ -331,7 +331,7 @@ TEST(LiveViewPage, ShowsTheFiguresOfTheSessionInHeadlessChromium) {
   EXPECT_EQ(element_text(dom, "read-rate"), percent_text(summary["object_read_rate"]));
   EXPECT_EQ(element_text(dom, "decode-rate"), percent_text(summary["mean_decode_rate_per_object"]));
   EXPECT_NE(element_text(dom, "picture-caption").find("code(s) read"), std::string::npos);
-  EXPECT_NE(dom.find("src=\"frame/fused.png?frame="), std::string::npos);
+  EXPECT_NE(dom.find("src=\"frame/fused.jpg?frame="), std::string::npos);
   // A screenshot, kept in the test's working folder for a look: after 3 s of real time
   // (under load, chromium's virtual time with the page polling stalled past 120 s at times).
   const fs::path shot = fs::current_path() / "live_view.png";
