@@ -81,7 +81,7 @@ Chip::Chip() {
     fail("mapping flash and SRAM");
   const std::vector<std::uint8_t> erased(kFlashSize, 0xFF);
   uc_mem_write(uc_, kFlashBase, erased.data(), erased.size());
-  const std::uint16_t bkpt = 0xBE00;  // the interrupt/call return trampoline (never executed)
+  const std::uint16_t bkpt = 0xBE00;  // the exception return trampoline (never executed)
   uc_mem_write(uc_, kTrampoline, &bkpt, sizeof bkpt);
   // SRAM after power-on: not zero, not a valid record.
   std::vector<std::uint8_t> sram(kSramSize);
@@ -93,6 +93,7 @@ Chip::Chip() {
         kTim3Base, kTim5Base, kDma2Base, kIwdgBase, kDbgmcuBase})
     map_region(block, 0x400);
   map_region(kScsBase, 0x1000);
+  map_region(OtgFs::kBase, OtgFs::kSize);
   map_region(kUniqueIdPage, 0x1000);
   uc_hook hook;
   uc_hook_add(uc_, &hook, UC_HOOK_MEM_UNMAPPED, reinterpret_cast<void*>(&Chip::unmapped), this, 1,
@@ -123,6 +124,11 @@ void Chip::stop_at(std::uint32_t address, const char* name) {
   uc_hook hook;
   uc_hook_add(uc_, &hook, UC_HOOK_CODE, reinterpret_cast<void*>(&Chip::on_code), this,
               address & ~1u, address & ~1u);
+}
+
+void Chip::sleep_at(std::uint32_t address) {
+  sleeps_.push_back(address & ~1u);
+  stop_at(address, "wfi");
 }
 
 void Chip::set_option_bytes(std::uint32_t optcr) {
@@ -168,7 +174,7 @@ std::string Chip::go(std::uint32_t pc, bool until_trampoline) {
     if (err != UC_ERR_OK) return std::string("error: unicorn: ") + uc_strerror(err);
     if (stopped_) {
       if (!until_trampoline || stopped_at_ == "return") return stopped_at_;
-      return "error: stopped at " + stopped_at_ + " inside a call or handler";
+      return "error: stopped at " + stopped_at_ + " inside a handler";
     }
     cycles_ += kSlice;
     run_hardware_until(cycles_);
@@ -178,70 +184,74 @@ std::string Chip::go(std::uint32_t pc, bool until_trampoline) {
   return "error: no stop within the instruction budget";
 }
 
-std::string Chip::call(std::uint32_t function, std::initializer_list<std::uint32_t> args,
-                       std::uint32_t stack_top, std::uint32_t* result) {
-  static constexpr int kArgRegs[4] = {UC_ARM_REG_R0, UC_ARM_REG_R1, UC_ARM_REG_R2, UC_ARM_REG_R3};
-  std::vector<std::uint32_t> stacked;
-  int i = 0;
-  for (const std::uint32_t a : args) {
-    if (i < 4)
-      uc_reg_write(uc_, kArgRegs[i], &a);
-    else
-      stacked.push_back(a);
-    ++i;
-  }
-  std::uint32_t sp = (stack_top - 4 * static_cast<std::uint32_t>(stacked.size())) & ~7u;
-  for (std::size_t k = 0; k < stacked.size(); ++k)
-    write_word(sp + 4 * static_cast<std::uint32_t>(k), stacked[k]);
-  const std::uint32_t lr = kTrampoline | 1u;
-  const std::uint32_t primask = 1;
-  uc_reg_write(uc_, UC_ARM_REG_SP, &sp);
-  uc_reg_write(uc_, UC_ARM_REG_LR, &lr);
-  uc_reg_write(uc_, UC_ARM_REG_PRIMASK, &primask);
-  const std::string out = go(function, true);
-  if (out != "return") return out;
-  if (reg(UC_ARM_REG_SP) != sp) return "error: the call left SP unbalanced";
-  if (result != nullptr) *result = reg(UC_ARM_REG_R0);
-  const std::uint32_t unmasked = 0;
-  uc_reg_write(uc_, UC_ARM_REG_PRIMASK, &unmasked);
-  return "returned";
-}
-
-std::string Chip::idle_for(std::uint64_t cycles) {
+std::string Chip::run_for(std::uint64_t cycles) {
   const std::uint64_t end = cycles_ + cycles;
-  while (error_.empty()) {
-    const int irq = deliverable_irq();
-    if (irq >= 0) {
-      if (!take_interrupt(irq)) break;
+  std::uint32_t pc = reg(UC_ARM_REG_PC);
+  skip_stop_ = pc & ~1u;
+  while (error_.empty() && cycles_ < end) {
+    const bool masked = reg(UC_ARM_REG_PRIMASK) != 0;
+    if (sleeping_) {
+      // PM0214 3.12.10: WFI ends on a pending exception, taken unless PRIMASK
+      // is set (then the core goes on after the wfi without it).
+      const int exception = deliverable_exception();
+      if (exception >= 0) {
+        sleeping_ = false;
+        if (!masked && !take_exception(exception)) break;
+        continue;
+      }
+      cycles_ = std::max(cycles_, std::min(next_hardware_event(), end));
+      run_hardware_until(cycles_);
       continue;
     }
-    const std::uint64_t next = next_hardware_event();
-    if (next > end) {
-      cycles_ = end;
-      return "idle";
+    // Not inside an IT block (xPSR ICI/IT 26:25, 15:10): Unicorn's slices end
+    // after a whole block; this only makes sure.
+    const bool in_it_block = (reg(UC_ARM_REG_XPSR) & 0x0600FC00u) != 0;
+    if (!masked && !in_it_block) {
+      const int exception = deliverable_exception();
+      if (exception >= 0) {
+        if (!take_exception(exception)) break;
+        continue;
+      }
     }
-    cycles_ = std::max(cycles_, next);
+    stopped_ = false;
+    const std::uint64_t slice = std::min<std::uint64_t>(kSlice, end - cycles_);
+    const uc_err err = uc_emu_start(uc_, pc | 1u, 0, 0, slice);
+    if (!error_.empty()) break;
+    if (err != UC_ERR_OK) return std::string("error: unicorn: ") + uc_strerror(err);
+    cycles_ += slice;
     run_hardware_until(cycles_);
+    pc = reg(UC_ARM_REG_PC);
+    if (stopped_) {
+      if (stopped_at_ != "wfi") return stopped_at_;
+      sleeping_ = true;  // the core sleeps in the wfi; it goes on after it
+      pc += 2;
+      uc_reg_write(uc_, UC_ARM_REG_PC, &pc);
+    }
   }
-  return "error: " + error_;
+  if (!error_.empty()) return "error: " + error_;
+  return "ran";
 }
 
-bool Chip::take_interrupt(int irq) {
+bool Chip::take_exception(int exception) {
   // PM0214 2.3.7: xPSR, PC, LR, R12, R3..R0 stacked on the current stack (MSP),
   // aligned to 8 bytes (xPSR bit 9 records the padding); the handler from the
-  // vector table at VTOR, entry 16 + irq.
-  nvic_pending_[irq / 32] &= ~(1u << (irq % 32));
+  // vector table at VTOR, entry `exception`.
+  if (exception == 15)
+    systick_pending_ = false;
+  else
+    nvic_pending_[(exception - 16) / 32] &= ~(1u << ((exception - 16) % 32));
   std::uint32_t sp = reg(UC_ARM_REG_SP);
   const bool pad = (sp & 4u) != 0;
   sp = (sp - 32 - (pad ? 4 : 0)) & ~7u;
-  const std::uint32_t frame[8] = {reg(UC_ARM_REG_R0),  reg(UC_ARM_REG_R1),
-                                  reg(UC_ARM_REG_R2),  reg(UC_ARM_REG_R3),
-                                  reg(UC_ARM_REG_R12), reg(UC_ARM_REG_LR),
-                                  reg(UC_ARM_REG_PC),  0x01000000u | (pad ? 1u << 9 : 0u)};
+  const std::uint32_t xpsr = (reg(UC_ARM_REG_XPSR) & ~0x1FFu & ~(1u << 9)) | 0x01000000u;
+  const std::uint32_t frame[8] = {
+      reg(UC_ARM_REG_R0),  reg(UC_ARM_REG_R1), reg(UC_ARM_REG_R2), reg(UC_ARM_REG_R3),
+      reg(UC_ARM_REG_R12), reg(UC_ARM_REG_LR), reg(UC_ARM_REG_PC), xpsr | (pad ? 1u << 9 : 0u)};
   for (int k = 0; k < 8; ++k) write_word(sp + 4 * static_cast<std::uint32_t>(k), frame[k]);
-  const std::uint32_t vector = read_word(regs_.at(kScsBase + kScbVtor) + 4 * (16 + irq));
+  const std::uint32_t vector = read_word(regs_.at(kScsBase + kScbVtor) + 4 * exception);
+  const std::string name = "exception " + std::to_string(exception);
   if ((vector & 1u) == 0) {
-    fail("vector of interrupt " + std::to_string(irq) + " is not a Thumb address");
+    fail("vector of " + name + " is not a Thumb address");
     return false;
   }
   const std::uint32_t lr = kTrampoline | 1u;  // stands for EXC_RETURN 0xFFFFFFF9
@@ -249,11 +259,11 @@ bool Chip::take_interrupt(int irq) {
   uc_reg_write(uc_, UC_ARM_REG_LR, &lr);
   const std::string out = go(vector, true);
   if (out != "return") {
-    if (error_.empty()) fail("interrupt " + std::to_string(irq) + ": " + out);
+    if (error_.empty()) fail(name + ": " + out);
     return false;
   }
   if (reg(UC_ARM_REG_SP) != sp) {
-    fail("interrupt " + std::to_string(irq) + " left SP unbalanced");
+    fail(name + " left SP unbalanced");
     return false;
   }
   static constexpr int kFrameRegs[7] = {UC_ARM_REG_R0,  UC_ARM_REG_R1, UC_ARM_REG_R2, UC_ARM_REG_R3,
@@ -262,17 +272,29 @@ bool Chip::take_interrupt(int irq) {
     const std::uint32_t v = read_word(sp + 4 * static_cast<std::uint32_t>(k));
     uc_reg_write(uc_, kFrameRegs[k], &v);
   }
+  const std::uint32_t stacked_xpsr = read_word(sp + 28) & ~(1u << 9);
+  uc_reg_write(uc_, UC_ARM_REG_XPSR, &stacked_xpsr);
   const std::uint32_t restored = sp + 32 + (pad ? 4 : 0);
   uc_reg_write(uc_, UC_ARM_REG_SP, &restored);
   return true;
 }
 
-int Chip::deliverable_irq() const {
+std::uint32_t Chip::exception_priority(int exception) const {
+  // PM0214 4.3.7 / 4.4.8: one byte per exception (IPR for IRQs, SHPR3 31:24 for SysTick).
+  const std::uint32_t address =
+      exception == 15 ? kScsBase + 0xD20 + 3 : kScsBase + 0x400 + (exception - 16);
+  return (regs_.at(address & ~3u) >> (8 * (address & 3u))) & 0xFFu;
+}
+
+int Chip::deliverable_exception() {
+  if (otg_.interrupt_line()) pend(kIrqOtgFs);  // level-sensitive: pends while high
+  int best = systick_pending_ ? 15 : -1;
   for (int irq = 0; irq < 96; ++irq) {
     const std::uint32_t bit = 1u << (irq % 32);
-    if ((nvic_pending_[irq / 32] & bit) != 0 && (nvic_enabled_[irq / 32] & bit) != 0) return irq;
+    if ((nvic_pending_[irq / 32] & bit) == 0 || (nvic_enabled_[irq / 32] & bit) == 0) continue;
+    if (best < 0 || exception_priority(16 + irq) < exception_priority(best)) best = 16 + irq;
   }
-  return -1;
+  return best;
 }
 
 void Chip::pend(int irq) {
@@ -366,14 +388,50 @@ void Chip::apply_bsrr(std::uint32_t base, std::uint32_t value, std::uint64_t at,
 }
 
 std::uint64_t Chip::next_hardware_event() const {
-  return (regs_.at(kTim1Base + kTimCr1) & kCr1Cen) != 0 ? tim1_next_update_ : kNever;
+  const std::uint64_t tim1 =
+      (regs_.at(kTim1Base + kTimCr1) & kCr1Cen) != 0 ? tim1_next_update_ : kNever;
+  return std::min(tim1, systick_zero_);
 }
 
 void Chip::run_hardware_until(std::uint64_t cycle) {
   while (error_.empty()) {
     const std::uint64_t next = next_hardware_event();
     if (next > cycle) return;
-    tim1_update(next);
+    if (next == systick_zero_) {
+      // PM0214 4.4: at 0 the counter reloads from LOAD (LOAD + 1 cycles a
+      // period) and sets COUNTFLAG; TICKINT pends the SysTick exception.
+      std::uint32_t& ctrl = regs_[kScsBase + 0x10];
+      ctrl |= 1u << 16;
+      if ((ctrl & 0x2u) != 0) systick_pending_ = true;
+      systick_zero_ = next + (regs_.at(kScsBase + 0x14) & 0xFFFFFFu) + 1;
+    } else {
+      tim1_update(next);
+    }
+  }
+}
+
+void Chip::systick_store(std::uint32_t address, std::uint32_t value) {
+  std::uint32_t& ctrl = regs_[kScsBase + 0x10];
+  if (address == kScsBase + 0x10) {
+    if ((value & 0x1u) != 0 && (value & 0x4u) == 0) {
+      fail("SysTick on the external reference clock (CLKSOURCE 0; not modelled)");
+      return;
+    }
+    const bool start = (ctrl & 0x1u) == 0 && (value & 0x1u) != 0;
+    ctrl = (ctrl & (1u << 16)) | (value & 0x7u);
+    if ((value & 0x1u) == 0) systick_zero_ = kNever;
+    // From VAL: 0 reloads at the next cycle, then counts LOAD down.
+    const std::uint32_t val = regs_.at(kScsBase + 0x18);
+    if (start)
+      systick_zero_ = cycles_ + (val != 0 ? val : (regs_.at(kScsBase + 0x14) & 0xFFFFFFu) + 1);
+  } else if (address == kScsBase + 0x14) {
+    regs_[address] = value & 0xFFFFFFu;
+  } else if (address == kScsBase + 0x18) {  // any write clears VAL and COUNTFLAG
+    regs_[address] = 0;
+    ctrl &= ~(1u << 16);
+    if ((ctrl & 0x1u) != 0) systick_zero_ = cycles_ + (regs_.at(kScsBase + 0x14) & 0xFFFFFFu) + 1;
+  } else {
+    fail("write of SysTick CALIB (read-only)");
   }
 }
 
@@ -518,6 +576,10 @@ std::uint32_t Chip::observe(std::uint32_t address) {
     }
   } else if (address >= kScsBase + 0x100 && address < kScsBase + 0x300) {
     nvic_observe(address - kScsBase, &v);
+  } else if (address == kScsBase + 0x10) {  // reading CTRL clears COUNTFLAG
+    regs_[address] &= ~(1u << 16);
+  } else if (address == kScsBase + 0x18 && (regs_.at(kScsBase + 0x10) & 0x1u) != 0) {
+    fail("read of SysTick VAL while counting (not modelled)");
   }
   return v;
 }
@@ -632,6 +694,10 @@ void Chip::store(std::uint32_t address, std::uint32_t value) {
     regs_[address] = value;
     return;
   }
+  if (address >= kScsBase + 0x10 && address <= kScsBase + 0x1C) {
+    systick_store(address, value);
+    return;
+  }
   if (base == kScsBase + 0x000 && offset >= 0x100 && offset < 0x300) {
     nvic_store(offset, value);
     return;
@@ -653,6 +719,8 @@ bool Chip::clocked(std::uint32_t address) const {
   if (base == kTim5Base) return (apb1 & (1u << 3)) != 0;
   if (base == kPwrBase) return (apb1 & (1u << 28)) != 0;
   if (base == kTim1Base) return (apb2 & (1u << 0)) != 0;
+  if (address >= OtgFs::kBase && address < OtgFs::kBase + OtgFs::kSize)
+    return (regs_.at(kRccBase + 0x34) & (1u << 7)) != 0;  // AHB2ENR.OTGFSEN
   return true;
 }
 
@@ -672,6 +740,27 @@ void Chip::unmodelled(const char* what, std::uint64_t address) {
   fail(buffer);
 }
 
+std::uint32_t Chip::otg_read(std::uint32_t address, unsigned size) {
+  if (size != 4 || !clocked(address)) {
+    unmodelled("read", address);
+    return 0;
+  }
+  std::uint32_t v = 0;
+  std::string error;
+  if (!otg_.read(address - OtgFs::kBase, &v, &error)) fail(error);
+  return v;
+}
+
+void Chip::otg_write(std::uint32_t address, unsigned size, std::uint32_t value) {
+  if (size != 4 || !clocked(address)) {
+    unmodelled("write", address);
+    return;
+  }
+  writes_.push_back({address, value});
+  std::string error;
+  if (!otg_.write(address - OtgFs::kBase, value, &error)) fail(error);
+}
+
 bool Chip::check(std::uint32_t word, const char* what, std::uint32_t address) {
   if (regs_.count(word) == 0 || !clocked(word)) {
     unmodelled(what, address);  // a peripheral whose clock is off ignores the bus
@@ -685,6 +774,7 @@ std::uint64_t Chip::mmio_read(uc_engine*, std::uint64_t offset, unsigned size, v
   Chip* chip = region->chip;
   const std::uint32_t address = region->base + static_cast<std::uint32_t>(offset);
   const std::uint32_t word = address & ~3u;
+  if (region->base == OtgFs::kBase) return chip->otg_read(address, size);
   if (!chip->check(word, "read", address)) return 0;
   const std::uint32_t v = chip->observe(word) >> (8 * (address & 3u));
   return size == 4 ? v : v & ((1u << (8 * size)) - 1u);
@@ -696,6 +786,10 @@ void Chip::mmio_write(uc_engine*, std::uint64_t offset, unsigned size, std::uint
   Chip* chip = region->chip;
   const std::uint32_t address = region->base + static_cast<std::uint32_t>(offset);
   const std::uint32_t word = address & ~3u;
+  if (region->base == OtgFs::kBase) {
+    chip->otg_write(address, size, static_cast<std::uint32_t>(value));
+    return;
+  }
   if (!chip->check(word, "write", address)) return;
   std::uint32_t v = static_cast<std::uint32_t>(value);
   if (size != 4) {  // a byte or half-word: the other lanes keep their value
