@@ -147,6 +147,42 @@ std::string Chip::run() {
   return go(pc, false);
 }
 
+void Chip::system_reset() {
+  // PM0214 4.3.5 SYSRESETREQ: a system reset. Flash, SRAM and the option bytes
+  // keep their contents; every peripheral and the core start over; RCC_CSR
+  // keeps its flags and adds SFTRSTF, and PINRSTF (the reset circuit drives
+  // NRST on any internal reset, RM0090 6.1.2).
+  reset_requested_ = false;
+  const std::uint32_t optcr = regs_.at(kFlashOptcr);
+  const std::uint32_t csr_flags = regs_.at(kRccBase + 0x74) & 0xFF000000u;
+  regs_.clear();
+  model_registers();
+  regs_[kFlashOptcr] = optcr | kOptcrOptLock;
+  regs_[kRccBase + 0x74] =
+      (regs_.at(kRccBase + 0x74) & 0x00FFFFFFu) | csr_flags | 1u << 28 | 1u << 26;
+  otg_ = OtgFs();
+  tim2_start_ = 0;
+  tim2_count0_ = 0;
+  tim1_next_update_ = kNever;
+  dma_index_ = dma_total_ = 0;
+  systick_zero_ = kNever;
+  systick_pending_ = false;
+  sleeping_ = false;
+  for (int i = 0; i < 3; ++i) nvic_enabled_[i] = nvic_pending_[i] = 0;
+  optkey_step_ = 0;
+  flash_busy_reads_ = 0;
+  ++system_resets_;
+  const std::uint32_t sp = read_word(kFlashBase);
+  const std::uint32_t pc = read_word(kFlashBase + 4) & ~1u;
+  const std::uint32_t xpsr = 0x01000000u, zero = 0, lr = 0xFFFFFFFFu;
+  uc_reg_write(uc_, UC_ARM_REG_SP, &sp);
+  uc_reg_write(uc_, UC_ARM_REG_PC, &pc);
+  uc_reg_write(uc_, UC_ARM_REG_XPSR, &xpsr);
+  uc_reg_write(uc_, UC_ARM_REG_PRIMASK, &zero);
+  uc_reg_write(uc_, UC_ARM_REG_CONTROL, &zero);
+  uc_reg_write(uc_, UC_ARM_REG_LR, &lr);
+}
+
 std::string Chip::resume() {
   return go(reg(UC_ARM_REG_PC), false);
 }
@@ -171,6 +207,7 @@ std::string Chip::go(std::uint32_t pc, bool until_trampoline) {
     stopped_ = false;
     const uc_err err = uc_emu_start(uc_, pc | 1u, 0, 0, kSlice);
     if (!error_.empty()) return "error: " + error_;
+    if (reset_requested_) return "error: SYSRESETREQ outside the main loop (not modelled)";
     if (err != UC_ERR_OK) return std::string("error: unicorn: ") + uc_strerror(err);
     if (stopped_) {
       if (!until_trampoline || stopped_at_ == "return") return stopped_at_;
@@ -220,9 +257,18 @@ std::string Chip::run_for(std::uint64_t cycles) {
     if (err != UC_ERR_OK) return std::string("error: unicorn: ") + uc_strerror(err);
     cycles_ += slice;
     run_hardware_until(cycles_);
+    if (reset_requested_) {
+      system_reset();
+      pc = reg(UC_ARM_REG_PC);
+      skip_stop_ = 0;
+      continue;
+    }
     pc = reg(UC_ARM_REG_PC);
     if (stopped_) {
-      if (stopped_at_ != "wfi") return stopped_at_;
+      if (stopped_at_ != "wfi") {  // stop_at's stops end run() and resume() only
+        skip_stop_ = pc;
+        continue;
+      }
       sleeping_ = true;  // the core sleeps in the wfi; it goes on after it
       pc += 2;
       uc_reg_write(uc_, UC_ARM_REG_PC, &pc);
@@ -692,6 +738,16 @@ void Chip::store(std::uint32_t address, std::uint32_t value) {
       value &= ~kOptcrOptStrt;
     }
     regs_[address] = value;
+    return;
+  }
+  if (address == kScsBase + 0xD0C) {      // AIRCR: VECTKEY 0x05FA, SYSRESETREQ (bit 2)
+    if ((value >> 16) != 0x05FA) return;  // ignored without the key
+    if ((value & ~(0xFFFF0000u | 1u << 2)) != 0) {
+      fail("AIRCR write other than SYSRESETREQ (not modelled)");
+      return;
+    }
+    reset_requested_ = true;
+    if (uc_ != nullptr) uc_emu_stop(uc_);
     return;
   }
   if (address >= kScsBase + 0x10 && address <= kScsBase + 0x1C) {

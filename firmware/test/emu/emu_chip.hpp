@@ -116,14 +116,17 @@ class Chip {
   void sleep_at(std::uint32_t address);
   /// Runs the core on from where it is (thread mode: the main loop) for
   /// `cycles`, taking exceptions as they pend while PRIMASK is clear and
-  /// sleeping in a `wfi` marked with sleep_at. "ran", the name of a stop
-  /// reached, or the error.
+  /// sleeping in a `wfi` marked with sleep_at; a SYSRESETREQ (AIRCR) resets
+  /// the chip and the core goes on from the reset vector (stops set with
+  /// stop_at are passed). "ran" or the error.
   std::string run_for(std::uint64_t cycles);
   /// The strobe input (PA5, TIM2_CH1 = TI1) goes to `level`; the input
   /// filter's delay is not modelled (the capture is at the edge's cycle).
   void strobe_pin(bool level);
 
   std::uint64_t cycles() const { return cycles_; }
+  /// System resets requested through AIRCR so far.
+  int system_resets() const { return system_resets_; }
   std::uint32_t reg(int r);
   OtgFs& otg_fs() { return otg_; }
   /// A modelled peripheral register's value (as stored; no side effects).
@@ -185,6 +188,7 @@ class Chip {
   bool take_exception(int exception);
   std::uint32_t exception_priority(int exception) const;
   void systick_store(std::uint32_t address, std::uint32_t value);
+  void system_reset();
   void nvic_store(std::uint32_t offset, std::uint32_t value);
   bool nvic_observe(std::uint32_t offset, std::uint32_t* value) const;
 
@@ -220,6 +224,8 @@ class Chip {
   std::uint64_t systick_zero_ = kNever;
   bool systick_pending_ = false;
   bool sleeping_ = false;
+  bool reset_requested_ = false;
+  int system_resets_ = 0;
   OtgFs otg_;
   // NVIC (96 device interrupts).
   std::uint32_t nvic_enabled_[3] = {0, 0, 0};

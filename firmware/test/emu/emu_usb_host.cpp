@@ -33,6 +33,10 @@ std::string UsbHost::poll_in() {
   std::vector<std::uint8_t> packet;
   const OtgFs::Handshake h = chip_.otg_fs().in(kHidEndpoint, &packet);
   if (h == OtgFs::Handshake::kNak) return "";
+  if (h == OtgFs::Handshake::kNoDevice) {  // it left the bus (a reset): enumerate it again
+    configured_ = false;
+    return "";
+  }
   if (h != OtgFs::Handshake::kAck) return std::string("EP1 IN: ") + name(h);
   if (packet.size() != 64) return "EP1 IN: a report of " + std::to_string(packet.size()) + " bytes";
   Report r{};
@@ -119,6 +123,7 @@ std::string UsbHost::enumerate(std::uint8_t address) {
     return "GET_DESCRIPTOR(device): " + e;
   if (d.size() != 18 || d[0] != 18 || d[1] != 1)
     return "GET_DESCRIPTOR(device): not a device descriptor";
+  device_descriptor_ = d;
   if (std::string e = control_no_data({0x00, 5, address, 0, 0, 0, 0, 0}); !e.empty())
     return "SET_ADDRESS: " + e;
   address_ = address;  // USB 2.0 9.2.6.3: the device has 2 ms to take it

@@ -30,7 +30,8 @@ class UsbHost {
 
   explicit UsbHost(Chip& chip) : chip_(chip) {}
 
-  /// Lets `cycles` pass on the bus, reading EP1 IN once per frame once configured.
+  /// Lets `cycles` pass on the bus, reading EP1 IN once per frame once
+  /// configured (until the device leaves the bus).
   std::string run_for(std::uint64_t cycles);
   /// Waits for the pull-up, then: bus reset, GET_DESCRIPTOR(device) at address
   /// 0, SET_ADDRESS `address`, GET_DESCRIPTOR(configuration), SET_CONFIGURATION
@@ -43,6 +44,10 @@ class UsbHost {
   /// One HID request report on EP1 OUT, then EP1 IN until its reply (the
   /// report echoing its command and sequence). "" or what went wrong.
   std::string request(const Report& report, Report* reply);
+  /// The device descriptor of the last enumeration.
+  const std::vector<std::uint8_t>& device_descriptor() const { return device_descriptor_; }
+  /// Configured and still on the bus.
+  bool configured() const { return configured_; }
   /// Every exposure event (IN reports 0x80..0xFF) read so far.
   const std::vector<Report>& events() const { return events_; }
 
@@ -56,6 +61,7 @@ class UsbHost {
   std::uint8_t address_ = 0;
   bool configured_ = false;
   std::uint64_t next_frame_ = 0;
+  std::vector<std::uint8_t> device_descriptor_;
   std::vector<Report> events_;
   std::vector<Report> replies_;
 };

@@ -22,10 +22,9 @@
 #include <vector>
 
 #include "emu_chip.hpp"
-#include "emu_elf.hpp"
+#include "emu_product.hpp"
 #include "emu_usb_host.hpp"
 #include "flutterscan/common/protocol.hpp"
-#include "flutterscan/firmware/boot_decision.hpp"
 
 namespace flutterscan::firmware::emu {
 namespace {
@@ -44,17 +43,7 @@ constexpr std::uint64_t kMinPeriodUs = 2000;
 class StrobeEmu : public ::testing::Test {
  protected:
   void SetUp() override {
-    const auto boot = Elf::load(FLUTTERSCAN_BOOTLOADER_ELF);
-    const auto app = Elf::load(FLUTTERSCAN_FW_STM32F405_ELF);
-    const auto image = read_file(FLUTTERSCAN_FW_STM32F405_BIN);
-    if (!boot || !app || image.empty())
-      GTEST_SKIP() << "no bootloader / application ELF or image (make fw-stm32f405 builds them)";
-    const auto sleeps = app->wfi_in("_Z16application_mainv");
-    ASSERT_EQ(sleeps.size(), 1u) << "the main loop's wfi";
-    for (const auto& s : boot->segments) chip_.write(s.address, s.bytes);
-    chip_.write(kAppBase, image);
-    chip_.stop_at(get<std::uint32_t>(image, kAppVectorTableOffset + 4), "application");
-    chip_.sleep_at(sleeps[0]);
+    if (const std::string missing = load_product(chip_); !missing.empty()) GTEST_SKIP() << missing;
     ASSERT_EQ(chip_.run(), "application");
     // Start-up (clocks, port, controller, watchdog, SysTick, OTG_FS with its
     // 25 ms wait for device mode), then the host enumerates it.
