@@ -57,6 +57,23 @@ constexpr std::uint32_t kDmaCrModelled =
 constexpr std::uint32_t kOptcrOptLock = 1u << 0;
 constexpr std::uint32_t kOptcrOptStrt = 1u << 1;
 constexpr std::uint32_t kFlashSrBsy = 1u << 16;
+constexpr std::uint32_t kFlashKeyr = kFlashIfBase + 0x04;
+constexpr std::uint32_t kFlashCr = kFlashIfBase + 0x10;
+constexpr std::uint32_t kKey1 = 0x45670123;
+constexpr std::uint32_t kKey2 = 0xCDEF89AB;
+// FLASH_CR: PG 0, SER 1, MER 2, SNB 6:3, PSIZE 9:8 (0b10: x32), STRT 16, LOCK 31.
+constexpr std::uint32_t kCrPg = 1u << 0;
+constexpr std::uint32_t kCrSer = 1u << 1;
+constexpr std::uint32_t kCrMer = 1u << 2;
+constexpr std::uint32_t kCrPsizeMask = 0x3u << 8;
+constexpr std::uint32_t kCrPsizeX32 = 0x2u << 8;
+constexpr std::uint32_t kCrStrt = 1u << 16;
+constexpr std::uint32_t kCrLock = 1u << 31;
+constexpr std::uint32_t kCrModelled =
+    kCrPg | kCrSer | (0xFu << 3) | kCrPsizeMask | kCrStrt | kCrLock;
+// FLASH_SR: EOP 0, OPERR 1, WRPERR 4, PGAERR 5, PGPERR 6, PGSERR 7 (rc_w1), BSY 16.
+constexpr std::uint32_t kSrFlags = 0xF3u;
+constexpr std::uint32_t kSrWrperr = 1u << 4;
 constexpr std::uint32_t kOptKey1 = 0x08192A3B;
 constexpr std::uint32_t kOptKey2 = 0x4C5D6E7F;
 // NVIC (PM0214 4.2): ISER, ICER, ISPR, ICPR words for interrupts 0..95.
@@ -75,8 +92,10 @@ Chip::Chip() {
     fail("uc_open");
     return;
   }
+  // Flash is mapped writable so that a store reaches flash_store (programming
+  // through the flash interface); any other store there fails.
   if (uc_ctl_set_cpu_model(uc_, UC_CPU_ARM_CORTEX_M4) != UC_ERR_OK ||
-      uc_mem_map(uc_, kFlashBase, kFlashSize, UC_PROT_READ | UC_PROT_EXEC) != UC_ERR_OK ||
+      uc_mem_map(uc_, kFlashBase, kFlashSize, UC_PROT_ALL) != UC_ERR_OK ||
       uc_mem_map(uc_, kSramBase, kSramSize, UC_PROT_ALL) != UC_ERR_OK)
     fail("mapping flash and SRAM");
   const std::vector<std::uint8_t> erased(kFlashSize, 0xFF);
@@ -98,6 +117,8 @@ Chip::Chip() {
   uc_hook hook;
   uc_hook_add(uc_, &hook, UC_HOOK_MEM_UNMAPPED, reinterpret_cast<void*>(&Chip::unmapped), this, 1,
               0);
+  uc_hook_add(uc_, &hook, UC_HOOK_MEM_WRITE, reinterpret_cast<void*>(&Chip::flash_store), this,
+              kFlashBase, kFlashBase + kFlashSize - 1);
   stop_at(kTrampoline, "return");
 }
 
@@ -170,6 +191,7 @@ void Chip::system_reset() {
   sleeping_ = false;
   for (int i = 0; i < 3; ++i) nvic_enabled_[i] = nvic_pending_[i] = 0;
   optkey_step_ = 0;
+  flash_key_step_ = 0;
   flash_busy_reads_ = 0;
   ++system_resets_;
   const std::uint32_t sp = read_word(kFlashBase);
@@ -456,6 +478,91 @@ void Chip::run_hardware_until(std::uint64_t cycle) {
   }
 }
 
+std::uint32_t Chip::flash_sector_base(int sector) {
+  // RM0090 table 5 (1 MiB part): sectors 0-3 16 KiB, 4 64 KiB, 5-11 128 KiB.
+  if (sector < 4) return kFlashBase + 0x4000u * static_cast<std::uint32_t>(sector);
+  if (sector == 4) return kFlashBase + 0x10000u;
+  return kFlashBase + 0x20000u * static_cast<std::uint32_t>(sector - 4);
+}
+
+void Chip::flash_control(std::uint32_t value) {
+  std::uint32_t& cr = regs_[kFlashCr];
+  if ((cr & kCrLock) != 0) {
+    if ((value | kCrLock) == (cr | kCrLock)) return;  // setting LOCK again: nothing changes
+    fail("write of FLASH_CR while LOCK is set (ignored by the chip)");
+    return;
+  }
+  if ((value & ~kCrModelled) != 0 || (value & kCrMer) != 0) {
+    fail("FLASH_CR: mass erase or interrupts (not modelled)");
+    return;
+  }
+  if ((value & (kCrPg | kCrSer)) != 0 && (value & kCrPsizeMask) != kCrPsizeX32) {
+    fail("FLASH_CR: a parallelism other than x32 (not modelled)");
+    return;
+  }
+  if (flash_busy_reads_ > 0 && value != cr) {
+    fail("FLASH_CR written while BSY (RM0090 3.9.8)");
+    return;
+  }
+  cr = value & ~kCrStrt;  // STRT clears itself as the erase ends
+  if ((value & kCrStrt) == 0) return;
+  if ((value & kCrSer) == 0) {
+    fail("FLASH_CR.STRT without SER (not modelled)");
+    return;
+  }
+  const int sector = static_cast<int>((value >> 3) & 0xFu);
+  if (sector > 11) {
+    fail("FLASH_CR: sector number beyond the part");
+    return;
+  }
+  if ((regs_.at(kFlashOptcr) & (1u << (16 + sector))) == 0) {  // nWRP: 0 = protected
+    regs_[kFlashSr] |= kSrWrperr;
+    return;
+  }
+  const std::uint32_t base = flash_sector_base(sector);
+  const std::vector<std::uint8_t> erased(flash_sector_base(sector + 1) - base, 0xFF);
+  uc_mem_write(uc_, base, erased.data(), erased.size());
+  flash_erases_.push_back(sector);
+  flash_busy_reads_ = 3;
+  regs_[kFlashSr] |= 1u;  // EOP
+}
+
+void Chip::flash_store(uc_engine*, uc_mem_type, std::uint64_t address, int size, std::int64_t value,
+                       void* user) {
+  // RM0090 3.6.4: with PG set and x32 parallelism, one aligned word per write;
+  // programming can only clear bits (the firmware erases first).
+  auto* chip = static_cast<Chip*>(user);
+  const std::uint32_t cr = chip->regs_.at(kFlashCr);
+  char b[112];
+  if ((cr & kCrLock) != 0 || (cr & kCrPg) == 0 || chip->flash_busy_reads_ > 0) {
+    std::snprintf(b, sizeof b, "write to flash at 0x%08llx without FLASH_CR.PG (or locked, busy)",
+                  static_cast<unsigned long long>(address));
+    chip->fail(b);
+    return;
+  }
+  const int sector = [&] {
+    int s = 0;
+    while (s < 11 && address >= chip->flash_sector_base(s + 1)) ++s;
+    return s;
+  }();
+  if (size != 4 || address % 4 != 0 || (chip->regs_.at(kFlashOptcr) & (1u << (16 + sector))) == 0) {
+    std::snprintf(b, sizeof b, "flash program of %d bytes at 0x%08llx (unaligned or protected)",
+                  size, static_cast<unsigned long long>(address));
+    chip->fail(b);
+    return;
+  }
+  const std::uint32_t old = chip->read_word(static_cast<std::uint32_t>(address));
+  const auto word = static_cast<std::uint32_t>(value);
+  if ((old & word) != word) {
+    std::snprintf(b, sizeof b, "flash program of 0x%08x over 0x%08x at 0x%08llx (not erased)", word,
+                  old, static_cast<unsigned long long>(address));
+    chip->fail(b);
+    return;
+  }
+  ++chip->flash_programs_;
+  chip->flash_busy_reads_ = 1;
+}
+
 void Chip::systick_store(std::uint32_t address, std::uint32_t value) {
   std::uint32_t& ctrl = regs_[kScsBase + 0x10];
   if (address == kScsBase + 0x10) {
@@ -709,6 +816,26 @@ void Chip::store(std::uint32_t address, std::uint32_t value) {
       if (value != 0) fail("DMA2: a stream other than 5 configured (not modelled)");
       return;
     }
+  }
+  if (address == kFlashKeyr) {
+    const std::uint32_t expected = flash_key_step_ == 0 ? kKey1 : kKey2;
+    if (value != expected) {
+      fail("wrong FLASH_KEYR sequence (RM0090 3.6.1: FLASH_CR locks until reset)");
+      return;
+    }
+    if (++flash_key_step_ == 2) {
+      flash_key_step_ = 0;
+      regs_[kFlashCr] &= ~kCrLock;
+    }
+    return;
+  }
+  if (address == kFlashSr) {  // rc_w1 flags; BSY read-only
+    regs_[address] &= ~(value & kSrFlags);
+    return;
+  }
+  if (address == kFlashCr) {
+    flash_control(value);
+    return;
   }
   if (address == kFlashOptKeyr) {
     const std::uint32_t expected = optkey_step_ == 0 ? kOptKey1 : kOptKey2;

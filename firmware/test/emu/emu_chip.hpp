@@ -142,6 +142,10 @@ class Chip {
     std::uint32_t odr;
   };
   const std::vector<PinWrite>& gpioc_writes() const { return gpioc_writes_; }
+  /// Sectors erased through the flash interface, in order.
+  const std::vector<int>& flash_erases() const { return flash_erases_; }
+  /// Words programmed through the flash interface.
+  int flash_programs() const { return flash_programs_; }
   /// Option-byte programming operations (OPTSTRT) seen.
   int option_programs() const { return option_programs_; }
   /// Sets the option bytes the chip comes out of reset with (FLASH_OPTCR).
@@ -189,6 +193,10 @@ class Chip {
   std::uint32_t exception_priority(int exception) const;
   void systick_store(std::uint32_t address, std::uint32_t value);
   void system_reset();
+  static std::uint32_t flash_sector_base(int sector);
+  void flash_control(std::uint32_t value);
+  static void flash_store(uc_engine*, uc_mem_type, std::uint64_t address, int size,
+                          std::int64_t value, void* user);
   void nvic_store(std::uint32_t offset, std::uint32_t value);
   bool nvic_observe(std::uint32_t offset, std::uint32_t* value) const;
 
@@ -232,6 +240,9 @@ class Chip {
   std::uint32_t nvic_pending_[3] = {0, 0, 0};
   // Flash option bytes: OPTKEYR sequence, BSY reads left.
   int optkey_step_ = 0;
+  int flash_key_step_ = 0;
+  std::vector<int> flash_erases_;
+  int flash_programs_ = 0;
   int flash_busy_reads_ = 0;
   int option_programs_ = 0;
   std::vector<PinWrite> gpioc_writes_;

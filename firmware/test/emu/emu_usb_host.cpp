@@ -93,6 +93,21 @@ std::string UsbHost::control_in(const Setup& setup, std::vector<std::uint8_t>* d
   return transact("status OUT", [&] { return otg.out(0, {}); });
 }
 
+std::string UsbHost::control_out(const Setup& setup, std::span<const std::uint8_t> data) {
+  OtgFs& otg = chip_.otg_fs();
+  if (std::string e = transact("SETUP", [&] { return otg.setup(setup); }); !e.empty()) return e;
+  // Data stage: OUT packets of up to 64 bytes (USB 2.0 8.5.3.1), then a zero-length IN.
+  for (std::size_t at = 0; at < data.size(); at += 64) {
+    const auto packet = data.subspan(at, std::min<std::size_t>(64, data.size() - at));
+    if (std::string e = transact("control OUT", [&] { return otg.out(0, packet); }); !e.empty())
+      return e;
+  }
+  std::vector<std::uint8_t> packet;
+  if (std::string e = transact("status IN", [&] { return otg.in(0, &packet); }); !e.empty())
+    return e;
+  return packet.empty() ? "" : "status IN: a packet of " + std::to_string(packet.size()) + " bytes";
+}
+
 std::string UsbHost::control_no_data(const Setup& setup) {
   OtgFs& otg = chip_.otg_fs();
   if (std::string e = transact("SETUP", [&] { return otg.setup(setup); }); !e.empty()) return e;

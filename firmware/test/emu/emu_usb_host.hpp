@@ -12,6 +12,7 @@
 #include <array>
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -39,6 +40,8 @@ class UsbHost {
   std::string enumerate(std::uint8_t address);
   /// A control read of up to `length` bytes: `data` holds what the device sent.
   std::string control_in(const Setup& setup, std::vector<std::uint8_t>* data);
+  /// A control write of `data` (the SETUP's wLength).
+  std::string control_out(const Setup& setup, std::span<const std::uint8_t> data);
   /// A control transfer without a data stage.
   std::string control_no_data(const Setup& setup);
   /// One HID request report on EP1 OUT, then EP1 IN until its reply (the
