@@ -148,7 +148,6 @@ void Chip::stop_at(std::uint32_t address, const char* name) {
 }
 
 void Chip::sleep_at(std::uint32_t address) {
-  sleeps_.push_back(address & ~1u);
   stop_at(address, "wfi");
 }
 
@@ -522,6 +521,9 @@ void Chip::flash_control(std::uint32_t value) {
   const std::uint32_t base = flash_sector_base(sector);
   const std::vector<std::uint8_t> erased(flash_sector_base(sector + 1) - base, 0xFF);
   uc_mem_write(uc_, base, erased.data(), erased.size());
+  // Code translated from the old contents must not run again (guest stores
+  // while programming invalidate it themselves; this write is the model's).
+  uc_ctl_remove_cache(uc_, base, base + static_cast<std::uint32_t>(erased.size()));
   flash_erases_.push_back(sector);
   flash_busy_reads_ = 3;
   regs_[kFlashSr] |= 1u;  // EOP

@@ -211,7 +211,6 @@ class Chip {
   std::map<std::uint32_t, std::uint32_t> regs_;
   std::vector<std::pair<std::uint32_t, std::uint32_t>> writes_;
   std::vector<std::pair<std::uint32_t, std::string>> stops_;
-  std::vector<std::uint32_t> sleeps_;
   std::uint32_t skip_stop_ = 0;
   bool stopped_ = false;
   std::vector<std::unique_ptr<Region>> regions_;
