@@ -42,7 +42,23 @@ const char* dfu_request_name(std::uint8_t request) {
 BoardHost::BoardHost(const fsim::SimBoardConfig& config, std::span<const std::uint8_t> image,
                      Scenario scenario)
     : board_(config, image), scenario_(scenario), start_(std::chrono::steady_clock::now()) {
-  event(std::string("power on in ") + mode_text(board_.mode()) + " mode");
+  if (scenario_.recovery_pin_boots > 0) {
+    // The SimBoard powered on as it was built; power it on again with the pin held.
+    board_.set_recovery_pin(true);
+    board_.reset(false);
+    event(std::string("power on in ") + mode_text(board_.mode()) + " mode (recovery pin held)");
+    recovery_pin_boots_left_ = scenario_.recovery_pin_boots;
+    booted();  // the power-on is the first boot
+  } else {
+    event(std::string("power on in ") + mode_text(board_.mode()) + " mode");
+  }
+  board_.on_reenumerate([this](fsim::BoardMode, std::uint32_t) { booted(); });
+}
+
+void BoardHost::booted() {
+  if (recovery_pin_boots_left_ == 0 || --recovery_pin_boots_left_ > 0) return;
+  board_.set_recovery_pin(false);
+  event("recovery pin released");
 }
 
 std::uint64_t BoardHost::real_now_us() const {

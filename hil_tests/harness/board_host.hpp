@@ -43,6 +43,10 @@ struct Scenario {
   int replug_after_ms = -1;
   /// GetInfo replies carry this protocol major instead (-1: the real one).
   int protocol_major = -1;
+  /// The recovery pin is held at power-on and through this many boots in all
+  /// (each reset after the power-on counts, those the board makes itself too),
+  /// then released: as a user who keeps the button pressed until then. 0: never held.
+  int recovery_pin_boots = 0;
 };
 
 /// \brief A device as enumerated, ready to be put into the testbed.
@@ -109,6 +113,8 @@ class BoardHost final : public DevicePort {
   void schedule_strobes();
   void unplug_locked(const char* why);
   void event(const std::string& what);
+  /// After every boot: counts the boots the recovery pin is still held for.
+  void booted();
 
   std::mutex mutex_;
   firmware::sim::SimBoard board_;
@@ -126,6 +132,7 @@ class BoardHost final : public DevicePort {
   bool swallowed_one_ = false;
   bool strobes_scheduled_ = false;
   bool arm_sent_ = false;
+  int recovery_pin_boots_left_ = 0;
   std::vector<Stimulus> stimuli_;  ///< sorted by time, consumed from the front
   std::size_t next_stimulus_ = 0;
 

@@ -117,6 +117,10 @@ int main(int argc, char** argv) {
                  "Cut the power when DFU DNLOAD block N arrives");
   app.add_option("--replug-after-ms", scenario.replug_after_ms,
                  "Plug back in (power cycle) this long after an unplug");
+  app.add_option("--recovery-pin-boots", scenario.recovery_pin_boots,
+                 "The recovery pin (PB2) is held at power-on and through this many boots in "
+                 "all (resets the board makes itself included), then released")
+      ->check(CLI::Range(0, 100));
   app.add_option("--protocol-major", scenario.protocol_major,
                  "Protocol major GetInfo reports (to test the host's refusal)");
   app.add_option("--timeout-s", timeout_s, "Kill the program after this long");

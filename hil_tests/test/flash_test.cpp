@@ -146,6 +146,42 @@ TEST(HilFlash, AnImageThatNeverConfirmsEndsInDfuModeAndFlutterscanFlashRecoversI
   EXPECT_EQ(count_requests(run.record, "DNLOAD"), static_cast<int>(kImageSize / 1024) + 1);
 }
 
+// The recovery pin (PB2) held at power-on keeps DFU mode over a good image,
+// and still held through the reset after a flash it keeps it again:
+// `flutterscan flash` then waits in vain for the application and says so.
+// Released (after that second boot), the next flash's reset starts the image.
+TEST(HilFlash, TheRecoveryPinKeepsDfuModeUntilReleasedThenAFlashStartsTheApplication) {
+  const auto dir = make_work_dir("cli_flash_recovery_pin");
+  const auto image = make_image(dir, "app020.bin");
+  const std::string flash = std::string(FLUTTERSCAN_BINARY) + " flash --wait-s 2 '" + image + "'";
+  const auto run =
+      run_harness({"--recovery-pin-boots", "2", "--timeout-s", "90"},
+                  {"sh", "-c", flash + "; echo \"first flash: exit $?\"; " + flash}, dir);
+  if (run.exit_code == 77) GTEST_SKIP() << run.output;
+  ASSERT_EQ(run.exit_code, 0) << run.output;
+  EXPECT_NE(run.output.find("did not appear in application mode"), std::string::npos) << run.output;
+  EXPECT_NE(run.output.find("first flash: exit "), std::string::npos) << run.output;
+  EXPECT_EQ(run.output.find("first flash: exit 0"), std::string::npos) << run.output;
+  const auto& events = run.record.at("events");
+  ASSERT_FALSE(events.empty());
+  EXPECT_EQ(events.front().at("what"), "power on in bootloader mode (recovery pin held)");
+  int released = 0;
+  for (const auto& e : events) released += e.at("what") == "recovery pin released";
+  EXPECT_EQ(released, 1) << events.dump();
+  // DFU mode at power-on over the good 0.1.0 image, DFU mode again after the
+  // first flash's reset, then the new image.
+  const auto& e = run.record.at("enumerations");
+  ASSERT_EQ(e.size(), 3u) << e.dump();
+  EXPECT_EQ(e[0].at("mode"), "bootloader");
+  EXPECT_EQ(e[1].at("mode"), "bootloader");
+  EXPECT_EQ(e[2].at("mode"), "application");
+  const auto& final = run.record.at("final");
+  EXPECT_EQ(final.at("mode"), "application") << run.output;
+  EXPECT_EQ(final.at("bcd_device"), 0x0020) << run.output;
+  EXPECT_EQ(final.at("writes_below_app_region"), 0);
+  EXPECT_EQ(count_requests(run.record, "DNLOAD"), 2 * (static_cast<int>(kImageSize / 1024) + 1));
+}
+
 TEST(HilFlash, FlutterscanFlashWithoutAFileFlashesTheBuiltProductImage) {
   // `flutterscan flash` with no file flashes the fw-stm32f405 image built with
   // it; the board (running 0.0.9) ends up holding exactly that image's bytes.

@@ -57,6 +57,23 @@ constexpr std::uint32_t kDmaCrModelled =
 constexpr std::uint32_t kOptcrOptLock = 1u << 0;
 constexpr std::uint32_t kOptcrOptStrt = 1u << 1;
 constexpr std::uint32_t kFlashSrBsy = 1u << 16;
+constexpr std::uint32_t kFlashKeyr = kFlashIfBase + 0x04;
+constexpr std::uint32_t kFlashCr = kFlashIfBase + 0x10;
+constexpr std::uint32_t kKey1 = 0x45670123;
+constexpr std::uint32_t kKey2 = 0xCDEF89AB;
+// FLASH_CR: PG 0, SER 1, MER 2, SNB 6:3, PSIZE 9:8 (0b10: x32), STRT 16, LOCK 31.
+constexpr std::uint32_t kCrPg = 1u << 0;
+constexpr std::uint32_t kCrSer = 1u << 1;
+constexpr std::uint32_t kCrMer = 1u << 2;
+constexpr std::uint32_t kCrPsizeMask = 0x3u << 8;
+constexpr std::uint32_t kCrPsizeX32 = 0x2u << 8;
+constexpr std::uint32_t kCrStrt = 1u << 16;
+constexpr std::uint32_t kCrLock = 1u << 31;
+constexpr std::uint32_t kCrModelled =
+    kCrPg | kCrSer | (0xFu << 3) | kCrPsizeMask | kCrStrt | kCrLock;
+// FLASH_SR: EOP 0, OPERR 1, WRPERR 4, PGAERR 5, PGPERR 6, PGSERR 7 (rc_w1), BSY 16.
+constexpr std::uint32_t kSrFlags = 0xF3u;
+constexpr std::uint32_t kSrWrperr = 1u << 4;
 constexpr std::uint32_t kOptKey1 = 0x08192A3B;
 constexpr std::uint32_t kOptKey2 = 0x4C5D6E7F;
 // NVIC (PM0214 4.2): ISER, ICER, ISPR, ICPR words for interrupts 0..95.
@@ -75,13 +92,15 @@ Chip::Chip() {
     fail("uc_open");
     return;
   }
+  // Flash is mapped writable so that a store reaches flash_store (programming
+  // through the flash interface); any other store there fails.
   if (uc_ctl_set_cpu_model(uc_, UC_CPU_ARM_CORTEX_M4) != UC_ERR_OK ||
-      uc_mem_map(uc_, kFlashBase, kFlashSize, UC_PROT_READ | UC_PROT_EXEC) != UC_ERR_OK ||
+      uc_mem_map(uc_, kFlashBase, kFlashSize, UC_PROT_ALL) != UC_ERR_OK ||
       uc_mem_map(uc_, kSramBase, kSramSize, UC_PROT_ALL) != UC_ERR_OK)
     fail("mapping flash and SRAM");
   const std::vector<std::uint8_t> erased(kFlashSize, 0xFF);
   uc_mem_write(uc_, kFlashBase, erased.data(), erased.size());
-  const std::uint16_t bkpt = 0xBE00;  // the interrupt/call return trampoline (never executed)
+  const std::uint16_t bkpt = 0xBE00;  // the exception return trampoline (never executed)
   uc_mem_write(uc_, kTrampoline, &bkpt, sizeof bkpt);
   // SRAM after power-on: not zero, not a valid record.
   std::vector<std::uint8_t> sram(kSramSize);
@@ -93,10 +112,13 @@ Chip::Chip() {
         kTim3Base, kTim5Base, kDma2Base, kIwdgBase, kDbgmcuBase})
     map_region(block, 0x400);
   map_region(kScsBase, 0x1000);
+  map_region(OtgFs::kBase, OtgFs::kSize);
   map_region(kUniqueIdPage, 0x1000);
   uc_hook hook;
   uc_hook_add(uc_, &hook, UC_HOOK_MEM_UNMAPPED, reinterpret_cast<void*>(&Chip::unmapped), this, 1,
               0);
+  uc_hook_add(uc_, &hook, UC_HOOK_MEM_WRITE, reinterpret_cast<void*>(&Chip::flash_store), this,
+              kFlashBase, kFlashBase + kFlashSize - 1);
   stop_at(kTrampoline, "return");
 }
 
@@ -125,6 +147,10 @@ void Chip::stop_at(std::uint32_t address, const char* name) {
               address & ~1u, address & ~1u);
 }
 
+void Chip::sleep_at(std::uint32_t address) {
+  stop_at(address, "wfi");
+}
+
 void Chip::set_option_bytes(std::uint32_t optcr) {
   regs_[kFlashOptcr] = optcr | kOptcrOptLock;
 }
@@ -139,6 +165,43 @@ std::string Chip::run() {
   const std::uint32_t pc = read_word(kFlashBase + 4);
   uc_reg_write(uc_, UC_ARM_REG_SP, &sp);
   return go(pc, false);
+}
+
+void Chip::system_reset() {
+  // PM0214 4.3.5 SYSRESETREQ: a system reset. Flash, SRAM and the option bytes
+  // keep their contents; every peripheral and the core start over; RCC_CSR
+  // keeps its flags and adds SFTRSTF, and PINRSTF (the reset circuit drives
+  // NRST on any internal reset, RM0090 6.1.2).
+  reset_requested_ = false;
+  const std::uint32_t optcr = regs_.at(kFlashOptcr);
+  const std::uint32_t csr_flags = regs_.at(kRccBase + 0x74) & 0xFF000000u;
+  regs_.clear();
+  model_registers();
+  regs_[kFlashOptcr] = optcr | kOptcrOptLock;
+  regs_[kRccBase + 0x74] =
+      (regs_.at(kRccBase + 0x74) & 0x00FFFFFFu) | csr_flags | 1u << 28 | 1u << 26;
+  otg_ = OtgFs();
+  tim2_start_ = 0;
+  tim2_count0_ = 0;
+  tim1_next_update_ = kNever;
+  dma_index_ = dma_total_ = 0;
+  systick_zero_ = kNever;
+  systick_pending_ = false;
+  sleeping_ = false;
+  for (int i = 0; i < 3; ++i) nvic_enabled_[i] = nvic_pending_[i] = 0;
+  optkey_step_ = 0;
+  flash_key_step_ = 0;
+  flash_busy_reads_ = 0;
+  ++system_resets_;
+  const std::uint32_t sp = read_word(kFlashBase);
+  const std::uint32_t pc = read_word(kFlashBase + 4) & ~1u;
+  const std::uint32_t xpsr = 0x01000000u, zero = 0, lr = 0xFFFFFFFFu;
+  uc_reg_write(uc_, UC_ARM_REG_SP, &sp);
+  uc_reg_write(uc_, UC_ARM_REG_PC, &pc);
+  uc_reg_write(uc_, UC_ARM_REG_XPSR, &xpsr);
+  uc_reg_write(uc_, UC_ARM_REG_PRIMASK, &zero);
+  uc_reg_write(uc_, UC_ARM_REG_CONTROL, &zero);
+  uc_reg_write(uc_, UC_ARM_REG_LR, &lr);
 }
 
 std::string Chip::resume() {
@@ -165,10 +228,11 @@ std::string Chip::go(std::uint32_t pc, bool until_trampoline) {
     stopped_ = false;
     const uc_err err = uc_emu_start(uc_, pc | 1u, 0, 0, kSlice);
     if (!error_.empty()) return "error: " + error_;
+    if (reset_requested_) return "error: SYSRESETREQ outside the main loop (not modelled)";
     if (err != UC_ERR_OK) return std::string("error: unicorn: ") + uc_strerror(err);
     if (stopped_) {
       if (!until_trampoline || stopped_at_ == "return") return stopped_at_;
-      return "error: stopped at " + stopped_at_ + " inside a call or handler";
+      return "error: stopped at " + stopped_at_ + " inside a handler";
     }
     cycles_ += kSlice;
     run_hardware_until(cycles_);
@@ -178,70 +242,83 @@ std::string Chip::go(std::uint32_t pc, bool until_trampoline) {
   return "error: no stop within the instruction budget";
 }
 
-std::string Chip::call(std::uint32_t function, std::initializer_list<std::uint32_t> args,
-                       std::uint32_t stack_top, std::uint32_t* result) {
-  static constexpr int kArgRegs[4] = {UC_ARM_REG_R0, UC_ARM_REG_R1, UC_ARM_REG_R2, UC_ARM_REG_R3};
-  std::vector<std::uint32_t> stacked;
-  int i = 0;
-  for (const std::uint32_t a : args) {
-    if (i < 4)
-      uc_reg_write(uc_, kArgRegs[i], &a);
-    else
-      stacked.push_back(a);
-    ++i;
-  }
-  std::uint32_t sp = (stack_top - 4 * static_cast<std::uint32_t>(stacked.size())) & ~7u;
-  for (std::size_t k = 0; k < stacked.size(); ++k)
-    write_word(sp + 4 * static_cast<std::uint32_t>(k), stacked[k]);
-  const std::uint32_t lr = kTrampoline | 1u;
-  const std::uint32_t primask = 1;
-  uc_reg_write(uc_, UC_ARM_REG_SP, &sp);
-  uc_reg_write(uc_, UC_ARM_REG_LR, &lr);
-  uc_reg_write(uc_, UC_ARM_REG_PRIMASK, &primask);
-  const std::string out = go(function, true);
-  if (out != "return") return out;
-  if (reg(UC_ARM_REG_SP) != sp) return "error: the call left SP unbalanced";
-  if (result != nullptr) *result = reg(UC_ARM_REG_R0);
-  const std::uint32_t unmasked = 0;
-  uc_reg_write(uc_, UC_ARM_REG_PRIMASK, &unmasked);
-  return "returned";
-}
-
-std::string Chip::idle_for(std::uint64_t cycles) {
+std::string Chip::run_for(std::uint64_t cycles) {
   const std::uint64_t end = cycles_ + cycles;
-  while (error_.empty()) {
-    const int irq = deliverable_irq();
-    if (irq >= 0) {
-      if (!take_interrupt(irq)) break;
+  std::uint32_t pc = reg(UC_ARM_REG_PC);
+  skip_stop_ = pc & ~1u;
+  while (error_.empty() && cycles_ < end) {
+    const bool masked = reg(UC_ARM_REG_PRIMASK) != 0;
+    if (sleeping_) {
+      // PM0214 3.12.10: WFI ends on a pending exception, taken unless PRIMASK
+      // is set (then the core goes on after the wfi without it).
+      const int exception = deliverable_exception();
+      if (exception >= 0) {
+        sleeping_ = false;
+        if (!masked && !take_exception(exception)) break;
+        continue;
+      }
+      cycles_ = std::max(cycles_, std::min(next_hardware_event(), end));
+      run_hardware_until(cycles_);
       continue;
     }
-    const std::uint64_t next = next_hardware_event();
-    if (next > end) {
-      cycles_ = end;
-      return "idle";
+    // Not inside an IT block (xPSR ICI/IT 26:25, 15:10): Unicorn's slices end
+    // after a whole block; this only makes sure.
+    const bool in_it_block = (reg(UC_ARM_REG_XPSR) & 0x0600FC00u) != 0;
+    if (!masked && !in_it_block) {
+      const int exception = deliverable_exception();
+      if (exception >= 0) {
+        if (!take_exception(exception)) break;
+        continue;
+      }
     }
-    cycles_ = std::max(cycles_, next);
+    stopped_ = false;
+    const std::uint64_t slice = std::min<std::uint64_t>(kSlice, end - cycles_);
+    const uc_err err = uc_emu_start(uc_, pc | 1u, 0, 0, slice);
+    if (!error_.empty()) break;
+    if (err != UC_ERR_OK) return std::string("error: unicorn: ") + uc_strerror(err);
+    cycles_ += slice;
     run_hardware_until(cycles_);
+    if (reset_requested_) {
+      system_reset();
+      pc = reg(UC_ARM_REG_PC);
+      skip_stop_ = 0;
+      continue;
+    }
+    pc = reg(UC_ARM_REG_PC);
+    if (stopped_) {
+      if (stopped_at_ != "wfi") {  // stop_at's stops end run() and resume() only
+        skip_stop_ = pc;
+        continue;
+      }
+      sleeping_ = true;  // the core sleeps in the wfi; it goes on after it
+      pc += 2;
+      uc_reg_write(uc_, UC_ARM_REG_PC, &pc);
+    }
   }
-  return "error: " + error_;
+  if (!error_.empty()) return "error: " + error_;
+  return "ran";
 }
 
-bool Chip::take_interrupt(int irq) {
+bool Chip::take_exception(int exception) {
   // PM0214 2.3.7: xPSR, PC, LR, R12, R3..R0 stacked on the current stack (MSP),
   // aligned to 8 bytes (xPSR bit 9 records the padding); the handler from the
-  // vector table at VTOR, entry 16 + irq.
-  nvic_pending_[irq / 32] &= ~(1u << (irq % 32));
+  // vector table at VTOR, entry `exception`.
+  if (exception == 15)
+    systick_pending_ = false;
+  else
+    nvic_pending_[(exception - 16) / 32] &= ~(1u << ((exception - 16) % 32));
   std::uint32_t sp = reg(UC_ARM_REG_SP);
   const bool pad = (sp & 4u) != 0;
   sp = (sp - 32 - (pad ? 4 : 0)) & ~7u;
-  const std::uint32_t frame[8] = {reg(UC_ARM_REG_R0),  reg(UC_ARM_REG_R1),
-                                  reg(UC_ARM_REG_R2),  reg(UC_ARM_REG_R3),
-                                  reg(UC_ARM_REG_R12), reg(UC_ARM_REG_LR),
-                                  reg(UC_ARM_REG_PC),  0x01000000u | (pad ? 1u << 9 : 0u)};
+  const std::uint32_t xpsr = (reg(UC_ARM_REG_XPSR) & ~0x1FFu & ~(1u << 9)) | 0x01000000u;
+  const std::uint32_t frame[8] = {
+      reg(UC_ARM_REG_R0),  reg(UC_ARM_REG_R1), reg(UC_ARM_REG_R2), reg(UC_ARM_REG_R3),
+      reg(UC_ARM_REG_R12), reg(UC_ARM_REG_LR), reg(UC_ARM_REG_PC), xpsr | (pad ? 1u << 9 : 0u)};
   for (int k = 0; k < 8; ++k) write_word(sp + 4 * static_cast<std::uint32_t>(k), frame[k]);
-  const std::uint32_t vector = read_word(regs_.at(kScsBase + kScbVtor) + 4 * (16 + irq));
+  const std::uint32_t vector = read_word(regs_.at(kScsBase + kScbVtor) + 4 * exception);
+  const std::string name = "exception " + std::to_string(exception);
   if ((vector & 1u) == 0) {
-    fail("vector of interrupt " + std::to_string(irq) + " is not a Thumb address");
+    fail("vector of " + name + " is not a Thumb address");
     return false;
   }
   const std::uint32_t lr = kTrampoline | 1u;  // stands for EXC_RETURN 0xFFFFFFF9
@@ -249,11 +326,11 @@ bool Chip::take_interrupt(int irq) {
   uc_reg_write(uc_, UC_ARM_REG_LR, &lr);
   const std::string out = go(vector, true);
   if (out != "return") {
-    if (error_.empty()) fail("interrupt " + std::to_string(irq) + ": " + out);
+    if (error_.empty()) fail(name + ": " + out);
     return false;
   }
   if (reg(UC_ARM_REG_SP) != sp) {
-    fail("interrupt " + std::to_string(irq) + " left SP unbalanced");
+    fail(name + " left SP unbalanced");
     return false;
   }
   static constexpr int kFrameRegs[7] = {UC_ARM_REG_R0,  UC_ARM_REG_R1, UC_ARM_REG_R2, UC_ARM_REG_R3,
@@ -262,17 +339,29 @@ bool Chip::take_interrupt(int irq) {
     const std::uint32_t v = read_word(sp + 4 * static_cast<std::uint32_t>(k));
     uc_reg_write(uc_, kFrameRegs[k], &v);
   }
+  const std::uint32_t stacked_xpsr = read_word(sp + 28) & ~(1u << 9);
+  uc_reg_write(uc_, UC_ARM_REG_XPSR, &stacked_xpsr);
   const std::uint32_t restored = sp + 32 + (pad ? 4 : 0);
   uc_reg_write(uc_, UC_ARM_REG_SP, &restored);
   return true;
 }
 
-int Chip::deliverable_irq() const {
+std::uint32_t Chip::exception_priority(int exception) const {
+  // PM0214 4.3.7 / 4.4.8: one byte per exception (IPR for IRQs, SHPR3 31:24 for SysTick).
+  const std::uint32_t address =
+      exception == 15 ? kScsBase + 0xD20 + 3 : kScsBase + 0x400 + (exception - 16);
+  return (regs_.at(address & ~3u) >> (8 * (address & 3u))) & 0xFFu;
+}
+
+int Chip::deliverable_exception() {
+  if (otg_.interrupt_line()) pend(kIrqOtgFs);  // level-sensitive: pends while high
+  int best = systick_pending_ ? 15 : -1;
   for (int irq = 0; irq < 96; ++irq) {
     const std::uint32_t bit = 1u << (irq % 32);
-    if ((nvic_pending_[irq / 32] & bit) != 0 && (nvic_enabled_[irq / 32] & bit) != 0) return irq;
+    if ((nvic_pending_[irq / 32] & bit) == 0 || (nvic_enabled_[irq / 32] & bit) == 0) continue;
+    if (best < 0 || exception_priority(16 + irq) < exception_priority(best)) best = 16 + irq;
   }
-  return -1;
+  return best;
 }
 
 void Chip::pend(int irq) {
@@ -366,14 +455,138 @@ void Chip::apply_bsrr(std::uint32_t base, std::uint32_t value, std::uint64_t at,
 }
 
 std::uint64_t Chip::next_hardware_event() const {
-  return (regs_.at(kTim1Base + kTimCr1) & kCr1Cen) != 0 ? tim1_next_update_ : kNever;
+  const std::uint64_t tim1 =
+      (regs_.at(kTim1Base + kTimCr1) & kCr1Cen) != 0 ? tim1_next_update_ : kNever;
+  return std::min(tim1, systick_zero_);
 }
 
 void Chip::run_hardware_until(std::uint64_t cycle) {
   while (error_.empty()) {
     const std::uint64_t next = next_hardware_event();
     if (next > cycle) return;
-    tim1_update(next);
+    if (next == systick_zero_) {
+      // PM0214 4.4: at 0 the counter reloads from LOAD (LOAD + 1 cycles a
+      // period) and sets COUNTFLAG; TICKINT pends the SysTick exception.
+      std::uint32_t& ctrl = regs_[kScsBase + 0x10];
+      ctrl |= 1u << 16;
+      if ((ctrl & 0x2u) != 0) systick_pending_ = true;
+      systick_zero_ = next + (regs_.at(kScsBase + 0x14) & 0xFFFFFFu) + 1;
+    } else {
+      tim1_update(next);
+    }
+  }
+}
+
+std::uint32_t Chip::flash_sector_base(int sector) {
+  // RM0090 table 5 (1 MiB part): sectors 0-3 16 KiB, 4 64 KiB, 5-11 128 KiB.
+  if (sector < 4) return kFlashBase + 0x4000u * static_cast<std::uint32_t>(sector);
+  if (sector == 4) return kFlashBase + 0x10000u;
+  return kFlashBase + 0x20000u * static_cast<std::uint32_t>(sector - 4);
+}
+
+void Chip::flash_control(std::uint32_t value) {
+  std::uint32_t& cr = regs_[kFlashCr];
+  if ((cr & kCrLock) != 0) {
+    if ((value | kCrLock) == (cr | kCrLock)) return;  // setting LOCK again: nothing changes
+    fail("write of FLASH_CR while LOCK is set (ignored by the chip)");
+    return;
+  }
+  if ((value & ~kCrModelled) != 0 || (value & kCrMer) != 0) {
+    fail("FLASH_CR: mass erase or interrupts (not modelled)");
+    return;
+  }
+  if ((value & (kCrPg | kCrSer)) != 0 && (value & kCrPsizeMask) != kCrPsizeX32) {
+    fail("FLASH_CR: a parallelism other than x32 (not modelled)");
+    return;
+  }
+  if (flash_busy_reads_ > 0 && value != cr) {
+    fail("FLASH_CR written while BSY (RM0090 3.9.8)");
+    return;
+  }
+  cr = value & ~kCrStrt;  // STRT clears itself as the erase ends
+  if ((value & kCrStrt) == 0) return;
+  if ((value & kCrSer) == 0) {
+    fail("FLASH_CR.STRT without SER (not modelled)");
+    return;
+  }
+  const int sector = static_cast<int>((value >> 3) & 0xFu);
+  if (sector > 11) {
+    fail("FLASH_CR: sector number beyond the part");
+    return;
+  }
+  if ((regs_.at(kFlashOptcr) & (1u << (16 + sector))) == 0) {  // nWRP: 0 = protected
+    regs_[kFlashSr] |= kSrWrperr;
+    return;
+  }
+  const std::uint32_t base = flash_sector_base(sector);
+  const std::vector<std::uint8_t> erased(flash_sector_base(sector + 1) - base, 0xFF);
+  uc_mem_write(uc_, base, erased.data(), erased.size());
+  // Code translated from the old contents must not run again (guest stores
+  // while programming invalidate it themselves; this write is the model's).
+  uc_ctl_remove_cache(uc_, base, base + static_cast<std::uint32_t>(erased.size()));
+  flash_erases_.push_back(sector);
+  flash_busy_reads_ = 3;
+  regs_[kFlashSr] |= 1u;  // EOP
+}
+
+void Chip::flash_store(uc_engine*, uc_mem_type, std::uint64_t address, int size, std::int64_t value,
+                       void* user) {
+  // RM0090 3.6.4: with PG set and x32 parallelism, one aligned word per write;
+  // programming can only clear bits (the firmware erases first).
+  auto* chip = static_cast<Chip*>(user);
+  const std::uint32_t cr = chip->regs_.at(kFlashCr);
+  char b[112];
+  if ((cr & kCrLock) != 0 || (cr & kCrPg) == 0 || chip->flash_busy_reads_ > 0) {
+    std::snprintf(b, sizeof b, "write to flash at 0x%08llx without FLASH_CR.PG (or locked, busy)",
+                  static_cast<unsigned long long>(address));
+    chip->fail(b);
+    return;
+  }
+  const int sector = [&] {
+    int s = 0;
+    while (s < 11 && address >= chip->flash_sector_base(s + 1)) ++s;
+    return s;
+  }();
+  if (size != 4 || address % 4 != 0 || (chip->regs_.at(kFlashOptcr) & (1u << (16 + sector))) == 0) {
+    std::snprintf(b, sizeof b, "flash program of %d bytes at 0x%08llx (unaligned or protected)",
+                  size, static_cast<unsigned long long>(address));
+    chip->fail(b);
+    return;
+  }
+  const std::uint32_t old = chip->read_word(static_cast<std::uint32_t>(address));
+  const auto word = static_cast<std::uint32_t>(value);
+  if ((old & word) != word) {
+    std::snprintf(b, sizeof b, "flash program of 0x%08x over 0x%08x at 0x%08llx (not erased)", word,
+                  old, static_cast<unsigned long long>(address));
+    chip->fail(b);
+    return;
+  }
+  ++chip->flash_programs_;
+  chip->flash_busy_reads_ = 1;
+}
+
+void Chip::systick_store(std::uint32_t address, std::uint32_t value) {
+  std::uint32_t& ctrl = regs_[kScsBase + 0x10];
+  if (address == kScsBase + 0x10) {
+    if ((value & 0x1u) != 0 && (value & 0x4u) == 0) {
+      fail("SysTick on the external reference clock (CLKSOURCE 0; not modelled)");
+      return;
+    }
+    const bool start = (ctrl & 0x1u) == 0 && (value & 0x1u) != 0;
+    ctrl = (ctrl & (1u << 16)) | (value & 0x7u);
+    if ((value & 0x1u) == 0) systick_zero_ = kNever;
+    // From VAL: 0 reloads at the next cycle, then counts LOAD down.
+    const std::uint32_t val = regs_.at(kScsBase + 0x18);
+    if (start)
+      systick_zero_ = cycles_ + (val != 0 ? val : (regs_.at(kScsBase + 0x14) & 0xFFFFFFu) + 1);
+  } else if (address == kScsBase + 0x14) {
+    regs_[address] = value & 0xFFFFFFu;
+  } else if (address == kScsBase + 0x18) {  // any write clears VAL and COUNTFLAG
+    regs_[address] = 0;
+    ctrl &= ~(1u << 16);
+    if ((ctrl & 0x1u) != 0) systick_zero_ = cycles_ + (regs_.at(kScsBase + 0x14) & 0xFFFFFFu) + 1;
+  } else {
+    fail("write of SysTick CALIB (read-only)");
   }
 }
 
@@ -518,6 +731,10 @@ std::uint32_t Chip::observe(std::uint32_t address) {
     }
   } else if (address >= kScsBase + 0x100 && address < kScsBase + 0x300) {
     nvic_observe(address - kScsBase, &v);
+  } else if (address == kScsBase + 0x10) {  // reading CTRL clears COUNTFLAG
+    regs_[address] &= ~(1u << 16);
+  } else if (address == kScsBase + 0x18 && (regs_.at(kScsBase + 0x10) & 0x1u) != 0) {
+    fail("read of SysTick VAL while counting (not modelled)");
   }
   return v;
 }
@@ -602,6 +819,26 @@ void Chip::store(std::uint32_t address, std::uint32_t value) {
       return;
     }
   }
+  if (address == kFlashKeyr) {
+    const std::uint32_t expected = flash_key_step_ == 0 ? kKey1 : kKey2;
+    if (value != expected) {
+      fail("wrong FLASH_KEYR sequence (RM0090 3.6.1: FLASH_CR locks until reset)");
+      return;
+    }
+    if (++flash_key_step_ == 2) {
+      flash_key_step_ = 0;
+      regs_[kFlashCr] &= ~kCrLock;
+    }
+    return;
+  }
+  if (address == kFlashSr) {  // rc_w1 flags; BSY read-only
+    regs_[address] &= ~(value & kSrFlags);
+    return;
+  }
+  if (address == kFlashCr) {
+    flash_control(value);
+    return;
+  }
   if (address == kFlashOptKeyr) {
     const std::uint32_t expected = optkey_step_ == 0 ? kOptKey1 : kOptKey2;
     if (value != expected) {
@@ -632,6 +869,20 @@ void Chip::store(std::uint32_t address, std::uint32_t value) {
     regs_[address] = value;
     return;
   }
+  if (address == kScsBase + 0xD0C) {      // AIRCR: VECTKEY 0x05FA, SYSRESETREQ (bit 2)
+    if ((value >> 16) != 0x05FA) return;  // ignored without the key
+    if ((value & ~(0xFFFF0000u | 1u << 2)) != 0) {
+      fail("AIRCR write other than SYSRESETREQ (not modelled)");
+      return;
+    }
+    reset_requested_ = true;
+    if (uc_ != nullptr) uc_emu_stop(uc_);
+    return;
+  }
+  if (address >= kScsBase + 0x10 && address <= kScsBase + 0x1C) {
+    systick_store(address, value);
+    return;
+  }
   if (base == kScsBase + 0x000 && offset >= 0x100 && offset < 0x300) {
     nvic_store(offset, value);
     return;
@@ -653,6 +904,8 @@ bool Chip::clocked(std::uint32_t address) const {
   if (base == kTim5Base) return (apb1 & (1u << 3)) != 0;
   if (base == kPwrBase) return (apb1 & (1u << 28)) != 0;
   if (base == kTim1Base) return (apb2 & (1u << 0)) != 0;
+  if (address >= OtgFs::kBase && address < OtgFs::kBase + OtgFs::kSize)
+    return (regs_.at(kRccBase + 0x34) & (1u << 7)) != 0;  // AHB2ENR.OTGFSEN
   return true;
 }
 
@@ -672,6 +925,27 @@ void Chip::unmodelled(const char* what, std::uint64_t address) {
   fail(buffer);
 }
 
+std::uint32_t Chip::otg_read(std::uint32_t address, unsigned size) {
+  if (size != 4 || !clocked(address)) {
+    unmodelled("read", address);
+    return 0;
+  }
+  std::uint32_t v = 0;
+  std::string error;
+  if (!otg_.read(address - OtgFs::kBase, &v, &error)) fail(error);
+  return v;
+}
+
+void Chip::otg_write(std::uint32_t address, unsigned size, std::uint32_t value) {
+  if (size != 4 || !clocked(address)) {
+    unmodelled("write", address);
+    return;
+  }
+  writes_.push_back({address, value});
+  std::string error;
+  if (!otg_.write(address - OtgFs::kBase, value, &error)) fail(error);
+}
+
 bool Chip::check(std::uint32_t word, const char* what, std::uint32_t address) {
   if (regs_.count(word) == 0 || !clocked(word)) {
     unmodelled(what, address);  // a peripheral whose clock is off ignores the bus
@@ -685,6 +959,7 @@ std::uint64_t Chip::mmio_read(uc_engine*, std::uint64_t offset, unsigned size, v
   Chip* chip = region->chip;
   const std::uint32_t address = region->base + static_cast<std::uint32_t>(offset);
   const std::uint32_t word = address & ~3u;
+  if (region->base == OtgFs::kBase) return chip->otg_read(address, size);
   if (!chip->check(word, "read", address)) return 0;
   const std::uint32_t v = chip->observe(word) >> (8 * (address & 3u));
   return size == 4 ? v : v & ((1u << (8 * size)) - 1u);
@@ -696,6 +971,10 @@ void Chip::mmio_write(uc_engine*, std::uint64_t offset, unsigned size, std::uint
   Chip* chip = region->chip;
   const std::uint32_t address = region->base + static_cast<std::uint32_t>(offset);
   const std::uint32_t word = address & ~3u;
+  if (region->base == OtgFs::kBase) {
+    chip->otg_write(address, size, static_cast<std::uint32_t>(value));
+    return;
+  }
   if (!chip->check(word, "write", address)) return;
   std::uint32_t v = static_cast<std::uint32_t>(value);
   if (size != 4) {  // a byte or half-word: the other lanes keep their value

@@ -2,7 +2,8 @@
 // The emulated STM32F405 of the emu tests: a Cortex-M4 in the Unicorn engine
 // (flash, SRAM) with models of the peripherals the product images touch,
 // written from RM0090 (RCC, flash interface and option bytes, PWR, GPIO,
-// TIM1/TIM2/TIM3/TIM5, DMA2, IWDG, DBGMCU) and PM0214 (SysTick, NVIC, SCB).
+// TIM1/TIM2/TIM3/TIM5, DMA2, IWDG, DBGMCU, OTG_FS) and PM0214 (SysTick, NVIC,
+// SCB).
 // Any access to a register that is not modelled, or to a peripheral whose
 // clock is off, stops the emulation with an error naming the address.
 //
@@ -11,7 +12,7 @@
 // modelled). The APB1 timers (TIM2: the microsecond clock and strobe capture)
 // count at 84 MHz before their prescaler, the APB2 timer TIM1 at 168 MHz. The
 // core runs in slices of kSlice instructions; between slices (and while the
-// core is idle) the timers and DMA2 stream 5 run event by event, each event at
+// core sleeps) the timers, SysTick and DMA2 stream 5 run event by event, each event at
 // its exact cycle.
 //
 // Modelled dynamics: TIM2 counting and input capture of the strobe pin on
@@ -19,23 +20,31 @@
 // (MMS = compare pulse); TIM1 in trigger mode from ITR1 (= TIM2 TRGO), counting
 // up to ARR with update DMA requests (UDE); DMA2 stream 5 memory to peripheral,
 // 32-bit, one word per request, into GPIOC BSRR, with its transfer-complete
-// flag and interrupt; NVIC enable/pending registers. Interrupts are taken only
-// while the core is idle (Chip::idle_for: the main loop in `wfi`), never
-// inside a Chip::call (the main loop's InterruptLock holds PRIMASK): the
-// exception frame is stacked on MSP and the handler entered through the vector
-// table at VTOR; it returns to a trampoline the model unstacks from (Unicorn
-// does no Cortex-M exception entry or return). SysTick counts nothing and
-// raises no exception (the application's SysTick handler only ends `wfi`).
+// flag and interrupt; SysTick counting the core clock down from LOAD and
+// raising its exception (PM0214 4.4); the OTG_FS core (emu_otg_fs.hpp) and its
+// interrupt line; NVIC enable/pending registers and priorities (IPR, SHPR3).
+//
+// Exceptions: Unicorn does no Cortex-M exception entry or return, so the model
+// does it (PM0214 2.3.7): the frame (R0-R3, R12, LR, PC, xPSR with its flags
+// and IT state) is stacked on MSP, the handler entered through the vector
+// table at VTOR and its return caught at a trampoline, which unstacks the
+// frame. An exception is taken between instruction slices while PRIMASK is
+// clear, and while the core sleeps in `wfi` (Chip::run_for);
+// of those pending and enabled, the one with the lowest priority value, then
+// the lowest number. Handlers run to completion (the product's handlers are
+// short; no preemption is modelled); the image uses no floating point, so no
+// FP context is stacked (a handler that used it would not be caught).
 
 #include <unicorn/unicorn.h>
 
 #include <cstdint>
-#include <initializer_list>
 #include <map>
 #include <memory>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include "emu_otg_fs.hpp"
 
 namespace flutterscan::firmware::emu {
 
@@ -81,6 +90,7 @@ inline constexpr std::uint32_t kTimSr = 0x10;
 /// Device interrupts of the strobe path (RM0090 table 61).
 inline constexpr int kIrqTim2 = 28;
 inline constexpr int kIrqDma2Stream5 = 68;
+inline constexpr int kIrqOtgFs = 67;
 
 class Chip {
  public:
@@ -101,22 +111,24 @@ class Chip {
   std::string run();
   /// Runs on from where the last stop was.
   std::string resume();
-  /// Calls the Thumb function at `function` (AAPCS: `args` in r0..r3, the rest
-  /// on the stack) with PRIMASK set, as the main loop's InterruptLock does, on
-  /// a stack below `stack_top`; the hardware runs on meanwhile. "returned"
-  /// (r0 in *result) or the error.
-  std::string call(std::uint32_t function, std::initializer_list<std::uint32_t> args,
-                   std::uint32_t stack_top, std::uint32_t* result = nullptr);
-  /// Lets `cycles` pass with the core idle: the timers and the DMA run, and
-  /// interrupts enabled in the NVIC are taken as they pend (lowest number
-  /// first: equal priorities). "idle" or the error.
-  std::string idle_for(std::uint64_t cycles);
+  /// Marks the `wfi` at `address` (the main loop's): there the core sleeps
+  /// until an exception is pending (Chip::run_for).
+  void sleep_at(std::uint32_t address);
+  /// Runs the core on from where it is (thread mode: the main loop) for
+  /// `cycles`, taking exceptions as they pend while PRIMASK is clear and
+  /// sleeping in a `wfi` marked with sleep_at; a SYSRESETREQ (AIRCR) resets
+  /// the chip and the core goes on from the reset vector (stops set with
+  /// stop_at are passed). "ran" or the error.
+  std::string run_for(std::uint64_t cycles);
   /// The strobe input (PA5, TIM2_CH1 = TI1) goes to `level`; the input
   /// filter's delay is not modelled (the capture is at the edge's cycle).
   void strobe_pin(bool level);
 
   std::uint64_t cycles() const { return cycles_; }
+  /// System resets requested through AIRCR so far.
+  int system_resets() const { return system_resets_; }
   std::uint32_t reg(int r);
+  OtgFs& otg_fs() { return otg_; }
   /// A modelled peripheral register's value (as stored; no side effects).
   std::uint32_t io(std::uint32_t address) const { return regs_.at(address); }
   /// Every value written to `address` by the core, in order.
@@ -130,6 +142,10 @@ class Chip {
     std::uint32_t odr;
   };
   const std::vector<PinWrite>& gpioc_writes() const { return gpioc_writes_; }
+  /// Sectors erased through the flash interface, in order.
+  const std::vector<int>& flash_erases() const { return flash_erases_; }
+  /// Words programmed through the flash interface.
+  int flash_programs() const { return flash_programs_; }
   /// Option-byte programming operations (OPTSTRT) seen.
   int option_programs() const { return option_programs_; }
   /// Sets the option bytes the chip comes out of reset with (FLASH_OPTCR).
@@ -158,6 +174,8 @@ class Chip {
   void unmodelled(const char* what, std::uint64_t address);
   void fail(const std::string& what);
   bool check(std::uint32_t word, const char* what, std::uint32_t address);
+  std::uint32_t otg_read(std::uint32_t address, unsigned size);
+  void otg_write(std::uint32_t address, unsigned size, std::uint32_t value);
 
   // Hardware between instructions.
   void run_hardware_until(std::uint64_t cycle);
@@ -169,8 +187,16 @@ class Chip {
   void dma_enable(std::uint32_t cr);
   void apply_bsrr(std::uint32_t base, std::uint32_t value, std::uint64_t at, bool by_dma);
   void pend(int irq);
-  int deliverable_irq() const;
-  bool take_interrupt(int irq);
+  /// The exception (15: SysTick, 16 + n: IRQ n) to take now, or -1.
+  int deliverable_exception();
+  bool take_exception(int exception);
+  std::uint32_t exception_priority(int exception) const;
+  void systick_store(std::uint32_t address, std::uint32_t value);
+  void system_reset();
+  static std::uint32_t flash_sector_base(int sector);
+  void flash_control(std::uint32_t value);
+  static void flash_store(uc_engine*, uc_mem_type, std::uint64_t address, int size,
+                          std::int64_t value, void* user);
   void nvic_store(std::uint32_t offset, std::uint32_t value);
   bool nvic_observe(std::uint32_t offset, std::uint32_t* value) const;
 
@@ -201,11 +227,21 @@ class Chip {
   std::uint32_t dma_index_ = 0;
   std::uint32_t dma_total_ = 0;
   bool strobe_level_ = false;
+  // SysTick: the cycle its counter next reaches 0 while enabled; COUNTFLAG.
+  std::uint64_t systick_zero_ = kNever;
+  bool systick_pending_ = false;
+  bool sleeping_ = false;
+  bool reset_requested_ = false;
+  int system_resets_ = 0;
+  OtgFs otg_;
   // NVIC (96 device interrupts).
   std::uint32_t nvic_enabled_[3] = {0, 0, 0};
   std::uint32_t nvic_pending_[3] = {0, 0, 0};
   // Flash option bytes: OPTKEYR sequence, BSY reads left.
   int optkey_step_ = 0;
+  int flash_key_step_ = 0;
+  std::vector<int> flash_erases_;
+  int flash_programs_ = 0;
   int flash_busy_reads_ = 0;
   int option_programs_ = 0;
   std::vector<PinWrite> gpioc_writes_;

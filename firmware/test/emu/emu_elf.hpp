@@ -1,7 +1,9 @@
 #pragma once
 // The emulator tests' ELF reader: the loadable segments of a 32-bit
-// little-endian ARM ELF (at their load addresses) and symbol values.
+// little-endian ARM ELF (at their load addresses), symbol values and sizes,
+// and where a function sleeps (wfi).
 
+#include <algorithm>
 #include <cstdint>
 #include <cstring>
 #include <fstream>
@@ -63,7 +65,31 @@ struct Elf {
   }
 
   /// The value of symbol `name` (mangled), or 0.
-  std::uint32_t symbol(const std::string& name) const {
+  std::uint32_t symbol(const std::string& name) const { return lookup(name, 4); }
+  /// The size of symbol `name` (a function's bytes), or 0.
+  std::uint32_t symbol_size(const std::string& name) const { return lookup(name, 8); }
+  /// The addresses of the `wfi` instructions (0xBF30) in function `name`.
+  std::vector<std::uint32_t> wfi_in(const std::string& name) const {
+    const std::uint32_t start = symbol(name) & ~1u;
+    const std::uint32_t end = start + symbol_size(name);
+    std::vector<std::uint32_t> out;
+    for (const Segment& s : segments)
+      for (std::uint32_t a = std::max(start, s.address); a + 2 <= end; a += 2) {
+        if (a + 2 > s.address + s.bytes.size()) break;
+        // A halfword that starts a 32-bit instruction (0b11101/0b11110/0b11111
+        // in 15:11) makes the next one its second half: skip it.
+        const auto h = get<std::uint16_t>(s.bytes, a - s.address);
+        if ((h >> 11) >= 0x1D) {
+          a += 2;
+          continue;
+        }
+        if (h == 0xBF30) out.push_back(a);
+      }
+    return out;
+  }
+
+ private:
+  std::uint32_t lookup(const std::string& name, std::size_t field) const {
     const auto& b = file;
     const auto shoff = get<std::uint32_t>(b, 32);
     const auto shentsize = get<std::uint16_t>(b, 46);
@@ -79,7 +105,7 @@ struct Elf {
       for (std::uint32_t s = 0; s + 16 <= size; s += 16) {
         const auto name_at = get<std::uint32_t>(b, offset + s);
         const char* n = reinterpret_cast<const char*>(b.data() + stroff + name_at);
-        if (name == n) return get<std::uint32_t>(b, offset + s + 4);
+        if (name == n) return get<std::uint32_t>(b, offset + s + field);  // st_value, st_size
       }
     }
     return 0;

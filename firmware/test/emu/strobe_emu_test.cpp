@@ -1,19 +1,16 @@
 // The product image's strobe path on the emulated chip (emu_chip.hpp; label
-// emu, issue 15 item 4): reset -> bootloader -> application start-up, then the
-// host's requests, then strobe edges on the TIM2 capture input. Every
-// instruction is the real fw-stm32f405 application's.
-//
-// How the host is played: OTG_FS is not modelled, so the emulation stops
-// where the application would initialise USB (OtgFsDevice::init) and from
-// there on calls the firmware's own entry points the main loop calls (with
-// PRIMASK set, as its InterruptLock does): CommandHandler::handle with the
-// 64-byte HID request reports a host sends (built with common/protocol.hpp),
-// and Controller::poll (the main loop's pass: it pre-arms the next table once
-// the guard accepts it). Between calls the core is idle (`wfi`): TIM2 and DMA2
-// stream 5 interrupts are taken as the NVIC would, through the vector table.
-// What is asserted is what GPIOC's output register did, cycle by cycle:
-// DMA2 stream 5 plays the selected code's BSRR words in order on TIM1 updates
-// and ends all-off, and an edge the guard must refuse lights nothing.
+// emu, issue 15 item 4): reset -> bootloader -> application start-up -> its
+// main loop, with a USB host on the OTG_FS core (emu_usb_host.hpp), then
+// strobe edges on the TIM2 capture input. Every instruction is the real
+// fw-stm32f405 images': the host's requests go in as HID reports on EP1 OUT
+// through the image's OTG_FS driver, device core and command handler, the
+// replies and exposure events come back on EP1 IN; the main loop sleeps in
+// `wfi` between SysTick (1 kHz) and OTG_FS wake-ups, pre-arms the next table
+// when the guard accepts it, and the TIM2 and DMA2 stream 5 interrupts are
+// taken as the NVIC would. What is asserted is what GPIOC's output register
+// did, cycle by cycle: DMA2 stream 5 plays the selected code's BSRR words in
+// order on TIM1 updates and ends all-off, and an edge the guard must refuse
+// lights nothing.
 
 #include <gtest/gtest.h>
 
@@ -25,9 +22,9 @@
 #include <vector>
 
 #include "emu_chip.hpp"
-#include "emu_elf.hpp"
+#include "emu_product.hpp"
+#include "emu_usb_host.hpp"
 #include "flutterscan/common/protocol.hpp"
-#include "flutterscan/firmware/boot_decision.hpp"
 
 namespace flutterscan::firmware::emu {
 namespace {
@@ -46,54 +43,19 @@ constexpr std::uint64_t kMinPeriodUs = 2000;
 class StrobeEmu : public ::testing::Test {
  protected:
   void SetUp() override {
-    const auto boot = Elf::load(FLUTTERSCAN_BOOTLOADER_ELF);
-    const auto app = Elf::load(FLUTTERSCAN_FW_STM32F405_ELF);
-    const auto image = read_file(FLUTTERSCAN_FW_STM32F405_BIN);
-    if (!boot || !app || image.empty())
-      GTEST_SKIP() << "no bootloader / application ELF or image (make fw-stm32f405 builds them)";
-    const std::uint32_t usb_init =
-        app->symbol("_ZN11flutterscan8firmware7stm32f411OtgFsDevice4initEm");
-    handle_ = app->symbol(
-        "_ZN11flutterscan8firmware14CommandHandler6handleESt4spanIKhLj4294967295EES2_IhLj"
-        "4294967295EE");
-    poll_ = app->symbol("_ZN11flutterscan8firmware10Controller4pollEb");
-    handler_ = app->symbol("_ZN11flutterscan8firmware7stm32f412_GLOBAL__N_117g_handler_storageE");
-    controller_ =
-        app->symbol("_ZN11flutterscan8firmware7stm32f412_GLOBAL__N_120g_controller_storageE");
-    ASSERT_NE(usb_init, 0u);
-    ASSERT_NE(handle_, 0u);
-    ASSERT_NE(poll_, 0u);
-    ASSERT_NE(handler_, 0u);
-    ASSERT_NE(controller_, 0u);
-    for (const auto& s : boot->segments) chip_.write(s.address, s.bytes);
-    chip_.write(kAppBase, image);
-    chip_.stop_at(get<std::uint32_t>(image, kAppVectorTableOffset + 4), "application");
-    chip_.stop_at(usb_init, "usb init");
+    if (const std::string missing = load_product(chip_); !missing.empty()) GTEST_SKIP() << missing;
     ASSERT_EQ(chip_.run(), "application");
-    ASSERT_EQ(chip_.resume(), "usb init");
-    // Host buffers and the calls' stack below application_main's frame.
-    const std::uint32_t sp = chip_.reg(UC_ARM_REG_SP) & ~7u;
-    request_at_ = sp - 256;
-    reply_at_ = sp - 128;
-    stack_top_ = sp - 512;
+    // Start-up (clocks, port, controller, watchdog, SysTick, OTG_FS with its
+    // 25 ms wait for device mode), then the host enumerates it.
+    ASSERT_EQ(host_.enumerate(5), "");
+    ASSERT_EQ(chip_.otg_fs().address(), 5);
   }
 
-  /// One HID request report through CommandHandler::handle; its reply's status.
+  /// One HID request report over USB; its reply's status.
   proto::Status send(const std::array<std::uint8_t, proto::kReportSize>& report) {
-    chip_.write(request_at_, std::vector<std::uint8_t>(report.begin(), report.end()));
-    std::uint32_t size = 0;
-    const std::string out = chip_.call(
-        handle_, {handler_, request_at_, proto::kReportSize, reply_at_, proto::kReportSize},
-        stack_top_, &size);
-    EXPECT_EQ(out, "returned");
-    EXPECT_EQ(size, proto::kReportSize);
-    reply_.fill(0);
-    for (std::size_t i = 0; i < reply_.size(); i += 4) {
-      const std::uint32_t w = chip_.read_word(reply_at_ + static_cast<std::uint32_t>(i));
-      for (std::size_t k = 0; k < 4; ++k) reply_[i + k] = static_cast<std::uint8_t>(w >> (8 * k));
-    }
-    EXPECT_EQ(reply_[0], report[0]);  // command echoed
-    EXPECT_EQ(reply_[1], report[1]);  // sequence echoed
+    const std::string error = host_.request(report, &reply_);
+    EXPECT_EQ(error, "");
+    if (!error.empty()) return static_cast<proto::Status>(0xFF);
     return static_cast<proto::Status>(reply_[3]);
   }
   template <typename T>
@@ -107,14 +69,14 @@ class StrobeEmu : public ::testing::Test {
     proto::encode_request(command, ++sequence_, r);
     return send(r);
   }
-  /// One pass of the main loop's controller work (Controller::poll).
-  void main_loop_pass() { EXPECT_EQ(chip_.call(poll_, {controller_, 1}, stack_top_), "returned"); }
+  /// `us` microseconds of the running product and the bus.
+  void run_us(std::uint64_t us) { ASSERT_EQ(host_.run_for(us * kUs), ""); }
   /// A strobe pulse: active edge now, inactive 20 us later, then idle.
   void strobe_pulse(std::uint64_t idle_after_us) {
     chip_.strobe_pin(true);
-    ASSERT_EQ(chip_.idle_for(20 * kUs), "idle");
+    run_us(20);
     chip_.strobe_pin(false);
-    ASSERT_EQ(chip_.idle_for(idle_after_us * kUs), "idle");
+    run_us(idle_after_us);
   }
   std::uint32_t guard_hits() {
     EXPECT_EQ(send(proto::Command::kGetStatus), proto::Status::kOk);
@@ -123,6 +85,12 @@ class StrobeEmu : public ::testing::Test {
                 reply_.data() + proto::kHeaderSize + offsetof(proto::StatusReply, guard_hits),
                 sizeof hits);
     return hits;
+  }
+  /// Exposure event `i` the host read from EP1 IN.
+  proto::ExposureEvent exposure_event(std::size_t i) const {
+    proto::ExposureEvent e{};
+    std::memcpy(&e, host_.events().at(i).data() + proto::kHeaderSize, sizeof e);
+    return e;
   }
   /// The writes to GPIOC BSRR from index `from` on.
   std::vector<Chip::PinWrite> writes_since(std::size_t from) const {
@@ -190,8 +158,7 @@ class StrobeEmu : public ::testing::Test {
   }
 
   Chip chip_;
-  std::uint32_t handle_ = 0, poll_ = 0, handler_ = 0, controller_ = 0;
-  std::uint32_t request_at_ = 0, reply_at_ = 0, stack_top_ = 0;
+  UsbHost host_{chip_};
   std::uint8_t sequence_ = 0;
   std::array<std::uint8_t, proto::kReportSize> reply_{};
 };
@@ -200,83 +167,129 @@ TEST_F(StrobeEmu, AnEdgePlaysTheSelectedCodeThroughDmaAndEndsAllOff) {
   configure_and_arm();
   // Armed in slave mode, the guard accepting: the table waits in hardware.
   ASSERT_TRUE(slot_table_prearmed());
-  ASSERT_EQ(chip_.idle_for(100 * kUs), "idle");
+  run_us(100);
   const std::size_t before = chip_.gpioc_writes().size();
   const std::uint64_t edge = chip_.cycles();
   strobe_pulse(1000);
   expect_one_exposure(writes_since(before), edge);
   EXPECT_EQ(guard_hits(), 0u);
+  // Its exposure event came in on EP1 IN: frame 1, code 0, no flag but the first code's.
+  ASSERT_EQ(host_.events().size(), 1u);
+  const proto::ExposureEvent event = exposure_event(0);
+  EXPECT_EQ(event.frame_counter, 1u);
+  EXPECT_EQ(event.code_id, 0u);
+  EXPECT_EQ(event.flags & proto::kEventGuardHit, 0u);
 }
 
 // After an exposure, the duty cap holds the next one off for kMinPeriodUs: the
 // main loop does not pre-arm, an edge inside that time is refused in the TIM2
-// interrupt before any LED lights, and one after it plays again.
+// interrupt before any LED lights (its event says so), and one after it plays.
 TEST_F(StrobeEmu, TheGuardRefusesAnEdgeTooSoonBeforeAnyLedLights) {
   configure_and_arm();
-  ASSERT_EQ(chip_.idle_for(100 * kUs), "idle");
+  run_us(100);
   const std::uint64_t first = chip_.cycles();
   strobe_pulse(800);
-  main_loop_pass();
   EXPECT_FALSE(slot_table_prearmed());  // at +~820 us the guard refuses: nothing waits in hardware
-  ASSERT_EQ(chip_.idle_for(200 * kUs), "idle");
+  run_us(200);
   const std::size_t before = chip_.gpioc_writes().size();
-  strobe_pulse(600);  // an edge at +~1000 us: half the minimum period
-  main_loop_pass();
+  strobe_pulse(600);  // an edge at +~1020 us: half the minimum period
   for (const Chip::PinWrite& w : writes_since(before)) {
     EXPECT_EQ(w.bsrr & 0xFFFFu, 0u) << "an LED was set at cycle " << w.cycle;
     EXPECT_EQ(w.odr & 0x7u, 0u);
   }
   EXPECT_EQ(chip_.io(kGpioCBase + kGpioOdr) & 0x7u, 0u);
-  EXPECT_EQ(guard_hits(), 1u);
-  // Past the minimum period: the main loop pre-arms again and an edge plays.
+  EXPECT_FALSE(slot_table_prearmed());
+  // Past the minimum period the main loop (woken at 1 kHz) pre-arms again and an edge plays.
   const std::uint64_t now_us = (chip_.cycles() - first) / kUs;
   ASSERT_LT(now_us, kMinPeriodUs);
-  ASSERT_EQ(chip_.idle_for((kMinPeriodUs - now_us + 50) * kUs), "idle");
-  main_loop_pass();
+  run_us(kMinPeriodUs - now_us + 1100);
   ASSERT_TRUE(slot_table_prearmed());
   const std::size_t third = chip_.gpioc_writes().size();
   const std::uint64_t edge = chip_.cycles();
   strobe_pulse(1000);
   expect_one_exposure(writes_since(third), edge);
+  EXPECT_EQ(guard_hits(), 1u);
+  ASSERT_EQ(host_.events().size(), 3u);
+  EXPECT_EQ(exposure_event(0).flags & proto::kEventGuardHit, 0u);
+  EXPECT_NE(exposure_event(1).flags & proto::kEventGuardHit, 0u);
+  EXPECT_EQ(exposure_event(2).flags & proto::kEventGuardHit, 0u);
+}
+
+// The on-time cap: a code that keeps an LED on longer than its max_on_time is
+// refused by Arm (an edge then lights nothing and reports nothing) and, once
+// armed with a code within the cap, by SelectCode: the next edge plays the
+// code within the cap.
+TEST_F(StrobeEmu, TheOnTimeCapRefusesACodeBeforeAnyLedLights) {
+  ASSERT_EQ(upload(1, {0b001, 0b001, 0b001, 0b010}), proto::Status::kOk);  // PC0 on 300 us
+  ASSERT_EQ(send(proto::Command::kSetTiming,
+                 proto::SetTimingRequest{
+                     kSlotUs, 0, static_cast<std::uint8_t>(proto::SlotTimeSource::kFixed), {}}),
+            proto::Status::kOk);
+  ASSERT_EQ(send(proto::Command::kSetMode,
+                 proto::SetModeRequest{static_cast<std::uint8_t>(proto::SyncMode::kSlave), 0, {}}),
+            proto::Status::kOk);
+  proto::SetGuardRequest guard{};
+  guard.max_on_time_us.fill(250);
+  guard.max_duty_permille.fill(1000);
+  ASSERT_EQ(send(proto::Command::kSetGuard, guard), proto::Status::kOk);
+  ASSERT_EQ(upload(0, std::vector<std::uint8_t>(kMasks.begin(), kMasks.end())),
+            proto::Status::kOk);  // no LED on for more than two slots
+  ASSERT_EQ(send(proto::Command::kSelectCode, proto::SelectCodeRequest{1, {}}), proto::Status::kOk);
+  EXPECT_EQ(send(proto::Command::kArm), proto::Status::kGuardLimit);
+  EXPECT_FALSE(slot_table_prearmed());
+  std::size_t before = chip_.gpioc_writes().size();
+  strobe_pulse(1000);
+  for (const Chip::PinWrite& w : writes_since(before))
+    EXPECT_EQ(w.bsrr & 0xFFFFu, 0u) << "an LED was set at cycle " << w.cycle;
+  EXPECT_EQ(chip_.io(kGpioCBase + kGpioOdr) & 0x7u, 0u);
+  EXPECT_TRUE(host_.events().empty());
+  // Armed with code 0; selecting code 1 is refused and the next edge plays code 0.
+  ASSERT_EQ(send(proto::Command::kSelectCode, proto::SelectCodeRequest{0, {}}), proto::Status::kOk);
+  ASSERT_EQ(send(proto::Command::kArm), proto::Status::kOk);
+  EXPECT_EQ(send(proto::Command::kSelectCode, proto::SelectCodeRequest{1, {}}),
+            proto::Status::kGuardLimit);
+  run_us(1100);
+  ASSERT_TRUE(slot_table_prearmed());
+  before = chip_.gpioc_writes().size();
+  const std::uint64_t edge = chip_.cycles();
+  strobe_pulse(1000);
+  expect_one_exposure(writes_since(before), edge);
+  ASSERT_EQ(host_.events().size(), 1u);
+  EXPECT_EQ(exposure_event(0).code_id, 0u);
 }
 
 // Issue 15 finding 4 on the product image: SelectCode of a second and then a
-// third code (longer, all LEDs on at the end) while DMA2 stream 5 plays the
-// first one builds them into tables the DMA is not reading: the exposure
-// plays the first code's words to its all-off end, untouched.
+// third code while DMA2 stream 5 plays the first one (48 slots, 4.8 ms: long
+// enough for two requests over USB) builds them into tables the DMA is not
+// reading: the exposure plays the first code's words to its all-off end,
+// untouched; the code selected last plays on the next edge.
 TEST_F(StrobeEmu, SelectingOtherCodesWhileTheDmaPlaysLeavesItsTableAlone) {
+  std::vector<std::uint8_t> playing;
+  for (int i = 0; i < 48; ++i) playing.push_back(static_cast<std::uint8_t>(1u << (i % 3)));
   std::vector<std::uint8_t> longer(12, 0b111);
   ASSERT_EQ(upload(1, longer), proto::Status::kOk);
   longer.assign(16, 0b101);
   ASSERT_EQ(upload(2, longer), proto::Status::kOk);
-  configure_and_arm(5000, 1000);  // codes 1 and 2 within the guard: SelectCode accepts them
-  main_loop_pass();
+  ASSERT_EQ(upload(3, playing), proto::Status::kOk);
+  configure_and_arm(5000, 1000);  // every code within the guard: SelectCode accepts them
+  ASSERT_EQ(send(proto::Command::kSelectCode, proto::SelectCodeRequest{3, {}}), proto::Status::kOk);
+  run_us(1100);
   ASSERT_TRUE(slot_table_prearmed());
   const std::size_t before = chip_.gpioc_writes().size();
   const std::uint64_t edge = chip_.cycles();
   chip_.strobe_pin(true);
-  ASSERT_EQ(chip_.idle_for(150 * kUs), "idle");  // the TIM2 interrupt ran; slot 1 playing
+  run_us(150);  // the TIM2 interrupt ran; slot 1 playing
   ASSERT_EQ(send(proto::Command::kSelectCode, proto::SelectCodeRequest{1, {}}), proto::Status::kOk);
-  ASSERT_EQ(chip_.idle_for(50 * kUs), "idle");
   ASSERT_EQ(send(proto::Command::kSelectCode, proto::SelectCodeRequest{2, {}}), proto::Status::kOk);
-  main_loop_pass();
-  ASSERT_LT(chip_.cycles() - edge, kMasks.size() * kSlotUs * kUs);  // still inside the exposure
+  ASSERT_LT(chip_.cycles() - edge, playing.size() * kSlotUs * kUs);  // still inside the exposure
   chip_.strobe_pin(false);
-  ASSERT_EQ(chip_.idle_for(1000 * kUs), "idle");
-  expect_one_exposure(writes_since(before), edge);
-  // The code selected last plays on the next edge, pre-armed by the main loop
-  // once its 1600 us of LED 0 fit the duty cap (100 %) since this edge.
-  main_loop_pass();
-  EXPECT_FALSE(slot_table_prearmed());  // 1200 us since this exposure began
-  ASSERT_EQ(chip_.idle_for(500 * kUs), "idle");
-  main_loop_pass();
+  run_us(5000);
+  expect_one_exposure(writes_since(before), edge, playing);
+  run_us(5000);
   ASSERT_TRUE(slot_table_prearmed());
   const std::size_t next = chip_.gpioc_writes().size();
   const std::uint64_t next_edge = chip_.cycles();
-  chip_.strobe_pin(true);
-  ASSERT_EQ(chip_.idle_for(20 * kUs), "idle");
-  chip_.strobe_pin(false);
-  ASSERT_EQ(chip_.idle_for(2000 * kUs), "idle");
+  strobe_pulse(2000);
   expect_one_exposure(writes_since(next), next_edge, longer);
 }
 
