@@ -382,7 +382,9 @@ int main(int argc, char** argv) {
                  "--stage-repeats >= 1, --soak >= 0\n";
     return 2;
   }
-  const fs::path out = fs::temp_directory_path() / "flutterscan_session_bench";
+  // Its own folder per run: two benches at once must not remove each other's session.
+  const fs::path out =
+      fs::temp_directory_path() / ("flutterscan_session_bench." + std::to_string(getpid()));
   std::cout << "CPU: " << bench::cpu_model() << "\n\n";
   if (cascade_only) return cascade_against_tv(width, height, std::min(frames, 120), out);
   if (soak_minutes > 0) {

@@ -81,15 +81,15 @@ int soak_table(const session::SessionConfig& config, double sample_s, const std:
   }
   wake.notify_all();
   sampler.join();
-  if (!outcome.error.empty()) {
-    std::cerr << "session_bench --soak: " << outcome.error << "\n";
-    return 1;
-  }
-  if (!csv.empty()) {
+  if (!csv.empty()) {  // the samples, whatever became of the session
     std::ofstream out(csv);
     out << "t_s,rss_mb,heap_mb,frames_processed\n";
     for (const auto& s : samples)
       out << s.t_s << ',' << s.rss_mb << ',' << s.heap_mb << ',' << s.frames << '\n';
+  }
+  if (!outcome.error.empty()) {
+    std::cerr << "session_bench --soak: " << outcome.error << "\n";
+    return 1;
   }
   const auto& s = outcome.summary;
   const double minutes = s.value("duration_s", 0.0) / 60;
