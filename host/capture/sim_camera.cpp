@@ -176,7 +176,8 @@ class SimCamera final : public CameraSource {
     delivered_ = 0;
     travel_px_ = 0;
     running_ = true;
-    if (o_.ring_frames > 0) prerender_ring();
+    if (o_.ring_frames > 0)
+      if (auto problem = prerender_ring(); !problem.empty()) return problem;
     host_start_ns_ = steady_now_ns();
     return {};
   }
@@ -253,6 +254,13 @@ class SimCamera final : public CameraSource {
     std::string error;
   };
 
+  /// The camera's timestamp of controller time `controller_us` (its offset and drift).
+  std::int64_t camera_ns(std::uint64_t controller_us) const {
+    return o_.clock_offset_ns +
+           static_cast<std::int64_t>(static_cast<double>(controller_us) * 1000.0 *
+                                     (1.0 + o_.clock_drift_ppm * 1e-6));
+  }
+
   /// One frame period on the virtual clock: strobe, encoder, clock to the next frame.
   RenderJob expose_one() {
     double speed = reflectance_ >= 0 ? 0.0 : o_.speed_px_per_s;  // a static target: belt stopped
@@ -263,9 +271,7 @@ class SimCamera final : public CameraSource {
     controller_.set_encoder_velocity(
         static_cast<std::int32_t>(std::lround(speed * o_.counts_per_px)));
     RenderJob job;
-    job.timestamp_ns =
-        o_.clock_offset_ns + static_cast<std::int64_t>(static_cast<double>(begin_us) * 1000.0 *
-                                                       (1.0 + o_.clock_drift_ppm * 1e-6));
+    job.timestamp_ns = camera_ns(begin_us);
     controller_.expose(o_.exposure_us);
     const auto transitions = controller_.take_led_transitions();
     const std::uint64_t after_us = controller_.now_us();
@@ -282,19 +288,28 @@ class SimCamera final : public CameraSource {
     return job;
   }
 
-  /// Ring mode: the ring's frames are exposed and rendered (on render_threads)
-  /// before start() returns, so that every frame afterwards comes from memory
-  /// and the frame rate holds from the first frame on.
-  void prerender_ring() {
-    std::vector<RenderJob> jobs;
-    while (static_cast<int>(jobs.size()) < o_.ring_frames &&
-           (o_.max_frames == 0 || sequence_ < o_.max_frames)) {
-      const bool lost = o_.drop_probability > 0 && uniform_(rng_) < o_.drop_probability;
-      RenderJob job = expose_one();
-      if (lost)
-        ++counters_.frames_dropped;
-      else
-        jobs.push_back(job);
+  /// Ring mode: the ring's frames are rendered (on render_threads) before
+  /// start() returns, so that every frame afterwards comes from memory and the
+  /// frame rate holds from the first frame on. Only the first is exposed now:
+  /// each strobe queues an exposure event on the controller, which holds 16
+  /// for the host, so exposing the whole ring here lost every event after the
+  /// 16th. The others are exposed as they are delivered (next_frame); the ring
+  /// renders them ahead from the first exposure, whose light and blur repeat
+  /// (jitter 0) one frame step of clock and belt further on each time.
+  std::string prerender_ring() {
+    const auto ring = static_cast<std::size_t>(o_.ring_frames);
+    const std::size_t count =
+        o_.max_frames == 0 ? ring : std::min(ring, static_cast<std::size_t>(o_.max_frames));
+    const bool lost = o_.drop_probability > 0 && uniform_(rng_) < o_.drop_probability;
+    const std::uint64_t begin_us = controller_.now_us();
+    const RenderJob first = expose_one();
+    const std::uint64_t step_us = controller_.now_us() - begin_us;
+    const double step_px = travel_px_;  // the belt's travel over the first frame step
+    std::vector<RenderJob> jobs(count, first);
+    for (std::size_t s = 1; s < count; ++s) {
+      jobs[s].sequence = s;
+      jobs[s].timestamp_ns = camera_ns(begin_us + s * step_us);
+      jobs[s].travel_at_slot0 = first.travel_at_slot0 + static_cast<double>(s) * step_px;
     }
     std::vector<Rendered> rendered(jobs.size());
     std::atomic<std::size_t> next{0};
@@ -304,12 +319,19 @@ class SimCamera final : public CameraSource {
         for (std::size_t i = next++; i < jobs.size(); i = next++) rendered[i] = render_new(jobs[i]);
       });
     for (auto& t : threads) t.join();
+    ring_.clear();
     for (auto& r : rendered) {
-      if (r.error.empty()) ring_.push_back(r.frame);
+      if (!r.error.empty()) return r.error;
+      ring_.push_back(std::move(r.frame));
+    }
+    if (lost) {
+      ++counters_.frames_dropped;
+    } else {
       std::promise<Rendered> ready;
-      ready.set_value(std::move(r));
+      ready.set_value(render_job(first));
       in_flight_.push_back(ready.get_future());
     }
+    return {};
   }
 
   /// The frame of `job` with its identity set and nothing drawn yet.
@@ -329,9 +351,9 @@ class SimCamera final : public CameraSource {
     return out;
   }
 
-  /// `job` from the ring once it is full, else rendered (and kept, in ring mode).
+  /// `job` from the ring (ring mode), else rendered.
   Rendered render_job(const RenderJob& job) {
-    if (o_.ring_frames > 0 && ring_.size() == static_cast<std::size_t>(o_.ring_frames)) {
+    if (!ring_.empty()) {
       Rendered out;
       out.frame = frame_of(job);
       const Frame& stored = ring_[job.sequence % ring_.size()];
@@ -342,9 +364,7 @@ class SimCamera final : public CameraSource {
       out.frame.descriptor_json = stored.descriptor_json;
       return out;
     }
-    Rendered out = render_new(job);
-    if (out.error.empty() && o_.ring_frames > 0) ring_.push_back(out.frame);
-    return out;
+    return render_new(job);
   }
 
   imaging::CaptureModel model_for(const Lighting& light, double blur) const {

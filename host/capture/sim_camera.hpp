@@ -66,6 +66,8 @@ struct SimConveyorOptions {
   bool pace_realtime = false;    ///< deliver at most one frame per frame period of host time
   /// Frames rendered once and replayed cyclically (0: render every frame);
   /// needs jitter 0. For benchmarks: rendering cost stays out of the pipeline.
+  /// Rendered at start() from the first exposure; each frame is still exposed
+  /// (its event queued on the controller) when it is delivered.
   int ring_frames = 0;
   /// Frames rendered at once (exposures run that far ahead of delivery).
   int render_threads = 2;

@@ -1,7 +1,8 @@
 // End-to-end sim sessions: every label's decoded value equals its ground
 // truth at the nominal noise level; jitter and lost frames reported exactly;
-// drops under overload counted at the one place; rotation within the disk
-// budget; results over TCP read by a client.
+// drops under overload counted at the one place; a sim ring longer than the
+// controller's event queue loses no event; rotation within the disk budget;
+// results over TCP read by a client.
 #include "session/session.hpp"
 
 #include <arpa/inet.h>
@@ -11,7 +12,10 @@
 
 #include <gtest/gtest.h>
 
+#include <set>
+#include <string>
 #include <thread>
+#include <vector>
 
 #include "session/test/session_test_support.hpp"
 
@@ -136,6 +140,34 @@ TEST(SimSession, OverloadDropsAtTheQueueAndCountsEveryDrop) {
       if (count_flag({l}, "dropped") == 0 && !l.contains("latency_ms")) ADD_FAILURE() << l.dump();
     ADD_FAILURE() << s.dump();
   }
+}
+
+TEST(SimSession, ARingLongerThanTheControllersEventQueueLosesNoEventNorObject) {
+  // The ring pre-renders 24 frames before the session starts; the controller
+  // holds 16 exposure events, so the ring's frames are exposed as delivered.
+  // The session sees what it sees with every frame rendered live.
+  auto labels_read = [](bool ring) {
+    const ScratchFolder scratch(ring ? "ring" : "ring_live");
+    SessionConfig config = small_sim_config(scratch.path(), 24);
+    if (ring) config.camera.options.push_back({"ring_frames", "24"});
+    config.processing.queue_depth = 24;  // frames arrive as fast as copied: none dropped
+    config.output.report = false;
+    const SessionOutcome outcome = run(config);
+    EXPECT_EQ(outcome.error, "");
+    const auto& s = outcome.summary;
+    EXPECT_EQ(s["events_received"], 24);
+    EXPECT_EQ(s["frames_without_event"], 0);
+    EXPECT_EQ(s["frames_processed"], 24);
+    EXPECT_GE(s["ground_truth"]["labels_fully_in_view"].get<int>(), 5) << s.dump(2);
+    EXPECT_EQ(s["ground_truth"]["missed"], nlohmann::json::array()) << s.dump(2);
+    std::vector<std::string> values;  // one object per label: each value once
+    for (const auto& o : s["object_results"]) values.push_back(o.value("value", "NO-READ"));
+    EXPECT_EQ(std::set<std::string>(values.begin(), values.end()).size(), values.size())
+        << s.dump(2);
+    EXPECT_GE(values.size(), s["ground_truth"]["labels_fully_in_view"].get<std::size_t>());
+    return values;
+  };
+  EXPECT_EQ(labels_read(true), labels_read(false));
 }
 
 TEST(SimSession, FrameFilesRotateWithinTheDiskBudgetAndTheLogNever) {
