@@ -66,7 +66,7 @@ constexpr double kBlurPx = 52;
 constexpr int kSupersample = sim::kSimSupersample;
 const std::string kSessionPath = "session";  ///< the session's default path among the methods
 /// The same with processing.decode_area = "frame" (codes looked for on the whole frame).
-const std::string kSessionFrame = "session, area frame";
+const std::string kSessionFrame = "session (area frame)";
 
 struct Options {
   std::string photos;
@@ -320,7 +320,7 @@ int run(const Options& o) {
   all.push_back(kSessionFrame);
   std::cout << "Read, of the " << original
             << " the photo itself reads (session: the default path, cascade, every second pass; "
-               "session, area frame: the same reading the whole frame)\n\n"
+               "session (area frame): the same reading the whole frame)\n\n"
                "| method | scene |";
   for (double e : o.electrons) std::cout << " " << e << " e- |";
   std::cout << "\n|---|---|";
