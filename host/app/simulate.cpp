@@ -1,6 +1,9 @@
 // `flutterscan simulate --scene code128:TEXT --code DIGITS --blur 52 --electrons 3000 -o frame.png`
 // writes the frame (16-bit PNG), its capture descriptor (frame.json) and the
 // ground truth (frame.truth.png, reflectance x 65535).
+// `--scene photo:PATH [--rotate DEG]` takes a photo of a real label as the
+// object (sim/photo_scene.hpp): its colour channels are the reflectance under
+// the red, green and blue LEDs, and the truth is their fusion (sim::fuse_bands).
 
 #include <cmath>
 #include <iostream>
@@ -12,9 +15,12 @@
 #include "app/image_io.hpp"
 #include "imaging/capture_descriptor.hpp"
 #include "imaging/motion_frame.hpp"
+#include "sim/colour_scene.hpp"
 #include "sim/forward_model.hpp"
+#include "sim/photo_scene.hpp"
 #include "sim/pixel_integration.hpp"
 #include "sim/scene.hpp"
+#include "sim/timeline_forward.hpp"
 
 namespace flutterscan::app {
 namespace {
@@ -38,6 +44,9 @@ struct SimulateOptions {
   std::string encoding = "linear";
   int width = 640;
   int height = 360;
+  bool width_given = false;  ///< photo scenes size themselves unless told
+  bool height_given = false;
+  double rotate = 0;  ///< photo scenes: degrees, anticlockwise
   double module = 3;
   std::uint64_t seed = 1;
   std::string output;
@@ -88,23 +97,73 @@ imaging::CaptureModel capture_model(const SimulateOptions& o) {
   return m;
 }
 
+/// A photo scene's frame where --width or --height do not say: the turned
+/// photo with kMinBeltPx of belt across the motion and its blur plus kMinBeltPx
+/// along it (the whole smear in view, belt before and after).
+void size_photo_frame(const SimulateOptions& o, const imaging::CaptureModel& model,
+                      sim::SceneSpec& spec) {
+  const auto least = sim::photo_frame_size(spec);
+  if (!least.ok()) throw UsageError("--scene: " + least.error());
+  const int smear = 2 * static_cast<int>(std::ceil(model.blur_px));
+  const bool along_x = imaging::moves_along_x(model.direction);
+  if (!o.width_given) spec.width = least.value().first + (along_x ? smear : 0);
+  if (!o.height_given) spec.height = least.value().second + (along_x ? 0 : smear);
+}
+
+/// The scene's expected electrons and its truth (the sharp grey view), rendered
+/// finer than the pixels so that it moves continuously within each pixel. A
+/// photo scene seen by an RGB camera under three LEDs is a colour object.
+std::pair<imaging::Image, imaging::Plane> render(const sim::SceneSpec& spec,
+                                                 const imaging::CaptureModel& model) {
+  constexpr int k = sim::kSimSupersample;
+  if (spec.kind == sim::SceneKind::kPhoto && model.leds == 3) {
+    auto bands = sim::render_photo_bands(spec, k);
+    if (!bands.ok()) throw UsageError("--scene: " + bands.error());
+    auto expected = sim::expected_colour_electrons(bands.value(), model, k);
+    if (!expected.ok()) throw UsageError("--scene: " + expected.error());
+    return {std::move(expected.value()), sim::bin_pixels(sim::fuse_bands(bands.value()), k)};
+  }
+  const auto fine = sim::render_scene(spec, k);
+  if (!fine.ok()) throw UsageError("--scene: " + fine.error());
+  return {sim::expected_electrons(fine.value(), model, k), sim::bin_pixels(fine.value(), k)};
+}
+
+/// What the descriptor says of a photo scene: the photo, its turn, where it
+/// lies and the reflectance its samples were scaled into.
+nlohmann::json photo_record(const sim::SceneSpec& spec, const imaging::CaptureModel& model) {
+  const auto layout = sim::photo_layout(spec);
+  if (!layout.ok()) throw UsageError("--scene: " + layout.error());
+  const sim::PhotoLayout& l = layout.value();
+  return {{"path", spec.content},
+          {"size", {l.photo_width, l.photo_height}},
+          {"bands", l.grey            ? "grey (one band for all three LEDs)"
+                    : model.leds == 3 ? "red, green, blue (LEDs 0, 1, 2)"
+                                      : "fused to grey (one LED)"},
+          {"decoding", "sRGB to linear"},
+          {"reflectance", {sim::kPhotoBlack, sim::kPhotoWhite}},
+          {"rotate_deg", spec.rotate_deg},
+          {"centre_px", {l.centre_x, l.centre_y}},
+          {"belt", spec.belt}};
+}
+
 void run(const SimulateOptions& o) {
   const imaging::CaptureModel model = capture_model(o);
   auto spec = sim::parse_scene(o.scene);
   if (!spec.ok()) throw UsageError("--scene: " + spec.error());
+  const bool photo = spec.value().kind == sim::SceneKind::kPhoto;
+  require(photo || o.rotate == 0, "--rotate turns photo scenes only (--scene photo:PATH)");
+  require(std::isfinite(o.rotate) && std::abs(o.rotate) <= 360,
+          "--rotate must be a number of degrees from -360 to 360");
   spec.value().width = o.width;
   spec.value().height = o.height;
   spec.value().module_px = o.module;
-  require(model.blur_px < imaging::length_along_motion(model.direction, o.width, o.height),
+  spec.value().rotate_deg = o.rotate;
+  if (photo) size_photo_frame(o, model, spec.value());
+  const int width = spec.value().width, height = spec.value().height;
+  require(model.blur_px < imaging::length_along_motion(model.direction, width, height),
           "--blur must be shorter than the image along the motion");
-  // The scene is rendered finer than the pixels so that it moves continuously
-  // within each pixel; the truth is what a sharp capture of it records.
-  const auto fine = sim::render_scene(spec.value(), sim::kSimSupersample);
-  if (!fine.ok()) throw UsageError("--scene: " + fine.error());
-  const imaging::Plane truth = sim::bin_pixels(fine.value(), sim::kSimSupersample);
-
-  const auto frame = sim::record_frame(
-      sim::expected_electrons(fine.value(), model, sim::kSimSupersample), model, o.seed);
+  const auto [expected, truth] = render(spec.value(), model);
+  const auto frame = sim::record_frame(expected, model, o.seed);
   const std::string descriptor_path = sibling_path(o.output, "", ".json");
   const std::string truth_path = sibling_path(o.output, ".truth", ".png");
   imaging::Image truth_image;
@@ -117,6 +176,7 @@ void run(const SimulateOptions& o) {
                               {"cap", o.cap},
                               {"supersample", sim::kSimSupersample},
                               {"truth", truth_path}};
+  if (photo) descriptor["simulation"]["photo"] = photo_record(spec.value(), model);
   for (const auto& error :
        {write_png16(o.output, frame), write_text(descriptor_path, descriptor.dump(2) + "\n"),
         write_png16(truth_path, truth_image)})
@@ -133,8 +193,9 @@ void add_simulate(CLI::App& app) {
   command
       ->add_option(
           "--scene", o->scene,
-          "code128:TEXT, ean13:DIGITS, qr:TEXT, datamatrix:TEXT, text:WORDS, image:PATH or "
-          "flat:REFLECTANCE (a calibration target)")
+          "code128:TEXT, ean13:DIGITS, qr:TEXT, datamatrix:TEXT, text:WORDS, image:PATH, "
+          "photo:PATH (a photo of a real label on the belt, its colours the reflectance under "
+          "the LEDs) or flat:REFLECTANCE (a calibration target)")
       ->required();
   command->add_option("--code", o->code, "LED code: digits or a library name")->required();
   command
@@ -165,18 +226,26 @@ void add_simulate(CLI::App& app) {
   command->add_option("--encoding", o->encoding, "linear or srgb")
       ->check(CLI::IsMember({"linear", "srgb"}))
       ->capture_default_str();
-  command->add_option("--width", o->width, "frame width")
-      ->check(CLI::Range(16, 16384))
-      ->capture_default_str();
-  command->add_option("--height", o->height, "frame height")
-      ->check(CLI::Range(16, 16384))
-      ->capture_default_str();
+  CLI::Option* width =
+      command->add_option("--width", o->width, "frame width (photo scenes: sized to the photo)")
+          ->check(CLI::Range(16, 16384))
+          ->capture_default_str();
+  CLI::Option* height =
+      command->add_option("--height", o->height, "frame height (photo scenes: sized to the photo)")
+          ->check(CLI::Range(16, 16384))
+          ->capture_default_str();
+  command->add_option("--rotate", o->rotate,
+                      "photo scenes: turn the photo by DEG degrees, anticlockwise on the image");
   command->add_option("--module", o->module, "barcode module width, pixels")
       ->check(CLI::Range(0.5, 100.0))
       ->capture_default_str();
   command->add_option("--seed", o->seed, "noise seed")->capture_default_str();
   command->add_option("-o,--output", o->output, "frame PNG to write")->required();
-  command->callback([o] { run(*o); });
+  command->callback([o, width, height] {
+    o->width_given = width->count() > 0;
+    o->height_given = height->count() > 0;
+    run(*o);
+  });
 }
 
 }  // namespace flutterscan::app

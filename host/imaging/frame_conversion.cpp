@@ -10,6 +10,10 @@ double srgb_to_linear(double v) {
   return v <= 0.04045 ? v / 12.92 : std::pow((v + 0.055) / 1.055, 2.4);
 }
 
+double linear_to_srgb(double v) {
+  return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
+}
+
 Image dn_to_electrons(const Image& dn, const CaptureModel& m) {
   const double full_scale = std::pow(2.0, m.bit_depth) - 1.0;
   Image out;

@@ -14,4 +14,7 @@ Image dn_to_electrons(const Image& dn, const CaptureModel& model);
 /// \brief The sRGB transfer curve's inverse, on values in [0, 1].
 double srgb_to_linear(double encoded);
 
+/// \brief The sRGB transfer curve (linear light to encoded), on values in [0, 1].
+double linear_to_srgb(double linear);
+
 }  // namespace flutterscan::imaging

@@ -3,6 +3,7 @@
 
 #include "reader/barcode_reader.hpp"
 
+#include "imaging/frame_conversion.hpp"
 #include "imaging/motion_frame.hpp"
 #include "reader/assertion_guard.hpp"
 
@@ -30,17 +31,35 @@ std::string check_symbologies(const std::string& symbologies) {
 
 namespace {
 
+/// Reflectance 0..1 to sRGB-encoded 8-bit, in kSrgbSteps steps of linear light.
+constexpr int kSrgbSteps = 16384;
+const std::vector<std::uint8_t>& srgb_table() {
+  static const std::vector<std::uint8_t> table = [] {
+    std::vector<std::uint8_t> t(kSrgbSteps + 1);
+    for (int i = 0; i <= kSrgbSteps; ++i)
+      t[static_cast<std::size_t>(i)] = static_cast<std::uint8_t>(
+          imaging::linear_to_srgb(static_cast<double>(i) / kSrgbSteps) * 255.0 + 0.5);
+    return t;
+  }();
+  return table;
+}
+
 /// Columns [x0, x1) of rows [y0, y1) of `latent` into `lum` (rows of x1 - x0
-/// bytes) as ZXing's 8-bit luminance.
-void to_luminance(const imaging::Plane& latent, int x0, int y0, int x1, int y1,
+/// bytes) as ZXing's 8-bit luminance: linear in reflectance, or sRGB-encoded.
+void to_luminance(const imaging::Plane& latent, int x0, int y0, int x1, int y1, LuminanceView view,
                   std::vector<std::uint8_t>& lum) {
   const auto width = static_cast<std::size_t>(x1 - x0);
   lum.resize(width * static_cast<std::size_t>(y1 - y0));
+  const std::vector<std::uint8_t>& srgb = srgb_table();
   for (int y = y0; y < y1; ++y) {
     const float* row = latent.row(y).data() + x0;
     std::uint8_t* out = lum.data() + static_cast<std::size_t>(y - y0) * width;
-    for (std::size_t x = 0; x < width; ++x)
-      out[x] = static_cast<std::uint8_t>(std::clamp(row[x], 0.0f, 1.0f) * 255.0f + 0.5f);
+    if (view == LuminanceView::kLinear)
+      for (std::size_t x = 0; x < width; ++x)
+        out[x] = static_cast<std::uint8_t>(std::clamp(row[x], 0.0f, 1.0f) * 255.0f + 0.5f);
+    else
+      for (std::size_t x = 0; x < width; ++x)
+        out[x] = srgb[static_cast<std::size_t>(std::clamp(row[x], 0.0f, 1.0f) * kSrgbSteps + 0.5f)];
   }
 }
 
@@ -99,19 +118,26 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
     const int x1 = std::clamp(w.x + w.width, x0, latent.width),
               y1 = std::clamp(w.y + w.height, y0, latent.height);
     if (x1 - x0 < 1 || y1 - y0 < 1) continue;
-    to_luminance(latent, x0, y0, x1, y1, lum);
-    const ZXing::ImageView view(lum.data(), x1 - x0, y1 - y0, ZXing::ImageFormat::Lum);
-    ZXing::Results results;
-    out.decoder_fault =
-        run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, hints); });
-    if (!out.decoder_fault.empty()) {
-      out.codes.clear();
-      return out;
-    }
-    for (const ZXing::Result& result : results) {
-      if (!result.isValid()) continue;
-      DecodedCode code = decoded_code(result, x0, y0, latent);
-      if (!already_read(out.codes, code)) out.codes.push_back(std::move(code));
+    // The linear view first; a window it reads nothing in, again sRGB-encoded.
+    for (const LuminanceView luminance : {LuminanceView::kLinear, LuminanceView::kSrgb}) {
+      to_luminance(latent, x0, y0, x1, y1, luminance, lum);
+      const ZXing::ImageView view(lum.data(), x1 - x0, y1 - y0, ZXing::ImageFormat::Lum);
+      ZXing::Results results;
+      out.decoder_fault =
+          run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, hints); });
+      if (!out.decoder_fault.empty()) {
+        out.codes.clear();
+        return out;
+      }
+      bool any = false;
+      for (const ZXing::Result& result : results) {
+        if (!result.isValid()) continue;
+        any = true;
+        DecodedCode code = decoded_code(result, x0, y0, latent);
+        code.luminance = luminance;
+        if (!already_read(out.codes, code)) out.codes.push_back(std::move(code));
+      }
+      if (any) break;
     }
   }
   return out;

@@ -21,6 +21,11 @@
 
 namespace flutterscan::reader {
 
+/// \brief How a latent's reflectance reaches the decoder as 8-bit luminance:
+/// linear (first), or sRGB-encoded (a window the linear view reads nothing
+/// in: dark or low-contrast print, as a camera's own encoding shows it).
+enum class LuminanceView { kLinear, kSrgb };
+
 /// \brief One decoded barcode.
 struct DecodedCode {
   std::string text;
@@ -32,7 +37,8 @@ struct DecodedCode {
   int orientation_deg = 0;  ///< ZXing's: the symbol's reading direction, degrees
   double centre_x = 0;      ///< pixel column of the symbol's centre
   double centre_y = 0;
-  double min_x = 0, max_x = 0;  ///< extent along x
+  double min_x = 0, max_x = 0;                       ///< extent along x
+  LuminanceView luminance = LuminanceView::kLinear;  ///< the view it was read on
   /// Where it lies (corners refined on the image for linear codes), its module
   /// size and its indicative print quality (measure_code()).
   CodeQuality quality;
@@ -71,7 +77,8 @@ struct DecodeWindow {
 
 /// \brief Every barcode of the named symbologies (check_symbologies() passed)
 /// ZXing reads on `latent` (reflectance, clipped to 0..1), inside `windows`
-/// (each decoded on its own; none: the whole image). Positions are the
+/// (each decoded on its own; none: the whole image), each window on the
+/// linear view and, when that reads nothing, on the sRGB-encoded one. Positions are the
 /// latent's. `try_rotate`: also look for 1-D codes turned by 90 degrees (about
 /// twice the decode time).
 BarcodeReadout read_barcodes(const imaging::Plane& latent,

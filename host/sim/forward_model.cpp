@@ -4,19 +4,12 @@
 #include <cmath>
 #include <random>
 
+#include "imaging/frame_conversion.hpp"
 #include "imaging/motion_frame.hpp"
 #include "sim/pixel_integration.hpp"
 
 namespace flutterscan::sim {
-namespace {
-
 using imaging::Plane;
-
-double linear_to_srgb(double v) {
-  return v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1.0 / 2.4) - 0.055;
-}
-
-}  // namespace
 
 imaging::Image expected_electrons(const Plane& reflectance, const imaging::CaptureModel& model,
                                   int supersample) {
@@ -44,7 +37,7 @@ imaging::Image record_frame(const imaging::Image& expected, const imaging::Captu
     if (model.encoding != imaging::Encoding::kLinear) {
       const double unit = dn / full_scale;
       dn = std::round(full_scale * (model.encoding == imaging::Encoding::kSrgb
-                                        ? linear_to_srgb(unit)
+                                        ? imaging::linear_to_srgb(unit)
                                         : std::pow(unit, 1.0 / model.gamma)));
     }
     return static_cast<float>(dn);

@@ -24,6 +24,9 @@
 #include <utility>
 #include <vector>
 
+#include "sim/colour_scene.hpp"
+#include "sim/photo_scene.hpp"
+
 namespace flutterscan::sim {
 namespace {
 
@@ -34,7 +37,7 @@ struct KindName {
   std::string_view name;
 };
 
-constexpr std::array<KindName, 7> kKindNames{{
+constexpr std::array<KindName, 8> kKindNames{{
     {SceneKind::kCode128, "code128"},
     {SceneKind::kEan13, "ean13"},
     {SceneKind::kQr, "qr"},
@@ -42,6 +45,7 @@ constexpr std::array<KindName, 7> kKindNames{{
     {SceneKind::kText, "text"},
     {SceneKind::kImage, "image"},
     {SceneKind::kFlat, "flat"},
+    {SceneKind::kPhoto, "photo"},
 }};
 
 constexpr int kMaxImageSide = 1 << 15;
@@ -112,7 +116,7 @@ std::string content_problem(SceneKind kind, const std::string& content) {
   const std::string name(scene_kind_name(kind));
   if (content.empty()) {
     return name + " scene has no content: write " + name + ":" +
-           (kind == SceneKind::kImage ? "PATH" : "TEXT");
+           (kind == SceneKind::kImage || kind == SceneKind::kPhoto ? "PATH" : "TEXT");
   }
   switch (kind) {
     case SceneKind::kEan13: {
@@ -154,6 +158,7 @@ std::string content_problem(SceneKind kind, const std::string& content) {
     case SceneKind::kQr:
     case SceneKind::kDataMatrix:
     case SceneKind::kImage:
+    case SceneKind::kPhoto:
       return {};
   }
   return {};
@@ -165,7 +170,8 @@ std::string spec_problem(const SceneSpec& spec) {
     return "scene size " + std::to_string(spec.width) + " x " + std::to_string(spec.height) +
            " px is outside 1.." + std::to_string(kMaxImageSide);
   }
-  if (spec.kind != SceneKind::kImage && !(std::isfinite(spec.module_px) && spec.module_px > 0)) {
+  if (spec.kind != SceneKind::kImage && spec.kind != SceneKind::kPhoto &&
+      !(std::isfinite(spec.module_px) && spec.module_px > 0)) {
     return "module size " + format_number(spec.module_px) + " px is not a positive number";
   }
   const std::array<std::pair<const char*, double>, 3> reflectances{
@@ -235,6 +241,7 @@ Result<ModuleGrid, std::string> encode_symbol(SceneKind kind, const std::string&
     case SceneKind::kText:
     case SceneKind::kImage:
     case SceneKind::kFlat:
+    case SceneKind::kPhoto:
       return GridResult::failure("not a barcode scene");
   }
   const std::string name(scene_kind_name(kind));
@@ -607,6 +614,11 @@ PlaneResult render_scene(const SceneSpec& camera_spec, int supersample) {
     return PlaneResult::failure(problem);
   }
   if (spec.kind == SceneKind::kImage) return render_image(spec);
+  if (spec.kind == SceneKind::kPhoto) {
+    auto bands = render_photo_bands(camera_spec, supersample);
+    if (!bands.ok()) return PlaneResult::failure(bands.error());
+    return PlaneResult::success(fuse_bands(bands.value()));
+  }
   if (spec.kind == SceneKind::kFlat)
     return PlaneResult::success(imaging::Plane(spec.width, spec.height, std::stof(spec.content)));
   PlaneResult label = spec.kind == SceneKind::kText ? render_text(spec) : render_barcode(spec);

@@ -19,6 +19,10 @@
 // An image scene is a picture file taken as reflectance: 8- and 16-bit files
 // are sRGB-encoded (linearised, then Rec. 709 luminance), float files linear;
 // it fills the whole frame (resized to width x height), with no label or belt.
+//
+// A photo scene is a photograph of a real label placed on the belt, one
+// reflectance per LED band (sim/photo_scene.hpp); render_scene() gives its
+// grey view, the bands' fusion (sim::fuse_bands).
 
 #include <array>
 #include <cstdint>
@@ -39,7 +43,8 @@ enum class SceneKind {
   kDataMatrix,
   kText,
   kImage,
-  kFlat,  ///< one reflectance over the whole frame: a calibration target
+  kFlat,   ///< one reflectance over the whole frame: a calibration target
+  kPhoto,  ///< a photo of a real label on the belt (sim/photo_scene.hpp)
 };
 
 /// \brief Belt visible on each side of a label, pixels (at least).
@@ -62,14 +67,17 @@ struct SceneSpec {
   double print_blur_px = 0;
   double texture = 0;
   std::uint64_t texture_seed = 1;
+  /// Photo scenes: the photo turned about its centre, degrees, anticlockwise on the image.
+  double rotate_deg = 0;
 };
 
 /// \brief The name parse_scene() knows a kind by ("code128", "ean13", "qr",
-/// "datamatrix", "text", "image", "flat").
+/// "datamatrix", "text", "image", "flat", "photo").
 std::string_view scene_kind_name(SceneKind kind);
 
 /// \brief Parses "KIND:CONTENT" (code128:TEXT, ean13:DIGITS, qr:TEXT,
-/// datamatrix:TEXT, text:WORDS, image:PATH, flat:REFLECTANCE) into a spec with default size and
+/// datamatrix:TEXT, text:WORDS, image:PATH, flat:REFLECTANCE, photo:PATH) into a spec with
+/// default size and
 /// reflectances. Content is everything after the first colon. An EAN-13 takes
 /// 12 digits (the check digit is added) or 13 with a correct check digit;
 /// Code 128 and text take printable ASCII. The error names the problem.

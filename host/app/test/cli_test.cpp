@@ -642,6 +642,64 @@ TEST_F(ImagingCliTest, SimulateRefusesBadScenesAndCodes) {
   EXPECT_FALSE(fs::exists(frame()));
 }
 
+TEST_F(ImagingCliTest, APhotoSceneIsPlacedOnTheBeltRecordedAndReadBack) {
+  simulate_label();
+  // The label's truth (a 640 x 360 grey PNG) serves as the photo.
+  const std::string photo = (dir_ / "photo.png").string();
+  fs::rename(dir_ / "frame.truth.png", photo);
+  const RunResult result =
+      run({"simulate", "--scene", "photo:" + photo, "--rotate", "3", "--code", "found-joint",
+           "--blur", "52", "--electrons", "3000", "--crosstalk", kCrosstalk, "-o", frame()});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  const json written = json::parse(read_file(descriptor()));
+  const json& record = written["simulation"]["photo"];
+  EXPECT_EQ(record["path"], photo);
+  EXPECT_EQ(record["size"], json::array({640, 360}));
+  EXPECT_EQ(record["rotate_deg"], 3.0);
+  EXPECT_EQ(record["reflectance"].size(), 2u);
+  EXPECT_TRUE(contains(record["bands"].get<std::string>(), "grey")) << record;
+  // Sized to the photo turned by 3 degrees, the belt around it and the blur along x.
+  const std::string bytes = read_file(frame());
+  const auto be32 = [&](std::size_t at) {
+    return (static_cast<unsigned char>(bytes[at]) << 24) |
+           (static_cast<unsigned char>(bytes[at + 1]) << 16) |
+           (static_cast<unsigned char>(bytes[at + 2]) << 8) |
+           static_cast<unsigned char>(bytes[at + 3]);
+  };
+  EXPECT_EQ(be32(16), 658u + 16u + 104u);  // 640 cos 3 + 360 sin 3 = 657.96 -> 658
+  EXPECT_EQ(be32(20), 394u + 16u);         // 640 sin 3 + 360 cos 3 = 393.002 -> 394
+  const RunResult read = run({"deblur", frame(), "--descriptor", descriptor(), "--method", "tv",
+                              "--decode", "--json", "-o", output()});
+  ASSERT_EQ(read.exit_code, 0) << read;
+  const auto objects = json_lines(read.out);
+  ASSERT_EQ(objects.size(), 1U);
+  EXPECT_EQ(objects[0]["decoded"], json::array({"FS-0042"})) << read;
+}
+
+TEST_F(ImagingCliTest, SimulateRefusesABadPhotoOrTurn) {
+  simulate_label();
+  const std::string photo = (dir_ / "frame.truth.png").string();
+  expect_usage_error({"simulate", "--scene", "photo:" + (dir_ / "absent.png").string(), "--code",
+                      "found-joint", "-o", output()},
+                     {"absent.png"});
+  expect_usage_error(
+      {"simulate", "--scene", "photo:" + descriptor(), "--code", "found-joint", "-o", output()},
+      {"frame.json"});
+  expect_usage_error({"simulate", "--scene", "photo:" + photo, "--rotate", "nan", "--code",
+                      "found-joint", "-o", output()},
+                     {"--rotate"});
+  expect_usage_error({"simulate", "--scene", "photo:" + photo, "--rotate", "720", "--code",
+                      "found-joint", "-o", output()},
+                     {"--rotate"});
+  expect_usage_error({"simulate", "--scene", "code128:X", "--rotate", "10", "--code", "found-joint",
+                      "-o", output()},
+                     {"--rotate", "photo"});
+  expect_usage_error({"simulate", "--scene", "photo:" + photo, "--width", "500", "--code",
+                      "found-joint", "-o", output()},
+                     {"needs a frame of at least 656 x 376"});
+  EXPECT_FALSE(fs::exists(output()));
+}
+
 TEST_F(ImagingCliTest, BenchSpeedHasHelp) {
   const RunResult result = run({"bench", "speed", "--help"});
   EXPECT_EQ(result.exit_code, 0) << result;

@@ -109,6 +109,27 @@ imaging::Plane belt_with_labels(const std::vector<int>& starts, int width, int h
   return belt;
 }
 
+TEST(BarcodeReader, DarkPrintTheLinearViewCannotSeparateIsReadOnTheSrgbView) {
+  // Grey print on dark card: reflectance 0.045 and 0.012 are 11 and 3 of 255
+  // in linear light (too little range for ZXing's binarizer), 60 and 28 sRGB-encoded.
+  const ZXing::BitMatrix bars = ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code128)
+                                    .setMargin(10)
+                                    .encode(L"DARK-01", 300, 120);
+  imaging::Plane card(340, 160, 0.045f);
+  for (int y = 0; y < bars.height(); ++y)
+    for (int x = 0; x < bars.width(); ++x)
+      if (bars.get(x, y)) card.at(20 + x, 20 + y) = 0.012f;
+  const BarcodeReadout readout = read_barcodes(card);
+  ASSERT_EQ(readout.codes.size(), 1u);
+  EXPECT_EQ(readout.codes[0].text, "DARK-01");
+  EXPECT_EQ(readout.codes[0].luminance, LuminanceView::kSrgb);
+  // Print the linear view reads is read there, once.
+  for (float& v : card.pixels) v = v > 0.03f ? 0.9f : 0.05f;
+  const BarcodeReadout bright = read_barcodes(card);
+  ASSERT_EQ(bright.codes.size(), 1u);
+  EXPECT_EQ(bright.codes[0].luminance, LuminanceView::kLinear);
+}
+
 TEST(BarcodeReader, PaperRunsFindLabelsAndFlagThoseCutByTheFrame) {
   const imaging::Plane image = belt_with_labels({60, 500, 980}, 1200);
   const auto runs = find_paper_runs(image);

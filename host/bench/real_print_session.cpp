@@ -1,0 +1,73 @@
+#include "bench/real_print_session.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <iostream>
+#include <stdexcept>
+
+#include "session/frame_model.hpp"
+#include "session/frame_processing.hpp"
+
+namespace flutterscan::bench {
+namespace {
+
+session::ExposureRecord event(const session::SessionConfig& config, int encoder_counts) {
+  session::ExposureRecord e;
+  e.frame_counter = 1;
+  e.encoder_delta = encoder_counts;
+  e.slot_time_us = config.controller.slot_time_us;
+  e.slot_count = static_cast<std::uint16_t>(config.controller.parsed_code.length());
+  return e;
+}
+
+capture::FrameFormat format(int width, int height, int bit_depth) {
+  return {width, height, capture::PixelFormat::kRgb16, bit_depth, 0};
+}
+
+}  // namespace
+
+SessionLine::SessionLine(int width, int height, double blur_px, double electrons,
+                         reader::DecodeArea area)
+    : width_(width), height_(height) {
+  config_.optics.electrons = electrons;
+  config_.processing.decode_area = area;
+  config_.optics.electrons_given = true;
+  config_.processing.threads_per_worker = 1;
+  config_.processing.second_pass_ms = session::kMaxSecondPassMs;  // offline: every window
+  if (auto problem = session::check_config(config_); !problem.empty())
+    throw std::runtime_error("session config: " + problem);
+  encoder_counts_ = static_cast<int>(std::lround(blur_px / config_.optics.px_per_count));
+  auto model = session::frame_model(event(config_, encoder_counts_), config_.controller.parsed_code,
+                                    config_, format(width, height, config_.optics.bit_depth));
+  if (!model.ok()) throw std::runtime_error(model.error());
+  model_ = std::move(model.value());
+}
+
+std::vector<std::string> SessionLine::read(const imaging::Image& dn) const {
+  session::FrameJob job;
+  job.event = event(config_, encoder_counts_);
+  job.frame.format = format(width_, height_, config_.optics.bit_depth);
+  job.frame.data.resize(static_cast<std::size_t>(width_) * height_ * 6);
+  for (int y = 0; y < height_; ++y)
+    for (int x = 0; x < width_; ++x)
+      for (int c = 0; c < 3; ++c) {
+        const auto v = static_cast<std::uint16_t>(
+            std::clamp(dn.channels[static_cast<std::size_t>(c)].at(x, y), 0.0f, 65535.0f));
+        const std::size_t at = (static_cast<std::size_t>(y) * width_ + x) * 6 + c * 2;
+        job.frame.data[at] = static_cast<std::uint8_t>(v & 0xff);
+        job.frame.data[at + 1] = static_cast<std::uint8_t>(v >> 8);
+      }
+  session::WorkerShared shared(config_);
+  const session::FrameOutcome out = session::process_frame(job, config_, shared, nullptr);
+  std::vector<std::string> texts;
+  if (!out.processed) {  // a NO-READ, said
+    std::cerr << "real_print_bench: the session did not process a frame: " << out.log.dump()
+              << "\n";
+    return texts;
+  }
+  for (const session::Sighting& s : out.sightings)
+    if (s.decoded) texts.push_back(s.value);
+  return texts;
+}
+
+}  // namespace flutterscan::bench

@@ -1,0 +1,40 @@
+#pragma once
+// The session's default per-frame path (session::process_frame: the model
+// fit, the deblur, the paper found, the decode, the cascade's second pass) on
+// frames made outside a session: a line with the session's default config at
+// one light level, its encoder reporting a given blur along +x, offline (every
+// second pass the cascade wants runs, as `flutterscan replay` runs them).
+
+#include <string>
+#include <vector>
+
+#include "imaging/capture_model.hpp"
+#include "imaging/image.hpp"
+#include "session/session_config.hpp"
+
+namespace flutterscan::bench {
+
+class SessionLine {
+ public:
+  /// \brief Frames of `width` x `height` (RGB, 12 bits) moving `blur_px` along +x
+  /// per exposure at light level `electrons`, codes looked for in `area` (the
+  /// session's default: the label paper). Throws if the config does not check.
+  SessionLine(int width, int height, double blur_px, double electrons,
+              reader::DecodeArea area = reader::ReaderOptions{}.area);
+
+  /// \brief The capture model the session builds for each of these frames:
+  /// what a simulated frame must be recorded with.
+  const imaging::CaptureModel& model() const { return model_; }
+
+  /// \brief The codes the session reads on `dn` (a frame recorded with model()).
+  std::vector<std::string> read(const imaging::Image& dn) const;
+
+ private:
+  session::SessionConfig config_;
+  int width_;
+  int height_;
+  int encoder_counts_;
+  imaging::CaptureModel model_;
+};
+
+}  // namespace flutterscan::bench
