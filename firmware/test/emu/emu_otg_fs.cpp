@@ -97,8 +97,8 @@ void OtgFs::core_reset() {
   rx_read_ = 0;
   for (auto& t : tx_) t.clear();
   for (int ep = 0; ep < kEndpoints; ++ep) {
-    in_[ep] = InEndpoint{};
-    out_[ep] = OutEndpoint{};
+    in_[ep] = Endpoint{};
+    out_[ep] = Endpoint{};
   }
   in_[0].ctl = kEpctlUsbaep;
   out_[0].ctl = kEpctlUsbaep;
@@ -153,29 +153,9 @@ std::uint32_t OtgFs::rx_used_words() const {
   return n;
 }
 
-void OtgFs::write_in_ctl(int ep, std::uint32_t value) {
-  InEndpoint& e = in_[ep];
-  const std::uint32_t stored = ep == 0 ? 0x3u : kEpctlStoredIn;  // EP0: MPSIZ 1:0
+void OtgFs::write_ctl(Endpoint& e, int ep, std::uint32_t stored, std::uint32_t value) {
   e.ctl = (e.ctl & ~stored) | (value & stored);
   // STALL: endpoint 0 only sets it (the core clears it at a SETUP); others read/write.
-  if (ep == 0)
-    e.ctl |= value & kEpctlStall;
-  else
-    e.ctl = (e.ctl & ~kEpctlStall) | (value & kEpctlStall);
-  if ((value & kEpctlSnak) != 0) e.nak = true;
-  if ((value & kEpctlCnak) != 0) e.nak = false;
-  if ((value & kEpctlEpdis) != 0 && (e.ctl & kEpctlEpena) != 0) {
-    e.ctl &= ~kEpctlEpena;
-    e.intr |= kEpintEpdisd;
-  } else if ((value & kEpctlEpena) != 0) {
-    e.ctl |= kEpctlEpena;
-  }
-}
-
-void OtgFs::write_out_ctl(int ep, std::uint32_t value) {
-  OutEndpoint& e = out_[ep];
-  const std::uint32_t stored = ep == 0 ? 0u : kEpctlStoredOut;
-  e.ctl = (e.ctl & ~stored) | (value & stored);
   if (ep == 0)
     e.ctl |= value & kEpctlStall;
   else
@@ -343,7 +323,7 @@ bool OtgFs::write(std::uint32_t offset, std::uint32_t value, std::string* error)
     const int ep = static_cast<int>((offset - kInEndpoints) / 0x20);
     switch ((offset - kInEndpoints) % 0x20) {
       case 0x00:
-        write_in_ctl(ep, value);
+        write_ctl(in_[ep], ep, ep == 0 ? 0x3u : kEpctlStoredIn, value);  // EP0: MPSIZ 1:0
         return true;
       case 0x08:
         in_[ep].intr &= ~value;
@@ -358,7 +338,7 @@ bool OtgFs::write(std::uint32_t offset, std::uint32_t value, std::string* error)
     const int ep = static_cast<int>((offset - kOutEndpoints) / 0x20);
     switch ((offset - kOutEndpoints) % 0x20) {
       case 0x00:
-        write_out_ctl(ep, value);
+        write_ctl(out_[ep], ep, ep == 0 ? 0u : kEpctlStoredOut, value);
         return true;
       case 0x08:
         out_[ep].intr &= ~value;
@@ -484,7 +464,7 @@ OtgFs::Handshake OtgFs::setup(const std::array<std::uint8_t, 8>& packet) {
 
 OtgFs::Handshake OtgFs::out(int ep, std::span<const std::uint8_t> packet) {
   if (!attached()) return Handshake::kNoDevice;
-  OutEndpoint& e = out_[ep];
+  Endpoint& e = out_[ep];
   if ((e.ctl & kEpctlStall) != 0) return Handshake::kStall;
   if ((e.ctl & kEpctlEpena) == 0 || e.nak) return Handshake::kNak;
   const std::uint32_t max_packet = ep == 0 ? 64u : (e.ctl & 0x7FFu);
@@ -503,7 +483,7 @@ OtgFs::Handshake OtgFs::out(int ep, std::span<const std::uint8_t> packet) {
 
 OtgFs::Handshake OtgFs::in(int ep, std::vector<std::uint8_t>* packet) {
   if (!attached()) return Handshake::kNoDevice;
-  InEndpoint& e = in_[ep];
+  Endpoint& e = in_[ep];
   if ((e.ctl & kEpctlStall) != 0) return Handshake::kStall;
   if ((e.ctl & kEpctlEpena) == 0 || e.nak) return Handshake::kNak;
   const std::uint32_t size_mask = ep == 0 ? 0x7Fu : 0x7FFFFu;

@@ -57,14 +57,9 @@ class OtgFs {
   Handshake in(int ep, std::vector<std::uint8_t>* packet);
 
  private:
-  struct InEndpoint {
-    std::uint32_t ctl = 0;  // stored bits (EPENA, STALL, TXFNUM, EPTYP, USBAEP, MPSIZ)
-    bool nak = false;
-    std::uint32_t intr = 0;
-    std::uint32_t tsiz = 0;
-  };
-  struct OutEndpoint {
-    std::uint32_t ctl = 0;
+  /// An IN or OUT endpoint's registers.
+  struct Endpoint {
+    std::uint32_t ctl = 0;  // stored bits (EPENA, STALL, TXFNUM (IN), EPTYP, USBAEP, MPSIZ)
     bool nak = false;
     std::uint32_t intr = 0;
     std::uint32_t tsiz = 0;
@@ -78,8 +73,8 @@ class OtgFs {
   std::uint32_t daint() const;
   std::uint32_t in_ctl(int ep) const;
   std::uint32_t out_ctl(int ep) const;
-  void write_in_ctl(int ep, std::uint32_t value);
-  void write_out_ctl(int ep, std::uint32_t value);
+  /// A write to endpoint `ep`'s DIEPCTL / DOEPCTL; `stored`: the bits it keeps.
+  static void write_ctl(Endpoint& e, int ep, std::uint32_t stored, std::uint32_t value);
   std::uint32_t pop_status(std::string* error);
   int tx_fifo_of(int ep) const;
   std::uint32_t tx_depth(int fifo) const;
@@ -102,8 +97,8 @@ class OtgFs {
   std::uint32_t doepmsk_ = 0;
   std::uint32_t daintmsk_ = 0;
   std::uint32_t pcgcctl_ = 0;
-  std::array<InEndpoint, kEndpoints> in_{};
-  std::array<OutEndpoint, kEndpoints> out_{};
+  std::array<Endpoint, kEndpoints> in_{};
+  std::array<Endpoint, kEndpoints> out_{};
   std::deque<RxEntry> rx_;
   std::vector<std::uint32_t> rx_current_;  // words of the popped entry still to be read
   std::size_t rx_read_ = 0;
