@@ -25,6 +25,7 @@
 #include "imaging/motion_refinement.hpp"
 #include "reader/barcode_reader.hpp"
 #include "reader/code_reading.hpp"
+#include "reader/code_regions.hpp"
 #include "reader/reader_options.hpp"
 #include "sim/scene.hpp"
 
@@ -297,8 +298,10 @@ void run(const DeblurFlags& f) {
   if (f.decode) {
     start = std::chrono::steady_clock::now();
     const std::vector<reader::LabelRegion> paper =
-        reader_options.area == reader::DecodeArea::kLabels ? reader::find_paper_runs(motion_latent)
-                                                           : std::vector<reader::LabelRegion>{};
+        reader_options.area == reader::DecodeArea::kLabels
+            ? reader::regions_to_read(reader::find_paper_runs(motion_latent),
+                                      reader::find_code_regions(motion_latent))
+            : std::vector<reader::LabelRegion>{};
     decoded = reader::code_texts(
         reader::read_codes(deblurred.latent, paper, model.direction, reader_options).readout);
     decode_ms = elapsed_ms(start);

@@ -14,6 +14,7 @@
 #include "imaging/motion_frame.hpp"
 #include "reader/barcode_reader.hpp"
 #include "reader/code_reading.hpp"
+#include "reader/code_regions.hpp"
 #include "session/frame_model.hpp"
 #include "session/model_fit.hpp"
 #include "session/read_record.hpp"
@@ -93,6 +94,7 @@ struct Deblurred {
   imaging::MotionFrame electrons;                 ///< empty for raw Bayer frames
   imaging::CaptureModel model;                    ///< the model the latent was deblurred with
   bool grey_global = false;                       ///< the latent is the grey global model's
+  bool per_channel = false;                       ///< the latent is the per-channel model's
   std::vector<std::string> flags;                 ///< guards that fired
   nlohmann::json log = nlohmann::json::object();  ///< model fit: {"model": ..., "guards": ...}
 
@@ -159,6 +161,7 @@ Result<Deblurred, StepFailure> deblur(Converted& in, const FrameJob& job,
   out.electrons = std::move(frame.value());
   out.model = std::move(r.value().model);
   out.grey_global = r.value().grey_global;
+  out.per_channel = r.value().per_channel;
   out.flags = std::move(r.value().flags);
   out.log = std::move(r.value().log);
   return Out::success(std::move(out));
@@ -167,19 +170,22 @@ Result<Deblurred, StepFailure> deblur(Converted& in, const FrameJob& job,
 /// What the decode found on one frame.
 struct Decoded {
   std::vector<reader::LabelRegion> paper;  ///< paper runs along the motion (motion frame)
+  std::vector<reader::LabelRegion> code;   ///< where the latent looks like a code (motion frame)
   reader::BarcodeReadout readout;
   std::optional<std::size_t> windows;  ///< decode_area "labels": the windows read
 };
 
-/// Step "decode": the paper along the motion, then the codes in
-/// processing.decode_area (the paper runs widened, or the whole frame) with
-/// the session's reader options.
+/// Step "decode": the paper and the code regions along the motion, then the
+/// codes in processing.decode_area (the paper runs and the code regions off
+/// them, widened; or the whole frame) with the session's reader options.
 Decoded decode(const Deblurred& image, imaging::Direction direction,
                const ProcessingConfig& processing) {
   Decoded out;
   out.paper = reader::find_paper_runs(image.motion_latent);
+  out.code = reader::find_code_regions(image.motion_latent);
   reader::CodeReading reading =
-      reader::read_codes(image.latent(), out.paper, direction, reader_options(processing));
+      reader::read_codes(image.latent(), reader::regions_to_read(out.paper, out.code), direction,
+                         reader_options(processing));
   out.readout = std::move(reading.readout);
   out.windows = reading.windows;
   return out;
@@ -193,6 +199,16 @@ std::vector<reader::LabelRegion> judged_regions(const Decoded& decoded, double b
   std::vector<reader::LabelRegion> regions = decoded.paper;
   const double upstream = blur_px + 4;
   std::erase_if(regions, [&](const reader::LabelRegion& r) { return r.cut || r.begin < upstream; });
+  return regions;
+}
+
+/// The code regions in view: not cut by the frame's edges, and without their
+/// part within the blur plus 4 px of the upstream edge (as judged_regions).
+std::vector<reader::LabelRegion> code_in_view(const Decoded& decoded, double blur_px) {
+  std::vector<reader::LabelRegion> regions = decoded.code;
+  const int upstream = static_cast<int>(std::ceil(blur_px)) + 4;
+  std::erase_if(regions, [&](const reader::LabelRegion& r) { return r.cut || r.end <= upstream; });
+  for (reader::LabelRegion& r : regions) r.begin = std::max(r.begin, upstream);
   return regions;
 }
 
@@ -333,9 +349,10 @@ FrameOutcome stopped(FrameOutcome out, const StepFailure& failure, nlohmann::jso
   return out;
 }
 
-/// Step "second pass" (method "cascade"): the judged label windows the
-/// decode read nothing in, deblurred again by tv and read again, within the
-/// budget; the codes found join `decoded`, its log line and flag join `out`.
+/// Step "second pass" (method "cascade"): the code regions and the judged
+/// label windows in view the decode read nothing in (retry_regions), deblurred
+/// again by tv and read again, within the budget; the codes found join `decoded`, its log line and
+/// flag join `out`.
 void second_pass(Deblurred& image, Decoded& decoded, const FrameJob& job,
                  const ProcessingConfig& processing, double first_pass_ms, WorkerShared& shared,
                  FrameOutcome& out, nlohmann::json& flags) {
@@ -346,13 +363,17 @@ void second_pass(Deblurred& image, Decoded& decoded, const FrameJob& job,
                                                          latent.width, latent.height) -
                           job.travel_px);
   shared.second_pass.add_frame(job.index, job.frame.timestamp_ns, first_pass_ms);
-  if (!image.grey_global) {
-    out.log["second_pass"] = {{"not_run", "the frame's model is not the grey global one"}};
+  if (!image.grey_global && !image.per_channel) {
+    out.log["second_pass"] = {{"not_run", image.electrons.channel_count() == 0
+                                              ? "a raw Bayer frame"
+                                              : "the code's phase differs row by row"}};
     return;
   }
-  const std::vector<reader::LabelRegion> judged = judged_regions(decoded, image.model.blur_px);
   const std::vector<reader::LabelRegion> unread =
-      unread_runs(judged, decoded.readout, direction, latent.width, latent.height);
+      retry_regions(unread_runs(judged_regions(decoded, image.model.blur_px), decoded.readout,
+                                direction, latent.width, latent.height),
+                    unread_runs(code_in_view(decoded, image.model.blur_px), decoded.readout,
+                                direction, latent.width, latent.height));
   if (unread.empty()) return;
   const SecondPassFrame frame{image.electrons, image.model, image.motion_latent,
                               image.camera_latent ? &*image.camera_latent : nullptr, job.travel_px};

@@ -138,6 +138,7 @@ Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
         imaging::deblur_per_channel(frame, model, 1.0 / options.gradient_variance, options.threads);
     if (!result.ok()) return Out::failure(result.error());
     out.latent = std::move(result.value().grey);
+    out.per_channel = true;
   } else if (choice.per_row_phase) {
     std::vector<double> phases(static_cast<std::size_t>(frame.lines()));
     const double slots = model.code.length();

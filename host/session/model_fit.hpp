@@ -61,9 +61,13 @@ struct FittedFrame {
   bool refinement_used = false;
   /// The model the latent was deblurred with (the blur and speed the fit chose).
   imaging::CaptureModel model;
-  /// The latent is the grey global model's, made by imaging::deblur (what the
-  /// cascade's second pass can redo window by window with another method).
+  /// The latent is the grey global model's, made by imaging::deblur.
   bool grey_global = false;
+  /// The latent is the per-channel model's (colour print), every row under the
+  /// code's global timing. Either this or grey_global: the cascade's second
+  /// pass can redo the frame window by window with the grey model and tv
+  /// (not for per-row code phases).
+  bool per_channel = false;
 };
 
 /// \brief Deblurs one frame (`frame`: electrons in the motion frame;

@@ -143,6 +143,21 @@ std::vector<reader::LabelRegion> unread_runs(std::span<const reader::LabelRegion
   return unread;
 }
 
+std::vector<reader::LabelRegion> retry_regions(std::span<const reader::LabelRegion> unread_paper,
+                                               std::span<const reader::LabelRegion> unread_code) {
+  std::vector<reader::LabelRegion> out(unread_code.begin(), unread_code.end());
+  for (const reader::LabelRegion& p : unread_paper) {
+    const bool holds_code =
+        std::any_of(unread_code.begin(), unread_code.end(), [&](const reader::LabelRegion& c) {
+          const bool rows = p.across_end <= p.across_begin ||
+                            (c.across_begin < p.across_end && c.across_end > p.across_begin);
+          return c.begin < p.end && c.end > p.begin && rows;
+        });
+    if (!holds_code) out.push_back(p);
+  }
+  return out;
+}
+
 SecondPass run_second_pass(const SecondPassFrame& frame,
                            std::span<const reader::LabelRegion> unread,
                            const reader::ReaderOptions& options, SecondPassBudget& budget,

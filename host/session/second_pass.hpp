@@ -112,6 +112,12 @@ std::vector<reader::LabelRegion> unread_runs(std::span<const reader::LabelRegion
                                              const reader::BarcodeReadout& readout,
                                              imaging::Direction direction, int width, int height);
 
+/// \brief The regions to deblur again: each of `unread_code` (where the latent
+/// looks like a code, reader::find_code_regions), and each of `unread_paper`
+/// that overlaps none of them (a code too faint in the first latent to show).
+std::vector<reader::LabelRegion> retry_regions(std::span<const reader::LabelRegion> unread_paper,
+                                               std::span<const reader::LabelRegion> unread_code);
+
 /// \brief Deblurs each of `unread` whose object `reads` has not seen read
 /// again with tv (one thread), alone with the margin its blur needs, pastes it
 /// into the latents, and reads its decode window again with `options`; the

@@ -39,6 +39,7 @@
 #include "reader/barcode_reader.hpp"
 #include "reader/code_measure.hpp"
 #include "reader/code_reading.hpp"
+#include "reader/code_regions.hpp"
 #include "reader/reader_options.hpp"
 #include "session/bench/live_view_runs.hpp"
 #include "session/bench/soak_run.hpp"
@@ -253,9 +254,12 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
     const double ratio = imaging::residual_ratio(electrons, latent, model.value(), height / 32);
     lap("guards");
     // The session's reader options (label paper only); the frame moves along +x.
-    const auto readout = reader::read_codes(latent, reader::find_paper_runs(latent),
-                                            imaging::Direction::kPlusX, reader::ReaderOptions{})
-                             .readout;
+    const auto readout =
+        reader::read_codes(latent,
+                           reader::regions_to_read(reader::find_paper_runs(latent),
+                                                   reader::find_code_regions(latent)),
+                           imaging::Direction::kPlusX, reader::ReaderOptions{})
+            .readout;
     lap("decode");
     // The read record of each code read (issue 19's cost target): its measurement on the
     // latent (read_barcodes made it inside "decode" already; made again here to time it

@@ -1,0 +1,148 @@
+#include "reader/code_regions.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstddef>
+#include <vector>
+
+namespace flutterscan::reader {
+namespace {
+
+constexpr int kCell = 16;
+constexpr double kMinContrast = 0.04;
+/// Changes a busy cell's samples make per kCell px, counting both directions
+/// (each change between its darkest and brightest): a code's modules make
+/// several, an edge at most one.
+constexpr double kMinChanges = 1.25;
+constexpr double kNoisePercentile = 0.2;
+constexpr int kMinCells = 3;
+
+struct CellStats {
+  double sum = 0, square = 0, steps = 0;
+  float low = 1e30f, high = -1e30f;
+  int samples = 0, step_samples = 0;
+};
+
+}  // namespace
+
+std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent) {
+  std::vector<LabelRegion> regions;
+  if (latent.width < kCell || latent.height < kCell) return regions;
+  const int cols = (latent.width + kCell - 1) / kCell, rows = (latent.height + kCell - 1) / kCell;
+  std::vector<CellStats> cells(static_cast<std::size_t>(cols) * rows);
+  // Every second row: its samples, its steps along x and its steps to the next row.
+  for (int y = 0; y < latent.height; y += 2) {
+    const auto row = latent.row(y);
+    const float* next = y + 1 < latent.height ? latent.row(y + 1).data() : nullptr;
+    CellStats* line = &cells[static_cast<std::size_t>(y / kCell) * cols];
+    for (int x = 0; x < latent.width; ++x) {
+      CellStats& c = line[x / kCell];
+      const double v = std::isfinite(row[x]) ? row[x] : 0.0;
+      c.sum += v;
+      c.square += v * v;
+      c.low = std::min(c.low, static_cast<float>(v));
+      c.high = std::max(c.high, static_cast<float>(v));
+      ++c.samples;
+      if (x + 1 < latent.width && next != nullptr) {
+        const double right = std::isfinite(row[x + 1]) ? row[x + 1] : 0.0;
+        const double below = std::isfinite(next[x]) ? next[x] : 0.0;
+        c.steps += std::abs(right - v) + std::abs(below - v);
+        ++c.step_samples;
+      }
+    }
+  }
+  std::vector<double> spread(cells.size(), 0.0), steps(cells.size(), 0.0);
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    const CellStats& c = cells[i];
+    if (c.samples == 0) continue;
+    const double mean = c.sum / c.samples;
+    spread[i] = std::sqrt(std::max(0.0, c.square / c.samples - mean * mean));
+    steps[i] = c.step_samples > 0 ? c.steps / c.step_samples : 0.0;
+  }
+  // The frame's noise: its flattest cells' spread and steps.
+  auto percentile = [](std::vector<double> values) {
+    const auto nth =
+        values.begin() + static_cast<std::ptrdiff_t>(kNoisePercentile * (values.size() - 1));
+    std::nth_element(values.begin(), nth, values.end());
+    return *nth;
+  };
+  const double noise = percentile(spread), noise_steps = percentile(steps);
+  const double need = std::max(kMinContrast, noise);
+  std::vector<char> busy(cells.size(), 0);
+  int busy_count = 0;
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    const double contrast = std::sqrt(std::max(0.0, spread[i] * spread[i] - noise * noise));
+    // The range less what noise adds to it (about 4 noise deviations over a cell's samples).
+    const double range = std::max(0.0, cells[i].high - cells[i].low - 4 * noise);
+    if (contrast >= need && steps[i] - noise_steps >= kMinChanges / kCell * range) {
+      busy[i] = 1;
+      ++busy_count;
+    }
+  }
+  if (busy_count < kMinCells) return regions;
+  // Grown by one cell, joined where they touch (4-neighbours); each region's busy cells counted.
+  std::vector<char> grown(cells.size(), 0);
+  for (int cy = 0; cy < rows; ++cy)
+    for (int cx = 0; cx < cols; ++cx) {
+      if (!busy[static_cast<std::size_t>(cy) * cols + cx]) continue;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int gx = cx + dx, gy = cy + dy;
+          if (gx >= 0 && gx < cols && gy >= 0 && gy < rows)
+            grown[static_cast<std::size_t>(gy) * cols + gx] = 1;
+        }
+    }
+  std::vector<int> label(cells.size(), -1);
+  std::vector<int> stack;
+  for (std::size_t seed = 0; seed < cells.size(); ++seed) {
+    if (!grown[seed] || label[seed] >= 0) continue;
+    const int id = static_cast<int>(seed);
+    int x0 = cols, x1 = -1, y0 = rows, y1 = -1, count = 0;
+    stack.assign(1, id);
+    label[seed] = id;
+    while (!stack.empty()) {
+      const int at = stack.back();
+      stack.pop_back();
+      const int cx = at % cols, cy = at / cols;
+      if (busy[static_cast<std::size_t>(at)]) {  // the extent: the busy cells only
+        x0 = std::min(x0, cx), x1 = std::max(x1, cx), y0 = std::min(y0, cy), y1 = std::max(y1, cy);
+        ++count;
+      }
+      const int neighbours[4][2] = {{cx - 1, cy}, {cx + 1, cy}, {cx, cy - 1}, {cx, cy + 1}};
+      for (const auto& [nx, ny] : neighbours) {
+        if (nx < 0 || nx >= cols || ny < 0 || ny >= rows) continue;
+        const std::size_t n = static_cast<std::size_t>(ny) * cols + nx;
+        if (!grown[n] || label[n] >= 0) continue;
+        label[n] = id;
+        stack.push_back(static_cast<int>(n));
+      }
+    }
+    if (count < kMinCells) continue;
+    LabelRegion r;
+    r.begin = x0 * kCell;
+    r.end = std::min(latent.width, (x1 + 1) * kCell);
+    r.across_begin = y0 * kCell;
+    r.across_end = std::min(latent.height, (y1 + 1) * kCell);
+    r.cut = r.begin == 0 || r.end == latent.width;
+    regions.push_back(r);
+  }
+  std::sort(regions.begin(), regions.end(),
+            [](const LabelRegion& a, const LabelRegion& b) { return a.begin < b.begin; });
+  return regions;
+}
+
+std::vector<LabelRegion> regions_to_read(std::span<const LabelRegion> paper,
+                                         std::span<const LabelRegion> code) {
+  std::vector<LabelRegion> out(paper.begin(), paper.end());
+  for (const LabelRegion& c : code) {
+    const bool inside = std::any_of(paper.begin(), paper.end(), [&](const LabelRegion& p) {
+      const bool rows = p.across_end <= p.across_begin ||
+                        (c.across_begin >= p.across_begin && c.across_end <= p.across_end);
+      return c.begin >= p.begin && c.end <= p.end && rows;
+    });
+    if (!inside) out.push_back(c);
+  }
+  return out;
+}
+
+}  // namespace flutterscan::reader

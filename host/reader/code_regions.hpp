@@ -1,0 +1,35 @@
+#pragma once
+// Where a latent looks like a code, whatever it is printed on. The label
+// paper (find_paper_runs) finds white labels on a darker belt; a code printed
+// on a carton, on cream or shadowed paper, or on a label dimmer than the
+// light level expects has no such paper around it. A code is busy: high
+// contrast well above the frame's noise, changing every few pixels in some
+// direction. Text is busy too (and is read as nothing, cheaply); a carton's
+// shading and an object's edge are not (one change across a cell).
+
+#include <span>
+#include <vector>
+
+#include "imaging/image.hpp"
+#include "reader/barcode_reader.hpp"
+
+namespace flutterscan::reader {
+
+/// \brief The busy regions of `latent` (the motion frame's; reflectance):
+/// 16 x 16 px cells whose contrast (standard deviation less the frame's noise,
+/// that of the flattest fifth of its cells) is at least 0.04 and at least that
+/// noise, and whose mean absolute step between neighbours (less the flattest
+/// cells') makes at least 1.25 changes between their darkest and brightest
+/// every 16 px (an edge makes at most one; a code's modules, up to about
+/// 10 px, more); such cells joined when they lie within one cell of each
+/// other, a region kept when it holds at least 3. Each region's columns are
+/// [begin, end) and its rows [across_begin, across_end), its busy cells'
+/// bounding box; `cut` when it touches the first or last column.
+std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent);
+
+/// \brief Where to read: the paper runs, and the code regions that do not lie
+/// inside one of them (a run whose rows were not measured spans every row).
+std::vector<LabelRegion> regions_to_read(std::span<const LabelRegion> paper,
+                                         std::span<const LabelRegion> code);
+
+}  // namespace flutterscan::reader

@@ -1,0 +1,105 @@
+// Where a latent looks like a code: found on dim paper and on cartons the
+// paper finder cannot see, never on noise, shading or an object's edge.
+#include "reader/code_regions.hpp"
+
+#include <ZXing/BitMatrix.h>
+#include <ZXing/MultiFormatWriter.h>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "reader/code_reading.hpp"
+
+namespace flutterscan::reader {
+namespace {
+
+/// Gaussian noise of `sigma` added to every sample of `plane` (fixed seed).
+void add_noise(imaging::Plane& plane, double sigma, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> noise(0.0f, static_cast<float>(sigma));
+  for (float& v : plane.pixels) v += noise(rng);
+}
+
+/// A 900 x 240 brown carton (0.22) with a Code 128 "FS-DIM" printed (0.05) on
+/// cream paper dimmer than white (0.45) at columns [300, 640), rows [40, 200),
+/// with noise of 0.02.
+imaging::Plane carton_with_dim_label() {
+  imaging::Plane carton(900, 240, 0.22f);
+  const ZXing::BitMatrix bars = ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code128)
+                                    .setMargin(0)
+                                    .encode(L"FS-DIM", 280, 100);
+  for (int y = 40; y < 200; ++y)
+    for (int x = 300; x < 640; ++x) {
+      const int bx = x - 330, by = y - 70;
+      const bool bar =
+          bx >= 0 && by >= 0 && bx < bars.width() && by < bars.height() && bars.get(bx, by);
+      carton.at(x, y) = bar ? 0.05f : 0.45f;
+    }
+  add_noise(carton, 0.02, 7);
+  return carton;
+}
+
+TEST(CodeRegions, ACodeOnDimPaperOnACartonIsFoundAndReadWhereThePaperFinderSeesNothing) {
+  const imaging::Plane carton = carton_with_dim_label();
+  const std::vector<LabelRegion> paper = find_paper_runs(carton);
+  EXPECT_TRUE(paper.empty());
+  const std::vector<LabelRegion> code = find_code_regions(carton);
+  ASSERT_EQ(code.size(), 1u);
+  // The region is the bars' extent, to within a cell.
+  int first = carton.width, last = -1;
+  for (int x = 0; x < carton.width; ++x)
+    if (carton.at(x, 120) < 0.15f) first = std::min(first, x), last = std::max(last, x);
+  ASSERT_LT(first, last);
+  EXPECT_LE(code[0].begin, first);
+  EXPECT_GE(code[0].begin, first - 16);
+  EXPECT_GT(code[0].end, last);
+  EXPECT_LE(code[0].end, last + 1 + 16);
+  EXPECT_LE(code[0].across_begin, 70);
+  EXPECT_GE(code[0].across_end, 170);
+  EXPECT_FALSE(code[0].cut);
+  const std::vector<LabelRegion> look = regions_to_read(paper, code);
+  ASSERT_EQ(look.size(), 1u);
+  const CodeReading reading = read_codes(carton, look, imaging::Direction::kPlusX, ReaderOptions{});
+  EXPECT_EQ(code_texts(reading.readout), std::vector<std::string>{"FS-DIM"});
+}
+
+TEST(CodeRegions, NoiseShadingAndAnObjectsEdgesAreNotCodes) {
+  imaging::Plane scene(640, 320, 0.0f);
+  for (int y = 0; y < scene.height; ++y)
+    for (int x = 0; x < scene.width; ++x) {
+      const float shading = 0.2f + 0.4f * static_cast<float>(x) / scene.width;  // smooth
+      const bool box = x >= 200 && x < 440 && y >= 80 && y < 240;               // edges only
+      scene.at(x, y) = box ? 0.85f : shading;
+    }
+  add_noise(scene, 0.05, 11);
+  EXPECT_TRUE(find_code_regions(scene).empty());
+  imaging::Plane noise(640, 320, 0.4f);
+  add_noise(noise, 0.08, 12);
+  EXPECT_TRUE(find_code_regions(noise).empty());
+  EXPECT_TRUE(find_code_regions(imaging::Plane(8, 8, 0.5f)).empty());
+}
+
+TEST(CodeRegions, AtTheFramesEdgeARegionIsCutAndTheRegionsReadSkipThoseInsidePaper) {
+  const imaging::Plane carton = carton_with_dim_label();
+  imaging::Plane shifted(420, 240, 0.22f);  // the label's last 120 columns fall outside
+  for (int y = 0; y < 240; ++y)
+    for (int x = 0; x < 420; ++x) shifted.at(x, y) = carton.at(x + 100, y);
+  const std::vector<LabelRegion> code = find_code_regions(shifted);
+  ASSERT_EQ(code.size(), 1u);
+  EXPECT_TRUE(code[0].cut);
+
+  const LabelRegion paper{100, 700, false, 0, 0};  // rows not measured: every row
+  const LabelRegion inside{200, 400, false, 50, 150};
+  const LabelRegion beyond{650, 800, false, 50, 150};
+  const std::vector<LabelRegion> runs{paper}, found{inside, beyond};
+  const std::vector<LabelRegion> look = regions_to_read(runs, found);
+  ASSERT_EQ(look.size(), 2u);
+  EXPECT_EQ(look[0].begin, 100);
+  EXPECT_EQ(look[1].begin, 650);
+}
+
+}  // namespace
+}  // namespace flutterscan::reader
