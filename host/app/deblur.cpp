@@ -397,8 +397,8 @@ void add_deblur(CLI::App& app) {
   command->add_flag("--decode", f->decode, "also decode the barcodes on the result");
   command
       ->add_option("--decode-area", f->decode_area,
-                   "with --decode: frame (the whole result) or labels (the label paper found "
-                   "along the motion, as a session reads by default)")
+                   "with --decode: frame (the whole result) or labels (the label paper and "
+                   "the regions that look like print, as a session reads by default)")
       ->capture_default_str();
   command->add_option("--flat", f->flat,
                       "flat-field file (`calibrate flat`): corrects light that varies across the "

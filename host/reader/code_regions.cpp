@@ -13,14 +13,17 @@ constexpr double kMinContrast = 0.04;
 /// Changes a busy cell's samples make per kCell px, counting both directions
 /// (each change between its darkest and brightest): a code's modules make
 /// several, an edge at most one.
-constexpr double kMinChanges = 1.25;
+constexpr double kMinChanges = 1.5;
 constexpr double kNoisePercentile = 0.2;
 constexpr int kMinCells = 3;
 
+/// Rows sampled: every kRowStep-th (and the row after it, for the steps across).
+constexpr int kRowStep = 4;
+
 struct CellStats {
-  double sum = 0, square = 0, steps = 0;
+  double sum = 0, square = 0, along = 0, across = 0;
   float low = 1e30f, high = -1e30f;
-  int samples = 0, step_samples = 0;
+  int samples = 0, along_steps = 0;
 };
 
 }  // namespace
@@ -30,25 +33,33 @@ std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent) {
   if (latent.width < kCell || latent.height < kCell) return regions;
   const int cols = (latent.width + kCell - 1) / kCell, rows = (latent.height + kCell - 1) / kCell;
   std::vector<CellStats> cells(static_cast<std::size_t>(cols) * rows);
-  // Every second row: its samples, its steps along x and its steps to the next row.
-  for (int y = 0; y < latent.height; y += 2) {
-    const auto row = latent.row(y);
-    const float* next = y + 1 < latent.height ? latent.row(y + 1).data() : nullptr;
+  // Every kRowStep-th row: its samples, its steps along x and its steps to the next row.
+  for (int y = 0; y + 1 < latent.height; y += kRowStep) {
+    const float* row = latent.row(y).data();
+    const float* next = latent.row(y + 1).data();
     CellStats* line = &cells[static_cast<std::size_t>(y / kCell) * cols];
-    for (int x = 0; x < latent.width; ++x) {
-      CellStats& c = line[x / kCell];
-      const double v = std::isfinite(row[x]) ? row[x] : 0.0;
-      c.sum += v;
-      c.square += v * v;
-      c.low = std::min(c.low, static_cast<float>(v));
-      c.high = std::max(c.high, static_cast<float>(v));
-      ++c.samples;
-      if (x + 1 < latent.width && next != nullptr) {
-        const double right = std::isfinite(row[x + 1]) ? row[x + 1] : 0.0;
-        const double below = std::isfinite(next[x]) ? next[x] : 0.0;
-        c.steps += std::abs(right - v) + std::abs(below - v);
-        ++c.step_samples;
+    for (int cx = 0; cx < cols; ++cx) {
+      const int x0 = cx * kCell, x1 = std::min(latent.width, x0 + kCell);
+      const int x_steps_end = std::min(x1, latent.width - 1);
+      float sum = 0, square = 0, along = 0, across = 0, low = row[x0], high = row[x0];
+      for (int x = x0; x < x1; ++x) {
+        const float v = row[x];
+        sum += v;
+        square += v * v;
+        low = std::min(low, v);
+        high = std::max(high, v);
+        across += std::abs(next[x] - v);
       }
+      for (int x = x0; x < x_steps_end; ++x) along += std::abs(row[x + 1] - row[x]);
+      CellStats& c = line[cx];
+      c.sum += sum;
+      c.square += square;
+      c.low = std::min(c.low, low);
+      c.high = std::max(c.high, high);
+      c.samples += x1 - x0;
+      c.along += along;
+      c.along_steps += x_steps_end - x0;
+      c.across += across;
     }
   }
   std::vector<double> spread(cells.size(), 0.0), steps(cells.size(), 0.0);
@@ -57,7 +68,7 @@ std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent) {
     if (c.samples == 0) continue;
     const double mean = c.sum / c.samples;
     spread[i] = std::sqrt(std::max(0.0, c.square / c.samples - mean * mean));
-    steps[i] = c.step_samples > 0 ? c.steps / c.step_samples : 0.0;
+    steps[i] = c.across / c.samples + (c.along_steps > 0 ? c.along / c.along_steps : 0.0);
   }
   // The frame's noise: its flattest cells' spread and steps.
   auto percentile = [](std::vector<double> values) {

@@ -145,15 +145,15 @@ std::vector<reader::LabelRegion> unread_runs(std::span<const reader::LabelRegion
 
 std::vector<reader::LabelRegion> retry_regions(std::span<const reader::LabelRegion> unread_paper,
                                                std::span<const reader::LabelRegion> unread_code) {
-  std::vector<reader::LabelRegion> out(unread_code.begin(), unread_code.end());
-  for (const reader::LabelRegion& p : unread_paper) {
-    const bool holds_code =
-        std::any_of(unread_code.begin(), unread_code.end(), [&](const reader::LabelRegion& c) {
+  std::vector<reader::LabelRegion> out(unread_paper.begin(), unread_paper.end());
+  for (const reader::LabelRegion& c : unread_code) {
+    const bool on_paper =
+        std::any_of(unread_paper.begin(), unread_paper.end(), [&](const reader::LabelRegion& p) {
           const bool rows = p.across_end <= p.across_begin ||
                             (c.across_begin < p.across_end && c.across_end > p.across_begin);
           return c.begin < p.end && c.end > p.begin && rows;
         });
-    if (!holds_code) out.push_back(p);
+    if (!on_paper) out.push_back(c);
   }
   return out;
 }

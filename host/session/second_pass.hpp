@@ -112,9 +112,10 @@ std::vector<reader::LabelRegion> unread_runs(std::span<const reader::LabelRegion
                                              const reader::BarcodeReadout& readout,
                                              imaging::Direction direction, int width, int height);
 
-/// \brief The regions to deblur again: each of `unread_code` (where the latent
-/// looks like a code, reader::find_code_regions), and each of `unread_paper`
-/// that overlaps none of them (a code too faint in the first latent to show).
+/// \brief The regions to deblur again: each of `unread_paper` (the judged
+/// labels), and each of `unread_code` (where the latent looks like a code,
+/// reader::find_code_regions) that overlaps none of them (a code printed on
+/// something other than white label paper).
 std::vector<reader::LabelRegion> retry_regions(std::span<const reader::LabelRegion> unread_paper,
                                                std::span<const reader::LabelRegion> unread_code);
 

@@ -253,12 +253,13 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
     const imaging::Plane& latent = deblurred.value().latent;
     const double ratio = imaging::residual_ratio(electrons, latent, model.value(), height / 32);
     lap("guards");
-    // The session's reader options (label paper only); the frame moves along +x.
+    // Where to read (the session's "labels" area): the paper, and the code regions off it.
+    const auto regions =
+        reader::regions_to_read(reader::find_paper_runs(latent), reader::find_code_regions(latent));
+    lap("regions");
+    // The session's reader options; the frame moves along +x.
     const auto readout =
-        reader::read_codes(latent,
-                           reader::regions_to_read(reader::find_paper_runs(latent),
-                                                   reader::find_code_regions(latent)),
-                           imaging::Direction::kPlusX, reader::ReaderOptions{})
+        reader::read_codes(latent, regions, imaging::Direction::kPlusX, reader::ReaderOptions{})
             .readout;
     lap("decode");
     // The read record of each code read (issue 19's cost target): its measurement on the
@@ -415,7 +416,7 @@ int main(int argc, char** argv) {
             << "):\n\n"
                "| stage | ms |\n|---|---|\n";
   for (const char* stage :
-       {"convert", "refine_motion", "model_choice", "deblur", "guards", "decode"}) {
+       {"convert", "refine_motion", "model_choice", "deblur", "guards", "regions", "decode"}) {
     const auto it = costs.find(stage);
     const double ms = it == costs.end() ? 0.0 : it->second;
     total += ms;

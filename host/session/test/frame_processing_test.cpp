@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <optional>
 
@@ -90,6 +91,39 @@ TEST(FrameProcessing, AWholeLabelIsDeblurredAndReadAtItsGroundTruth) {
   EXPECT_EQ(out.descriptor["capture"]["sequence"], sequence);
   EXPECT_EQ(out.latent.width, 640);
   EXPECT_FALSE(out.frame.data.empty());  // kept for the results stage to save
+}
+
+/// `job`'s frame as if its whole scene reflected `share[c]` of the light in
+/// channel c: every sample's signal above the black level scaled (the sim's RGB
+/// 16-bit frames).
+void tint_scene(FrameJob& job, std::array<double, 3> share) {
+  ASSERT_EQ(job.frame.format.pixel_format, capture::PixelFormat::kRgb16);
+  const auto model = imaging::from_descriptor(nlohmann::json::parse(job.frame.descriptor_json));
+  ASSERT_TRUE(model.ok());
+  const double black = model.value().black_level;
+  for (std::size_t i = 0; i + 1 < job.frame.data.size(); i += 2) {
+    const double v = job.frame.data[i] | (job.frame.data[i + 1] << 8);
+    const double k = share[(i / 2) % 3];
+    const auto scaled = static_cast<std::uint16_t>(std::lround(black + (v - black) * k));
+    job.frame.data[i] = static_cast<std::uint8_t>(scaled & 0xff);
+    job.frame.data[i + 1] = static_cast<std::uint8_t>(scaled >> 8);
+  }
+}
+
+TEST(FrameProcessing, ACodeOnPaperDimmerThanWhiteIsFoundByItsPrintAndRead) {
+  const SessionConfig config = small_config();
+  FrameJob job = job_with_a_label(config);
+  ASSERT_FALSE(job.frame.truth.empty());
+  const std::vector<std::string> truth = job.frame.truth;
+  tint_scene(job, {0.5, 0.5, 0.5});  // label paper about 0.45: below the paper finder's 0.62
+  WorkerShared shared(config);
+  const FrameOutcome out = process_frame(job, config, shared, nullptr);
+  ASSERT_TRUE(out.processed) << out.log.dump();
+  EXPECT_GE(out.log["decode_windows"].get<int>(), 1) << out.log.dump();
+  for (const auto& value : truth)
+    EXPECT_TRUE(std::any_of(out.sightings.begin(), out.sightings.end(),
+                            [&](const Sighting& s) { return s.decoded && s.value == value; }))
+        << value << " not read on dim paper: " << out.log.dump();
 }
 
 TEST(FrameProcessing, AnEventThatDoesNotFitTheCodeIsLoggedNotProcessed) {
@@ -213,6 +247,24 @@ TEST(FrameProcessing, TheCascadeReadsAWindowJointWienerMissedByDeblurringItAgain
   ASSERT_TRUE(out_turned.processed) << out_turned.log.dump();
   EXPECT_FALSE(out_turned.decode_failed) << out_turned.log.dump();
   ASSERT_EQ(out_turned.sightings.size(), out.sightings.size());
+}
+
+TEST(FrameProcessing, AColourPrintFrameDeblurredPerChannelGetsTheSecondPassToo) {
+  SessionConfig config = small_config();
+  std::optional<FrameJob> missed = frame_joint_wiener_misses(config);
+  ASSERT_TRUE(missed);
+  config.processing.second_pass_ms = kMaxSecondPassMs;  // offline: every window
+  ASSERT_EQ(check_config(config), "");
+  FrameJob job = *missed;
+  tint_scene(job, {1.0, 0.55, 0.3});  // a warm card: the channels disagree with one grey latent
+  WorkerShared shared(config);
+  const FrameOutcome out = process_frame(job, config, shared, nullptr);
+  ASSERT_TRUE(out.processed) << out.log.dump();
+  ASSERT_NE(out.log["model"]["chosen"].get<std::string>().find("per-channel"), std::string::npos)
+      << out.log["model"].dump();
+  const nlohmann::json& pass = out.log["second_pass"];
+  EXPECT_FALSE(pass.contains("not_run")) << pass.dump();
+  EXPECT_GE(pass["windows"].size(), 1u) << out.log.dump();
 }
 
 TEST(FrameProcessing, AWindowTheBudgetCannotPayForIsFlaggedAndStaysANoRead) {
