@@ -202,13 +202,17 @@ std::vector<reader::LabelRegion> judged_regions(const Decoded& decoded, double b
   return regions;
 }
 
-/// The code regions in view: not cut by the frame's edges, and without their
-/// part within the blur plus 4 px of the upstream edge (as judged_regions).
-std::vector<reader::LabelRegion> code_in_view(const Decoded& decoded, double blur_px) {
+/// The code regions in view: their part beyond the blur plus 4 px of the
+/// upstream edge (where the latent has no support, and often looks busy), at
+/// least two cells wide there; not those cut by the downstream edge.
+std::vector<reader::LabelRegion> code_in_view(const Decoded& decoded, double blur_px, int length) {
+  constexpr int kMinWidth = 32;
   std::vector<reader::LabelRegion> regions = decoded.code;
   const int upstream = static_cast<int>(std::ceil(blur_px)) + 4;
-  std::erase_if(regions, [&](const reader::LabelRegion& r) { return r.cut || r.end <= upstream; });
   for (reader::LabelRegion& r : regions) r.begin = std::max(r.begin, upstream);
+  std::erase_if(regions, [&](const reader::LabelRegion& r) {
+    return r.end >= length || r.end - r.begin < kMinWidth;
+  });
   return regions;
 }
 
@@ -369,11 +373,11 @@ void second_pass(Deblurred& image, Decoded& decoded, const FrameJob& job,
                                               : "the code's phase differs row by row"}};
     return;
   }
-  const std::vector<reader::LabelRegion> unread =
-      retry_regions(unread_runs(judged_regions(decoded, image.model.blur_px), decoded.readout,
-                                direction, latent.width, latent.height),
-                    unread_runs(code_in_view(decoded, image.model.blur_px), decoded.readout,
-                                direction, latent.width, latent.height));
+  const std::vector<reader::LabelRegion> unread = retry_regions(
+      unread_runs(judged_regions(decoded, image.model.blur_px), decoded.readout, direction,
+                  latent.width, latent.height),
+      unread_runs(code_in_view(decoded, image.model.blur_px, image.motion_latent.width),
+                  decoded.readout, direction, latent.width, latent.height));
   if (unread.empty()) return;
   const SecondPassFrame frame{image.electrons, image.model, image.motion_latent,
                               image.camera_latent ? &*image.camera_latent : nullptr, job.travel_px};
