@@ -15,7 +15,11 @@ constexpr double kMinContrast = 0.04;
 /// several, an edge at most one.
 constexpr double kMinChanges = 1.5;
 constexpr double kNoisePercentile = 0.2;
-constexpr int kMinCells = 3;
+/// A busy cell's contrast is at least this many times the noise: a cell of
+/// noise alone (its spread's estimate from 64 samples varies by about 18%, and
+/// the flattest fifth's is low) stays well below it.
+constexpr double kNoiseMultiple = 1.5;
+constexpr int kMinCells = 6;
 
 /// Rows sampled: every kRowStep-th (and the row after it, for the steps across).
 constexpr int kRowStep = 4;
@@ -78,7 +82,7 @@ std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent) {
     return *nth;
   };
   const double noise = percentile(spread), noise_steps = percentile(steps);
-  const double need = std::max(kMinContrast, noise);
+  const double need = std::max(kMinContrast, kNoiseMultiple * noise);
   std::vector<char> busy(cells.size(), 0);
   int busy_count = 0;
   for (std::size_t i = 0; i < cells.size(); ++i) {
