@@ -27,7 +27,8 @@ namespace {
 //   convert: event -> descriptor -> electrons
 //   deblur:  flat field -> model fit + deblur (latent in the camera's orientation and the motion
 //            frame)
-//   decode:  paper runs -> decode
+//   decode:  paper runs, code regions -> decode
+//   second pass (cascade): the windows read nothing in -> tv -> read again
 //   record:  labels judged -> the frame's log line, descriptor and files
 
 /// Why a step stopped the frame: the log's error and the flag it raises.
