@@ -1,10 +1,10 @@
 #pragma once
 // The cascade's second pass (processing.method = "cascade", the session's
 // default; docs/session.md, "The cascade"). Joint Wiener deblurs the whole
-// frame; each judged label window where it read nothing is deblurred again,
-// alone, by tv (slower, and reads far more in dim light), pasted into the
-// fused frame and read again, while the session's CPU budget lasts. A window
-// the budget cannot pay for is counted and flagged, never dropped silently.
+// frame; each judged label window, and each code region off the labels, where
+// it read nothing is deblurred again, alone, by tv (slower, and reads far more in dim light),
+// pasted into the fused frame and read again, while the session's CPU budget lasts. A window the
+// budget cannot pay for is counted and flagged, never dropped silently.
 
 #include <cstdint>
 #include <mutex>

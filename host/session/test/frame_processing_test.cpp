@@ -284,6 +284,24 @@ TEST(FrameProcessing, AWindowTheBudgetCannotPayForIsFlaggedAndStaysANoRead) {
       << flags.dump();
 }
 
+TEST(SecondPass, RetriesEveryUnreadLabelAndTheCodeRegionsOffThem) {
+  const reader::LabelRegion label{100, 300, false, 0, 0};       // rows not measured: every row
+  const reader::LabelRegion on_label{150, 250, false, 10, 50};  // inside the label: not again
+  const reader::LabelRegion carton{400, 520, false, 20, 90};    // a code printed on a carton
+  const reader::LabelRegion below{120, 200, false, 300, 340};
+  const reader::LabelRegion measured{100, 300, false, 0, 200};  // a label whose rows are known
+  const std::vector<reader::LabelRegion> paper{label}, code{on_label, carton};
+  const auto retried = retry_regions(paper, code);
+  ASSERT_EQ(retried.size(), 2u);
+  EXPECT_EQ(retried[0].begin, 100);
+  EXPECT_EQ(retried[1].begin, 400);
+  // Across the motion too: a region below a label whose rows are known is retried on its own.
+  const std::vector<reader::LabelRegion> measured_paper{measured}, code_below{below};
+  EXPECT_EQ(retry_regions(measured_paper, code_below).size(), 2u);
+  EXPECT_EQ(retry_regions({}, code).size(), 2u);
+  EXPECT_TRUE(retry_regions({}, {}).empty());
+}
+
 TEST(SecondPassBudget, CreditFollowsTheFramePeriodTheWorkersAndTheFirstPass) {
   SecondPassBudget budget(-1, 2);  // auto
   budget.add_frame(0, 0, 20);      // no period yet: no credit
