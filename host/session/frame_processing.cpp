@@ -183,7 +183,9 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
                const ProcessingConfig& processing) {
   Decoded out;
   out.paper = reader::find_paper_runs(image.motion_latent);
-  out.code = reader::find_code_regions(image.motion_latent);
+  // Code regions serve only the labels area and the cascade's second pass.
+  if (processing.decode_area == reader::DecodeArea::kLabels || processing.cascade)
+    out.code = reader::find_code_regions(image.motion_latent);
   reader::CodeReading reading =
       reader::read_codes(image.latent(), reader::regions_to_read(out.paper, out.code), direction,
                          reader_options(processing));
@@ -192,24 +194,31 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
   return out;
 }
 
+/// The columns from the upstream edge where the deblurred image has no
+/// support: the blur plus 4 px (rounded up: a region starting at a column
+/// below it starts within blur_px + 4).
+int unsupported_columns(double blur_px) {
+  return static_cast<int>(std::ceil(blur_px)) + 4;
+}
+
 /// Labels judged: each whole label region in view (not cut by the frame, not
-/// within the blur plus 4 px of the upstream edge, where the deblurred image
-/// has no support) is a sighting, read when a code lies on it (8 px slack),
-/// else NO-READ; codes off the judged regions are sightings of their own.
+/// within unsupported_columns of the upstream edge) is a sighting, read when a
+/// code lies on it (8 px slack), else NO-READ; codes off the judged regions are
+/// sightings of their own.
 std::vector<reader::LabelRegion> judged_regions(const Decoded& decoded, double blur_px) {
   std::vector<reader::LabelRegion> regions = decoded.paper;
-  const double upstream = blur_px + 4;
+  const int upstream = unsupported_columns(blur_px);
   std::erase_if(regions, [&](const reader::LabelRegion& r) { return r.cut || r.begin < upstream; });
   return regions;
 }
 
-/// The code regions in view: their part beyond the blur plus 4 px of the
-/// upstream edge (where the latent has no support, and often looks busy), at
-/// least two cells wide there; not those cut by the downstream edge.
+/// The code regions in view: their part beyond unsupported_columns (where the
+/// latent often looks busy), at least two cells wide there; not those cut by
+/// the downstream edge.
 std::vector<reader::LabelRegion> code_in_view(const Decoded& decoded, double blur_px, int length) {
   constexpr int kMinWidth = 32;
   std::vector<reader::LabelRegion> regions = decoded.code;
-  const int upstream = static_cast<int>(std::ceil(blur_px)) + 4;
+  const int upstream = unsupported_columns(blur_px);
   for (reader::LabelRegion& r : regions) r.begin = std::max(r.begin, upstream);
   std::erase_if(regions, [&](const reader::LabelRegion& r) {
     return r.end >= length || r.end - r.begin < kMinWidth;
