@@ -28,7 +28,7 @@ std::string feature_names(std::uint32_t features) {
   return out.empty() ? "none" : out;
 }
 
-void run(const DeviceTarget& target) {
+void print_info(const DeviceTarget& target) {
   DeviceSession session(target);
   const protocol::InfoReply info = session.client().info();
   std::printf("controller  %s\n", session.client().description().c_str());
@@ -49,7 +49,7 @@ void add_device_info(CLI::App& device) {
   auto target = std::make_shared<DeviceTarget>();
   CLI::App* command = device.add_subcommand("info", "Versions, board, limits and features");
   add_device_target_options(*command, *target);
-  command->callback([target] { run(*target); });
+  command->callback([target] { print_info(*target); });
 }
 
 }  // namespace flutterscan::app

@@ -47,7 +47,7 @@ std::string flags_text(std::uint8_t flags) {
   return out.empty() ? "none" : out;
 }
 
-void run(const DeviceTarget& target) {
+void print_status(const DeviceTarget& target) {
   DeviceSession session(target);
   const auto s = value_or_throw(session.client().status());
   std::printf("state            %s\n", protocol::controller_state_name(s.state));
@@ -72,7 +72,7 @@ void add_device_status(CLI::App& device) {
   auto target = std::make_shared<DeviceTarget>();
   CLI::App* command = device.add_subcommand("status", "State, codes, timing and counters");
   add_device_target_options(*command, *target);
-  command->callback([target] { run(*target); });
+  command->callback([target] { print_status(*target); });
 }
 
 }  // namespace flutterscan::app

@@ -6,6 +6,7 @@
 
 #include "codes/scheme_choice.hpp"
 #include "session/frame_model.hpp"
+#include "session/read_record.hpp"
 
 namespace flutterscan::session {
 namespace {
@@ -14,10 +15,6 @@ std::string digits_of(const LedCode& code) {
   std::string text(static_cast<std::size_t>(code.length()), '0');
   text.resize(code.format(text));
   return text;
-}
-
-double rounded(double value, double step) {
-  return std::round(value / step) * step;
 }
 
 }  // namespace
@@ -88,18 +85,18 @@ Captured<SchemeLight> choose_scheme_from_light(
 }
 
 nlohmann::json scheme_light_json(const SchemeLight& light) {
-  nlohmann::json j = {{"electrons", rounded(light.electrons, 0.1)},
+  nlohmann::json j = {{"electrons", rounded(light.electrons, 1)},
                       {"source", light.level ? "measured" : "configured"},
                       {"paper_reflectance", light.paper_reflectance},
                       {"probe", light.probe}};
   if (light.configured) j["configured_electrons"] = *light.configured;
   if (light.level) {
     const imaging::LightLevel& l = *light.level;
-    j["measured_electrons"] = rounded(l.electrons, 0.1);
+    j["measured_electrons"] = rounded(l.electrons, 1);
     j["frames"] = l.frames;
     j["pixels"] = l.pixels;
-    j["paper_electrons"] = rounded(l.paper_electrons, 0.1);
-    j["background_electrons"] = rounded(l.background_electrons, 0.1);
+    j["paper_electrons"] = rounded(l.paper_electrons, 1);
+    j["background_electrons"] = rounded(l.background_electrons, 1);
     j["saturated_share"] = l.saturated_share;
   }
   if (!light.not_measured.empty()) j["not_measured"] = light.not_measured;

@@ -8,20 +8,17 @@
 #include "imaging/model_guards.hpp"
 #include "imaging/per_channel_wiener.hpp"
 #include "imaging/row_phase_deblur.hpp"
+#include "session/read_record.hpp"
 
 namespace flutterscan::session {
 namespace {
-
-double rounded(double v, double step) {
-  return std::round(v / step) * step;
-}
 
 /// Milliseconds since `since`, to 0.01 ms; `since` moves to now.
 double lap_ms(std::chrono::steady_clock::time_point& since) {
   const auto now = std::chrono::steady_clock::now();
   const double ms = std::chrono::duration<double, std::milli>(now - since).count();
   since = now;
-  return rounded(ms, 0.01);
+  return rounded(ms, 2);
 }
 
 /// Above this cross-channel residual per sample (about 1 when the grey model
@@ -41,13 +38,13 @@ void refine_encoder_motion(const imaging::MotionFrame& frame, imaging::CaptureMo
     return;
   }
   const auto& m = r.value();
-  nlohmann::json log = {{"encoder_blur_px", rounded(model.blur_px, 0.01)},
+  nlohmann::json log = {{"encoder_blur_px", rounded(model.blur_px, 2)},
                         {"edges", m.edges},
-                        {"residual", rounded(m.residual_per_sample, 0.01)}};
+                        {"residual", rounded(m.residual_per_sample, 2)}};
   if (m.edges) {
-    log["refined_blur_px"] = rounded(m.blur_px, 0.001);
-    log["standard_error_px"] = rounded(m.standard_error_px, 0.001);
-    if (m.accelerating) log["speed_ratio"] = rounded(m.speed_ratio, 0.001);
+    log["refined_blur_px"] = rounded(m.blur_px, 3);
+    log["standard_error_px"] = rounded(m.standard_error_px, 3);
+    if (m.accelerating) log["speed_ratio"] = rounded(m.speed_ratio, 3);
   }
   out.refinement = m;
   if (m.edges && m.at_range_edge) {
@@ -94,9 +91,9 @@ Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
     const auto estimate =
         imaging::estimate_blur(frame, model, lo, hi, std::max(1, frame.lines() / 90));
     if (estimate.ok()) {
-      out.log["blur_estimate_px"] = rounded(estimate.value().blur_px, 0.01);
+      out.log["blur_estimate_px"] = rounded(estimate.value().blur_px, 2);
       if (std::isfinite(estimate.value().standard_error_px))
-        out.log["blur_estimate_se_px"] = rounded(estimate.value().standard_error_px, 0.001);
+        out.log["blur_estimate_se_px"] = rounded(estimate.value().standard_error_px, 3);
       if (!config.encoder) {
         if (std::isfinite(estimate.value().standard_error_px)) {
           model.blur_px = estimate.value().blur_px;
@@ -130,9 +127,9 @@ Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
                                       config.encoder, 0};
   times["model_choice"] = lap_ms(lap);
   out.log["model"] = {{"chosen", choice.describe()},
-                      {"grey_residual", rounded(choice.grey_residual, 0.01)},
-                      {"blur_px", rounded(model.blur_px, 0.01)}};
-  if (model.speed_ratio != 1) out.log["model"]["speed_ratio"] = rounded(model.speed_ratio, 0.001);
+                      {"grey_residual", rounded(choice.grey_residual, 2)},
+                      {"blur_px", rounded(model.blur_px, 2)}};
+  if (model.speed_ratio != 1) out.log["model"]["speed_ratio"] = rounded(model.speed_ratio, 3);
   if (choice.latent == imaging::LatentModel::kPerChannel && frame.channel_count() == 3) {
     auto result =
         imaging::deblur_per_channel(frame, model, 1.0 / options.gradient_variance, options.threads);
@@ -163,8 +160,8 @@ Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
 
   // 3. Guards.
   guards.saturated_share = saturated_share;
-  out.log["guards"] = {{"saturated_share", rounded(guards.saturated_share, 1e-5)},
-                       {"residual_ratio", rounded(guards.residual_ratio, 0.01)}};
+  out.log["guards"] = {{"saturated_share", rounded(guards.saturated_share, 5)},
+                       {"residual_ratio", rounded(guards.residual_ratio, 2)}};
   if (guards.blur_checked) out.log["guards"]["blur_disagrees"] = guards.blur_disagrees;
   for (auto& flag : guards.flags()) out.flags.push_back(flag);
   times["guards"] = lap_ms(lap);  // with the residual check after a global deblur

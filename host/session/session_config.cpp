@@ -23,7 +23,7 @@
 namespace flutterscan::session {
 namespace {
 
-using Out = Result<SessionConfig, std::string>;
+using ConfigResult = Result<SessionConfig, std::string>;
 
 /// Reads typed values out of one table, remembering the first problem.
 class TableReader {
@@ -276,14 +276,14 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
   } catch (const toml::parse_error& e) {
     std::ostringstream where;
     where << origin << ":" << e.source().begin.line << ": " << e.description();
-    return Out::failure(where.str());
+    return ConfigResult::failure(where.str());
   }
   SessionConfig c;
   std::string error;
   if (auto p = known_keys_problem(
           root, "", {"camera", "controller", "optics", "processing", "output", "results"}, origin);
       !p.empty())
-    return Out::failure(p);
+    return ConfigResult::failure(p);
   const toml::table* camera = root["camera"].as_table();
   if (camera != nullptr) {
     if (auto p = known_keys_problem(*camera, "camera.",
@@ -291,7 +291,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
                                      "gain_db", "frame_rate_hz", "trigger", "options"},
                                     origin);
         !p.empty())
-      return Out::failure(p);
+      return ConfigResult::failure(p);
     TableReader r(camera, "camera.", origin, error);
     r.get("spec", c.camera.spec);
     r.get("width", c.camera.settings.width);
@@ -302,17 +302,18 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     std::string pixel_format, trigger;
     r.get("pixel_format", pixel_format);
     r.get("trigger", trigger);
-    if (!error.empty()) return Out::failure(error);
+    if (!error.empty()) return ConfigResult::failure(error);
     if (!pixel_format.empty()) {
       c.camera.settings.pixel_format = capture::pixel_format_from_name(pixel_format);
       if (!c.camera.settings.pixel_format)
-        return Out::failure(origin + ": camera.pixel_format '" + pixel_format +
-                            "' is not a known format");
+        return ConfigResult::failure(origin + ": camera.pixel_format '" + pixel_format +
+                                     "' is not a known format");
     }
     if (!trigger.empty()) {
       auto mode = capture::trigger_mode_from_name(trigger);
       if (!mode)
-        return Out::failure(origin + ": camera.trigger must be free-run, software or line0");
+        return ConfigResult::failure(origin +
+                                     ": camera.trigger must be free-run, software or line0");
       c.camera.settings.trigger = *mode;
     }
     if (const toml::table* options = (*camera)["options"].as_table()) {
@@ -330,8 +331,8 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
         } else if (auto b = node.value_exact<bool>())
           value = *b ? "true" : "false";
         else
-          return Out::failure(origin + ": camera.options." + std::string(key.str()) +
-                              " must be a string, number or boolean");
+          return ConfigResult::failure(origin + ": camera.options." + std::string(key.str()) +
+                                       " must be a string, number or boolean");
         c.camera.options.emplace_back(std::string(key.str()), value);
       }
     }
@@ -341,7 +342,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
             *t, "controller.",
             {"spec", "code", "slot_time_us", "sync", "frame_period_us", "probe_frames"}, origin);
         !p.empty())
-      return Out::failure(p);
+      return ConfigResult::failure(p);
     TableReader r(t, "controller.", origin, error);
     r.get("spec", c.controller.spec);
     r.get("code", c.controller.code);
@@ -358,7 +359,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
              "nominal_blur_px", "line_time_us", "flat_field", "paper_reflectance"},
             origin);
         !p.empty())
-      return Out::failure(p);
+      return ConfigResult::failure(p);
     TableReader r(t, "optics.", origin, error);
     r.get("px_per_count", c.optics.px_per_count);
     r.get("direction", c.optics.direction);
@@ -392,7 +393,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
         std::ostringstream where;
         where << origin << ":" << node->source().begin.line
               << ": optics.crosstalk must be 3 rows of 3 numbers >= 0 (rows = camera channels)";
-        return Out::failure(where.str());
+        return ConfigResult::failure(where.str());
       }
       c.optics.crosstalk = values;
     }
@@ -405,17 +406,18 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
              "blur_check_every", "blur_tolerance", "symbologies", "try_rotate", "decode_area"},
             origin);
         !p.empty())
-      return Out::failure(p);
+      return ConfigResult::failure(p);
     TableReader r(t, "processing.", origin, error);
     std::string method;
     r.get("method", method);
     if (!method.empty() && !set_processing_method(method, c.processing))
-      return Out::failure(origin + ": processing.method '" + method + "' is none of " +
-                          kProcessingMethods);
+      return ConfigResult::failure(origin + ": processing.method '" + method + "' is none of " +
+                                   kProcessingMethods);
     if (const toml::node* budget = t->get("second_pass_ms"); budget && budget->is_string()) {
       if (budget->value_exact<std::string>() != "auto")
-        return Out::failure(origin + ":" + std::to_string(budget->source().begin.line) +
-                            ": processing.second_pass_ms must be \"auto\" or a number of ms");
+        return ConfigResult::failure(
+            origin + ":" + std::to_string(budget->source().begin.line) +
+            ": processing.second_pass_ms must be \"auto\" or a number of ms");
       c.processing.second_pass_ms = -1;
     } else {
       r.get("second_pass_ms", c.processing.second_pass_ms);
@@ -437,8 +439,8 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     if (!area.empty()) {
       const auto a = reader::decode_area_from_name(area);
       if (!a)
-        return Out::failure(origin + ": processing.decode_area '" + area +
-                            "' is neither labels nor frame");
+        return ConfigResult::failure(origin + ": processing.decode_area '" + area +
+                                     "' is neither labels nor frame");
       c.processing.decode_area = *a;
     }
   }
@@ -448,7 +450,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
                                      "keep_failed_frames", "disk_budget_mb", "report"},
                                     origin);
         !p.empty())
-      return Out::failure(p);
+      return ConfigResult::failure(p);
     TableReader r(t, "output.", origin, error);
     r.get("dir", c.output.dir);
     r.get("timestamped_subfolder", c.output.timestamped_subfolder);
@@ -461,7 +463,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     if (auto p = known_keys_problem(
             *t, "results.", {"tcp_port", "tcp_bind", "serial", "serial_baud", "mqtt"}, origin);
         !p.empty())
-      return Out::failure(p);
+      return ConfigResult::failure(p);
     TableReader r(t, "results.", origin, error);
     r.get("tcp_port", c.results.tcp_port);
     r.get("tcp_bind", c.results.tcp_bind);
@@ -469,21 +471,22 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     r.get("serial_baud", c.results.serial_baud);
     if (const toml::node* mqtt = t->get("mqtt")) {
       if (!mqtt->is_table())
-        return Out::failure(origin + ":" + std::to_string(mqtt->source().begin.line) +
-                            ": results.mqtt must be a table ([results.mqtt])");
+        return ConfigResult::failure(origin + ":" + std::to_string(mqtt->source().begin.line) +
+                                     ": results.mqtt must be a table ([results.mqtt])");
       MqttConfig m;
-      if (auto p = parse_mqtt(*mqtt->as_table(), origin, m); !p.empty()) return Out::failure(p);
+      if (auto p = parse_mqtt(*mqtt->as_table(), origin, m); !p.empty())
+        return ConfigResult::failure(p);
       c.results.mqtt = std::move(m);
     }
   }
-  if (!error.empty()) return Out::failure(error);
-  return Out::success(std::move(c));
+  if (!error.empty()) return ConfigResult::failure(error);
+  return ConfigResult::success(std::move(c));
 }
 
 Result<SessionConfig, std::string> load_config(const std::string& path) {
   toml::table root;
   std::ifstream in(path);
-  if (!in) return Out::failure("cannot read config '" + path + "'");
+  if (!in) return ConfigResult::failure("cannot read config '" + path + "'");
   std::ostringstream text;
   text << in.rdbuf();
   return parse_config(text.str(), path);
