@@ -11,7 +11,7 @@ deps:
 	@tools/install-deps
 
 build: deps
-	cmake --preset host-release -DFLUTTERSCAN_WERROR=$(WERROR) >/dev/null
+	cmake --preset host-release -DFLUTTERSCAN_WERROR=$(WERROR) -DFLUTTERSCAN_TESTS=ON >/dev/null
 	cmake --build --preset host-release -j $(JOBS)
 
 arm-common: deps
@@ -35,7 +35,14 @@ PREFIX ?= /usr/local
 install: build fw-stm32f405
 	cmake --install build --prefix $(PREFIX)
 
-demo: build
+# The first run on a fresh machine: only the product's packages and only the
+# flutterscan target. A build tree already configured (say by `make test`) keeps
+# its tests; a new one is configured without them.
+demo:
+	@tools/install-deps demo
+	@test -f build/CMakeCache.txt || \
+	  cmake --preset host-release -DFLUTTERSCAN_WERROR=$(WERROR) -DFLUTTERSCAN_TESTS=OFF >/dev/null
+	cmake --build --preset host-release --target flutterscan -j $(JOBS)
 	tools/demo
 
 bench: build
