@@ -4,8 +4,12 @@
 #   1. `flutterscan cameras` must list a libcamera camera (vimc's sensor, through the pipeline);
 #   2. `flutterscan scan --camera libcamera:ID --controller sim --frames N` must capture N frames
 #      through libcamera; the session folder it writes is checked on the host: N frames in
-#      session.jsonl, sequence numbers increasing by one, camera timestamps increasing, the
-#      first frames kept as PNG with the size asked for and not uniform, no camera error.
+#      session.jsonl at the size asked for, sequence numbers increasing by one, camera
+#      timestamps increasing, none lost, no camera error (none is processed: the sim controller
+#      sees no strobe from a real camera, so no exposure event matches a frame);
+#   3. CHECK_PROGRAM (libcamera_vimc_check, built from the backend's own sources) checks what the
+#      scan does not show: the pixels, in both RGB orders, and refusals (its lines
+#      LIBCAMERA-VM-RESULT NAME PASS|FAIL ...).
 #
 # The guest: the Debian kernel (vm_kernel.sh: fetched and cached as for run_vivid_vm.sh) with
 # vimc.ko built once against it (also cached), a busybox-static initramfs that loads the media
@@ -17,18 +21,27 @@
 # udev database entries: there is no udevd in the guest, so init writes them. The CPU is TCG's
 # `max` model: flutterscan is built for x86-64-v3 (AVX2, FMA), which QEMU 7.2's TCG emulates.
 #
-# Usage: run_libcamera_vimc_vm.sh FLUTTERSCAN CACHE_DIR [FRAMES]
+# Usage: run_libcamera_vimc_vm.sh FLUTTERSCAN CHECK_PROGRAM CACHE_DIR [FRAMES]
+#        run_libcamera_vimc_vm.sh --prepare CACHE_DIR   (only fetch the kernel and build vimc.ko:
+#                                                        the ctest fixture before the guest test)
 # Exit 0 pass, 1 fail, 77 skip (only when QEMU itself cannot start).
 # Every wait is bounded: the guest gets VM_TIMEOUT seconds (default 200).
 set -euo pipefail
 
-if (($# < 2)); then
-  echo "usage: $0 FLUTTERSCAN CACHE_DIR [FRAMES]" >&2
+prepare_only=false
+if (($# == 2)) && [[ $1 == --prepare ]]; then
+  prepare_only=true
+  set -- "" "" "$2"
+elif (($# < 3)); then
+  echo "usage: $0 FLUTTERSCAN CHECK_PROGRAM CACHE_DIR [FRAMES] | $0 --prepare CACHE_DIR" >&2
   exit 2
 fi
 flutterscan=$(realpath -m "$1")
-cache_dir=$(realpath -m "$2")
-frames=${3:-8}
+check_program=$(realpath -m "$2")
+cache_dir=$(realpath -m "$3")
+frames=${4:-8}
+width=720
+height=480
 vm_timeout=${VM_TIMEOUT:-200}
 here=$(dirname "$(realpath "$0")")
 # Loaded in this order (each after the ones it depends on).
@@ -50,7 +63,17 @@ skip() {
   exit 77
 }
 
+if $prepare_only; then
+  # shellcheck source=vm_kernel.sh
+  source "$here/vm_kernel.sh"
+  vm_kernel_prepare "$cache_dir"
+  vm_kernel_build_vimc
+  echo "libcamera-vm: kernel $VM_KERNEL_PACKAGE ($VM_KERNEL_VERSION) and $VM_VIMC_KO ready" \
+    "($(seconds_since "$started") s)"
+  exit 0
+fi
 [[ -x $flutterscan ]] || fail "flutterscan binary $flutterscan missing or not executable"
+[[ -x $check_program ]] || fail "check program $check_program missing or not executable"
 [[ $frames =~ ^[0-9]+$ ]] && ((frames >= 2)) || fail "FRAMES must be a number >= 2"
 if ! command -v qemu-system-x86_64 >/dev/null; then
   skip "qemu-system-x86_64 is not installed (run tools/install-deps: qemu-system-x86)"
@@ -65,7 +88,7 @@ ipa_dir=/usr/lib/x86_64-linux-gnu/libcamera
 [[ -f $ipa_dir/ipa_vimc.so && -x $ipa_dir/vimc_ipa_proxy ]] ||
   fail "libcamera's vimc IPA module is not installed ($ipa_dir/ipa_vimc.so, vimc_ipa_proxy;" \
     "run tools/install-deps: libcamera-ipa)"
-ldd "$flutterscan" | grep -q 'libcamera\.so' ||
+[[ $(ldd "$flutterscan") == *libcamera.so* ]] ||
   fail "$flutterscan is not linked with libcamera (configure with -DFLUTTERSCAN_LIBCAMERA=ON)"
 
 # --- kernel, modules and vimc.ko, cached ------------------------------------------
@@ -84,6 +107,14 @@ mkdir -p "$root"/{bin,dev,proc,sys,host,out,lib/modules} "$out"
 cp "$busybox" "$root/bin/busybox"
 for m in "${modules[@]}"; do cp "$(vm_kernel_module "$m")" "$root/lib/modules/"; done
 cp "$VM_VIMC_KO" "$root/lib/modules/"
+# The session's camera settings: a small frame keeps the deblur of each frame short under TCG.
+# libcamera 0.0.3's vimc pipeline aligns sizes to multiples of 6 (640x480 becomes 636x480, which
+# the backend refuses as a size the pipeline changed).
+cat >"$out/scan.toml" <<EOF
+[camera]
+width = $width
+height = $height
+EOF
 # The guest's steps; each result line starts with LIBCAMERA-VM-. Inside the chroot the
 # environment is clean but for what libcamera and flutterscan need; libcamera logs warnings.
 {
@@ -121,10 +152,16 @@ cp "$VM_VIMC_KO" "$root/lib/modules/"
   echo "id=\$(sed -n 's/^  \\(libcamera:.*[^ ]\\)  .*\$/\\1/p' /out/cameras.txt | head -n 1)"
   echo 'if [ -n "$id" ]; then'
   echo '  echo "LIBCAMERA-VM-CAMERA $id"'
-  printf '  run scan --camera "$id" --controller sim --frames %d --out /tmp/out/sessions ' "$frames"
+  printf '  run scan --config /tmp/out/scan.toml --camera "$id" --controller sim --frames %d ' "$frames"
+  printf -- '--out /tmp/out/sessions '
+
   echo '--no-progress >/out/scan.txt 2>&1'
   echo '  echo "LIBCAMERA-VM-SCAN rc=$?"'
   echo '  sed "s/^/scan| /" /out/scan.txt | head -n 60'
+  printf '  chroot /host /usr/bin/env -i LIBCAMERA_LOG_LEVELS=*:ERROR %q "$id" %d %d 10 ' \
+    "$check_program" "$width" "$height"
+  echo '>/out/check.txt 2>&1; echo "LIBCAMERA-VM-CHECK rc=$?"'
+  echo '  cat /out/check.txt'
   echo 'fi'
   echo 'echo "LIBCAMERA-VM-DONE uptime=$(cut -d" " -f1 /proc/uptime)"'
   echo 'umount /host/tmp/out /out 2>/dev/null; sync'
@@ -171,9 +208,16 @@ grep -q '^LIBCAMERA-VM-SCAN rc=0$' <<<"$console" || fail "flutterscan scan throu
 # --- the session folder ------------------------------------------------------------
 session=$(find "$out/sessions" -mindepth 1 -maxdepth 1 -type d | head -n 1)
 [[ -n $session ]] || fail "the scan wrote no session folder"
-python3 "$here/check_libcamera_session.py" "$session" "$frames" ||
+python3 "$here/check_libcamera_session.py" "$session" "$frames" "$width" "$height" ||
   fail "the session through $camera does not hold the frames asked for (see above)"
 
+# --- the check program's lines ------------------------------------------------------
+results=$(grep '^LIBCAMERA-VM-RESULT' <<<"$console" || true)
+[[ -n $results ]] || fail "the check program printed no LIBCAMERA-VM-RESULT line"
+echo "$results"
+if grep -q ' FAIL ' <<<"$results"; then fail "a libcamera_vimc_check check failed (see above)"; fi
+grep -q '^LIBCAMERA-VM-CHECK rc=0$' <<<"$console" || fail "libcamera_vimc_check did not exit 0"
+
 total_seconds=$(seconds_since "$started")
-echo "libcamera-vm: PASS ($camera: $frames frames through libcamera; QEMU ${boot_seconds} s," \
-  "total ${total_seconds} s)"
+echo "libcamera-vm: PASS ($camera: scan of $frames frames, $(grep -c ' PASS ' <<<"$results")" \
+  "checks; QEMU ${boot_seconds} s, total ${total_seconds} s)"
