@@ -31,7 +31,7 @@ set -euo pipefail
 prepare_only=false
 if (($# == 2)) && [[ $1 == --prepare ]]; then
   prepare_only=true
-  set -- "" "" "$2"
+  set -- - - "$2"
 elif (($# < 3)); then
   echo "usage: $0 FLUTTERSCAN CHECK_PROGRAM CACHE_DIR [FRAMES] | $0 --prepare CACHE_DIR" >&2
   exit 2
