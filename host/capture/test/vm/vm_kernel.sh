@@ -101,7 +101,8 @@ vm_kernel_build_vimc() {
     build=$(mktemp -d "$cache_dir/vimc-build.XXXXXX")
     log=$build/log
     (cd "$build" && timeout 600 apt-get download "${packages[@]}" >"$log" 2>&1) ||
-      fail "apt-get download ${packages[*]} failed: $(tail -n 3 "$log")"
+      fail "apt-get download ${packages[*]} failed (if apt no longer has that version, delete" \
+        "$cache_dir to fetch the current kernel): $(tail -n 3 "$log")"
     mkdir "$build/x"
     for pkg in "$build"/linux-headers-*.deb "$build"/linux-kbuild-*.deb; do
       dpkg-deb -x "$pkg" "$build/x" || fail "unpacking $pkg failed"
