@@ -1,6 +1,7 @@
 // "libcamera:ID": cameras through libcamera (Debian 12's 0.0.3; docs/capture.md). Run against
 // the kernel's vimc driver through libcamera's vimc pipeline handler in a QEMU guest
-// (test/vm/run_libcamera_vimc_vm.sh); the API changes at every 0.x release.
+// (test/vm/run_libcamera_vimc_vm.sh; what that does not reach is listed in docs/capture.md); the
+// API changes at every 0.x release.
 //
 // One stream: the raw role when a Bayer format (or none) is asked for, else the still-capture
 // role; RGGB 8/10/12 bit (unpacked), RGB888/BGR888 or R8. A format or size the pipeline changes
@@ -185,6 +186,8 @@ class LibcameraCamera final : public CameraSource {
              " failed: " + std::strerror(-ret);
     format_ = {static_cast<int>(stream.size.width), static_cast<int>(stream.size.height), m->format,
                m->bit_depth, stream.stride};
+    if (format_.row_bytes == 0)  // a pipeline that leaves the stride unset: rows packed
+      format_.row_bytes = static_cast<std::size_t>(format_.width) * bytes_per_pixel(m->format);
     settings_ = wanted;
     settings_.width = format_.width;
     settings_.height = format_.height;
@@ -268,7 +271,10 @@ class LibcameraCamera final : public CameraSource {
       const std::uint8_t* bytes = mapping.data + mapping.offset;
       frame.data.assign(bytes, bytes + image_bytes);
       frame.sequence = sequence64_;
-      frame.timestamp_ns = static_cast<std::int64_t>(metadata.timestamp);
+      // SensorTimestamp (start of exposure of the first row) where the pipeline reports it, else
+      // the buffer's timestamp.
+      const auto sensor_ns = request->metadata().get(libcamera::controls::SensorTimestamp);
+      frame.timestamp_ns = sensor_ns ? *sensor_ns : static_cast<std::int64_t>(metadata.timestamp);
       frame.host_arrival_ns = steady_now_ns();
       frame.format = format_;
       ++counters_.frames_delivered;
