@@ -74,7 +74,7 @@ if $prepare_only; then
 fi
 [[ -x $flutterscan ]] || fail "flutterscan binary $flutterscan missing or not executable"
 [[ -x $check_program ]] || fail "check program $check_program missing or not executable"
-[[ $frames =~ ^[0-9]+$ ]] && ((frames >= 2)) || fail "FRAMES must be a number >= 2"
+if ! [[ $frames =~ ^[0-9]+$ ]] || ((frames < 2)); then fail "FRAMES must be a number >= 2"; fi
 if ! command -v qemu-system-x86_64 >/dev/null; then
   skip "qemu-system-x86_64 is not installed (run tools/install-deps: qemu-system-x86)"
 fi
