@@ -162,6 +162,15 @@ class LibcameraCamera final : public CameraSource {
                ")";
       }
       stream.pixelFormat = chosen->libcamera;
+    } else if (mapping_of(stream.pixelFormat) == nullptr) {
+      // The role's default is one flutterscan does not read (e.g. packed CSI-2 Bayer): the best
+      // offered that it reads, if any.
+      const auto offered = stream.formats().pixelformats();
+      for (const auto& m : mappings())
+        if (std::find(offered.begin(), offered.end(), m.libcamera) != offered.end()) {
+          stream.pixelFormat = m.libcamera;
+          break;
+        }
     }
     if (wanted.width) stream.size.width = static_cast<unsigned>(*wanted.width);
     if (wanted.height) stream.size.height = static_cast<unsigned>(*wanted.height);
