@@ -16,7 +16,7 @@ CameraBackend sim_camera_backend();
 CameraBackend v4l2_camera_backend();
 /// \brief "aravis:NAME": GenICam cameras through Aravis 0.8 (aravis_camera.cpp).
 CameraBackend aravis_camera_backend();
-/// \brief "libcamera:ID" (libcamera_camera.cpp; compile-tested only).
+/// \brief "libcamera:ID": cameras through libcamera 0.0.3 (libcamera_camera.cpp).
 CameraBackend libcamera_camera_backend();
 
 }  // namespace flutterscan::capture

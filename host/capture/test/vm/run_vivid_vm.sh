@@ -51,42 +51,11 @@ fi
 command -v cpio >/dev/null || fail "cpio is not installed (run tools/install-deps: cpio)"
 
 # --- kernel and modules, cached ------------------------------------------------
-mkdir -p "$cache_dir"
-kernel_dir=""
-for dir in "$cache_dir"/linux-image-*; do
-  [[ -f $dir/complete ]] && kernel_dir=$dir
-done
-if [[ -z $kernel_dir ]]; then
-  package=$(apt-cache depends linux-image-amd64 2>/dev/null |
-    awk '/Depends: linux-image-6\.1\.0-[0-9]+-amd64$/ {print $2; exit}')
-  [[ -n $package ]] || package=$(apt-cache search --names-only '^linux-image-6\.1\.0-[0-9]+-amd64$' |
-    awk '{print $1}' | sort -V | tail -n 1)
-  [[ -n $package ]] || fail "no linux-image-6.1.0-*-amd64 package known to apt (apt-get update?)"
-  say "fetching $package (first run only)"
-  download=$(mktemp -d "$cache_dir/download.XXXXXX")
-  trap 'rm -rf "$download"' EXIT
-  (cd "$download" && timeout 300 apt-get download "$package" >/dev/null 2>"$download/apt.log") ||
-    fail "apt-get download $package failed: $(tail -n 3 "$download/apt.log")"
-  mkdir "$download/x"
-  dpkg-deb --fsys-tarfile "$download"/*.deb |
-    tar -x -C "$download/x" --wildcards './boot/vmlinuz-*' './lib/modules/*/kernel/drivers/media/*'
-  kernel_dir=$cache_dir/$package
-  rm -rf "$kernel_dir"
-  mkdir -p "$kernel_dir/modules"
-  cp "$download"/x/boot/vmlinuz-* "$kernel_dir/vmlinuz"
-  for m in "${modules[@]}"; do
-    found=$(find "$download/x/lib/modules" -name "$m.ko" -o -name "$m.ko.xz" | head -n 1)
-    [[ -n $found ]] || fail "module $m not found in $package"
-    case $found in
-      *.xz) xz -dc "$found" >"$kernel_dir/modules/$m.ko" ;;
-      *) cp "$found" "$kernel_dir/modules/$m.ko" ;;
-    esac
-  done
-  touch "$kernel_dir/complete"
-  rm -rf "$download"
-  trap - EXIT
-fi
-say "kernel $(basename "$kernel_dir")"
+here=$(dirname "$(realpath "$0")")
+# shellcheck source=vm_kernel.sh
+source "$here/vm_kernel.sh"
+vm_kernel_prepare "$cache_dir"
+say "kernel $VM_KERNEL_PACKAGE"
 
 # --- initramfs -----------------------------------------------------------------
 work=$(mktemp -d "$cache_dir/run.XXXXXX")
@@ -94,7 +63,7 @@ trap 'rm -rf "$work"' EXIT
 root=$work/root
 mkdir -p "$root"/{bin,dev,proc,sys,lib/modules}
 cp "$busybox" "$root/bin/busybox"
-cp "$kernel_dir"/modules/*.ko "$root/lib/modules/"
+for m in "${modules[@]}"; do cp "$(vm_kernel_module "$m")" "$root/lib/modules/"; done
 cp "$check_program" "$root/v4l2_vivid_check"
 {
   echo '#!/bin/busybox sh'
@@ -123,7 +92,7 @@ boot_started=$(now_ms)
 set +e
 timeout --kill-after=5 "$vm_timeout" qemu-system-x86_64 -accel tcg -m 512 -smp 1 \
   -nographic -no-reboot -monitor none \
-  -kernel "$kernel_dir/vmlinuz" -initrd "$work/initramfs.cpio" \
+  -kernel "$VM_KERNEL_DIR/vmlinuz" -initrd "$work/initramfs.cpio" \
   -append "console=ttyS0 panic=-1 quiet loglevel=3 rdinit=/init" \
   </dev/null >"$log" 2>"$work/qemu.err"
 qemu_status=$?
