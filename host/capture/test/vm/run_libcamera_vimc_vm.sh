@@ -142,7 +142,14 @@ EOF
   echo '  : >"/host/run/udev/data/c$(cat "$d/dev")"'
   echo 'done'
   echo 'echo "guest: modules loaded after $(cut -d" " -f1 /proc/uptime) s"'
-  printf 'run() { chroot /host /usr/bin/env -i HOME=/tmp PATH=/usr/bin:/bin LANG=C.UTF-8 '
+  # A sanitizer build (host-asan) runs here too, with its options (the preset's LSan
+  # suppressions).
+  sanitizer_env=""
+  for v in ASAN_OPTIONS LSAN_OPTIONS UBSAN_OPTIONS; do
+    [[ -n ${!v:-} ]] && sanitizer_env+=" $(printf '%q' "$v=${!v}")"
+  done
+  printf 'run() { chroot /host /usr/bin/env -i HOME=/tmp PATH=/usr/bin:/bin LANG=C.UTF-8%s ' \
+    "$sanitizer_env"
   printf 'LIBCAMERA_LOG_LEVELS=*:WARN %q "$@"; }\n' "$flutterscan"
   echo 't0=$(cut -d" " -f1 /proc/uptime)'
   echo 'run cameras >/out/cameras.txt 2>&1; echo "LIBCAMERA-VM-CAMERAS rc=$?"'
@@ -158,8 +165,8 @@ EOF
   echo '--no-progress >/out/scan.txt 2>&1'
   echo '  echo "LIBCAMERA-VM-SCAN rc=$?"'
   echo '  sed "s/^/scan| /" /out/scan.txt | head -n 60'
-  printf '  chroot /host /usr/bin/env -i LIBCAMERA_LOG_LEVELS=*:ERROR %q "$id" %d %d 10 ' \
-    "$check_program" "$width" "$height"
+  printf '  chroot /host /usr/bin/env -i%s LIBCAMERA_LOG_LEVELS=*:ERROR %q "$id" %d %d 10 ' \
+    "$sanitizer_env" "$check_program" "$width" "$height"
   echo '>/out/check.txt 2>&1; echo "LIBCAMERA-VM-CHECK rc=$?"'
   echo '  cat /out/check.txt'
   echo 'fi'
@@ -171,6 +178,9 @@ chmod +x "$root/init"
 (cd "$root" && find . | cpio -o -H newc --quiet >"$work/initramfs.cpio")
 
 # --- boot ------------------------------------------------------------------------
+# multidevs=remap: the host's /proc, /sys, /dev and /run are other file systems whose root
+# directories share inode numbers; exported as they are, the guest takes them for one directory
+# (proc mounted on /host/proc showed up on /host/sys, and the chroot had no /proc/self).
 log=$work/console.log
 boot_started=$(now_ms)
 set +e
@@ -178,7 +188,7 @@ timeout --kill-after=5 "$vm_timeout" qemu-system-x86_64 -accel tcg -cpu max -m 1
   -nographic -no-reboot -monitor none \
   -kernel "$VM_KERNEL_DIR/vmlinuz" -initrd "$work/initramfs.cpio" \
   -append "console=ttyS0 panic=-1 quiet loglevel=3 rdinit=/init" \
-  -virtfs local,path=/,mount_tag=hostroot,security_model=none,readonly=on \
+  -virtfs local,path=/,mount_tag=hostroot,security_model=none,readonly=on,multidevs=remap \
   -virtfs local,path="$out",mount_tag=out,security_model=none \
   </dev/null >"$log" 2>"$work/qemu.err"
 qemu_status=$?
