@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <limits>
 #include <span>
@@ -289,6 +290,12 @@ Result<ElectronFrame, std::string> frame_to_electrons(const Frame& frame,
   }
   out.saturated_share =
       static_cast<double>(saturated) / (static_cast<double>(channels) * f.width * f.height);
+  // Every value is (sample - black) x gain with 0 <= sample <= the format's largest: finite
+  // black and gain bound them (a factor of 2 to spare for float rounding).
+  const double largest_sample = wide ? 65535.0 : 255.0;
+  if (std::isfinite(black) && std::isfinite(gain) &&
+      2 * (largest_sample + std::abs(black)) * std::abs(gain) <= imaging::kMaxPixelValue)
+    out.values = imaging::PixelValues::kShownInRange;
   return Converted::success(std::move(out));
 }
 

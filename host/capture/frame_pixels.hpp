@@ -7,6 +7,7 @@
 #include "flutterscan/common/result.hpp"
 #include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
+#include "imaging/image_checks.hpp"
 
 namespace flutterscan::capture {
 
@@ -20,6 +21,10 @@ Result<imaging::Image, std::string> frame_to_dn(const Frame& frame);
 struct ElectronFrame {
   imaging::Image electrons;    ///< imaging::dn_to_electrons(frame_to_dn(frame), model)
   double saturated_share = 0;  ///< imaging::saturated_share(frame_to_dn(frame), model)
+  /// kShownInRange when the samples' range, the black level and the gain bound every
+  /// value within imaging::kMaxPixelValue (the one-pass conversion with a finite black
+  /// level and gain): imaging::MotionFrame::make need not read them again.
+  imaging::PixelValues values = imaging::PixelValues::kScan;
 };
 
 /// \brief frame_to_dn, imaging::saturated_share and imaging::dn_to_electrons,

@@ -130,8 +130,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fit.slot_time_us = event.slot_time_us;
   fit.blur_check_every = config.processing.blur_check_every;
   fit.fallback_blur_px = o.nominal_blur_px;
-  const auto motion =
-      imaging::MotionFrame::make(std::move(electrons.value().electrons), model.value().direction);
+  const auto motion = imaging::MotionFrame::make(std::move(electrons.value().electrons),
+                                                 model.value().direction, electrons.value().values);
   if (!motion.ok()) {
     fuzz::trace("frame refused: " + motion.error());
     FUZZ_CHECK(!motion.error().empty(), "a frame refused without a message");

@@ -7,7 +7,7 @@
 
 namespace flutterscan::imaging {
 
-std::string image_problem(const Image& image) {
+std::string image_problem(const Image& image, PixelValues values) {
   if (image.channels.empty()) return "the image has no channel";
   const int width = image.channels[0].width, height = image.channels[0].height;
   if (width < 1 || height < 1)
@@ -24,6 +24,7 @@ std::string image_problem(const Image& image) {
     if (plane.pixels.size() != static_cast<std::size_t>(width) * static_cast<std::size_t>(height))
       return "channel " + std::to_string(c) + " holds " + std::to_string(plane.pixels.size()) +
              " pixels, not width x height";
+    if (values == PixelValues::kShownInRange) continue;
     // Non-finite or absurd values (a black level of 1e85 in a descriptor) would turn
     // the whole deconvolution into inf and NaN.
     // A branch-free pass first (it vectorises: every frame goes through it), the

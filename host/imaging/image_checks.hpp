@@ -10,10 +10,17 @@
 
 namespace flutterscan::imaging {
 
+/// \brief Whether image_problem() reads every pixel value, or the caller has
+/// shown them finite and within kMaxPixelValue (a conversion whose inputs bound
+/// its outputs: frame_to_electrons of integer samples with a finite black level
+/// and gain) and only the shape is checked.
+enum class PixelValues { kScan, kShownInRange };
+
 /// \brief Why `image` cannot be processed (no channel, an empty plane, planes of
 /// different sizes, pixels not width x height, a side beyond kMaxFrameSidePx, a
-/// value that is not finite or beyond kMaxPixelValue); empty if it can.
-std::string image_problem(const Image& image);
+/// value that is not finite or beyond kMaxPixelValue, unless `values` says the
+/// caller has shown them in range); empty if it can.
+std::string image_problem(const Image& image, PixelValues values = PixelValues::kScan);
 
 /// \brief Why the model's light scale cannot be computed with (crosstalk entries
 /// beyond kMaxCrosstalk or, other than 0, below kMinCrosstalk, LED or ambient electrons beyond

@@ -56,9 +56,10 @@ Plane from_motion_frame(const Plane& plane, Direction direction) {
   return plane;
 }
 
-Result<MotionFrame, std::string> MotionFrame::make(Image camera, Direction direction) {
+Result<MotionFrame, std::string> MotionFrame::make(Image camera, Direction direction,
+                                                   PixelValues values) {
   using Out = Result<MotionFrame, std::string>;
-  if (auto problem = image_problem(camera); !problem.empty()) return Out::failure(problem);
+  if (auto problem = image_problem(camera, values); !problem.empty()) return Out::failure(problem);
   return Out::success(MotionFrame(std::move(camera), direction));
 }
 

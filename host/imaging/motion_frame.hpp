@@ -12,6 +12,7 @@
 #include "flutterscan/common/result.hpp"
 #include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
+#include "imaging/image_checks.hpp"
 
 namespace flutterscan::imaging {
 
@@ -39,8 +40,10 @@ class MotionFrame {
  public:
   MotionFrame() = default;  ///< no channel (what a failed make() holds)
   /// \brief `camera` (planes as the camera delivered them) turned for
-  /// `direction`; fails naming what is wrong with the image (image_problem).
-  static Result<MotionFrame, std::string> make(Image camera, Direction direction);
+  /// `direction`; fails naming what is wrong with the image (image_problem,
+  /// which reads every value unless `values` says they were shown in range).
+  static Result<MotionFrame, std::string> make(Image camera, Direction direction,
+                                               PixelValues values = PixelValues::kScan);
 
   /// \brief The channels in the motion frame: row y, sample n = position n along the motion.
   const Image& image() const { return image_; }

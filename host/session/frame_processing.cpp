@@ -141,7 +141,11 @@ Result<Deblurred, StepFailure> deblur(Converted& in, const FrameJob& job,
   if (flat != nullptr)
     if (auto problem = imaging::apply_flat_field(in.frame.electrons, *flat); !problem.empty())
       return Out::failure({"optics.flat_field: " + problem});
-  auto frame = imaging::MotionFrame::make(std::move(in.frame.electrons), in.model.direction);
+  // The conversion's bound on the values holds until a flat field rescales them.
+  const imaging::PixelValues values =
+      flat != nullptr ? imaging::PixelValues::kScan : in.frame.values;
+  auto frame =
+      imaging::MotionFrame::make(std::move(in.frame.electrons), in.model.direction, values);
   if (!frame.ok()) return Out::failure({frame.error()});
   ModelFitConfig fit;
   fit.encoder = config.optics.encoder;

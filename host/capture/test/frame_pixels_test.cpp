@@ -11,6 +11,7 @@
 
 #include "imaging/frame_conversion.hpp"
 #include "imaging/model_guards.hpp"
+#include "imaging/motion_frame.hpp"
 
 namespace flutterscan::capture {
 namespace {
@@ -85,6 +86,34 @@ TEST(FrameToElectrons, NonLinearEncodingsTakeTheThreeStepPath) {
   ASSERT_TRUE(dn.ok() && fast.ok());
   const imaging::Image expected = imaging::dn_to_electrons(dn.value(), m);
   EXPECT_EQ(fast.value().electrons.channels[1].pixels, expected.channels[1].pixels);
+}
+
+// The one-pass conversion says when its inputs bound every value within kMaxPixelValue, so that
+// MotionFrame::make need not read them again; where they do not (a wild black level or gain),
+// the values are read, and an out-of-range one is still refused naming where it is.
+TEST(FrameToElectrons, SaysWhenTheBlackLevelAndGainBoundTheValues) {
+  const Frame frame = random_frame(PixelFormat::kRgb16, 12, 0);
+  const auto usual = frame_to_electrons(frame, camera(12, 3));
+  ASSERT_TRUE(usual.ok()) << usual.error();
+  EXPECT_EQ(usual.value().values, imaging::PixelValues::kShownInRange);
+
+  imaging::CaptureModel wild = camera(12, 3);
+  wild.black_level = 1e85;  // inf as a float: (sample - black) x gain is -inf
+  auto unbounded = frame_to_electrons(frame, wild);
+  ASSERT_TRUE(unbounded.ok()) << unbounded.error();
+  EXPECT_EQ(unbounded.value().values, imaging::PixelValues::kScan);
+  const auto refused = imaging::MotionFrame::make(
+      std::move(unbounded.value().electrons), imaging::Direction::kPlusX, unbounded.value().values);
+  ASSERT_FALSE(refused.ok());
+  EXPECT_NE(refused.error().find("not a finite number"), std::string::npos) << refused.error();
+
+  // 65535 x 1e10 e-/DN is within 1e15, but not with the factor of 2 the bound keeps for rounding.
+  imaging::CaptureModel steep = camera(12, 3);
+  steep.gain = 1e10;
+  steep.black_level = 0;
+  const auto near_limit = frame_to_electrons(frame, steep);
+  ASSERT_TRUE(near_limit.ok()) << near_limit.error();
+  EXPECT_EQ(near_limit.value().values, imaging::PixelValues::kScan);
 }
 
 TEST(FrameToElectrons, ShortDataIsRefusedNamingTheFrame) {
