@@ -224,7 +224,7 @@ std::vector<DecodeWindow> decode_windows(std::span<const LabelRegion> runs, int 
     const int b = camera_boundary(std::min(length, r.end + margin));
     const int begin = std::min(a, b), end = std::max(a, b);
     const int lines = along_x ? height : width;
-    const bool measured = r.across_end > r.across_begin;
+    const bool measured = r.rows_measured();
     const int top = measured ? std::max(0, r.across_begin - margin) : 0;
     const int bottom = measured ? std::min(lines, r.across_end + margin) : lines;
     windows.push_back(along_x ? DecodeWindow{begin, top, end - begin, bottom - top}

@@ -94,6 +94,21 @@ struct LabelRegion {
   /// Rows of the paper across the motion; both 0: not measured (every row).
   int across_begin = 0;
   int across_end = 0;
+
+  /// \brief Whether the rows were measured (if not, the region spans every row).
+  bool rows_measured() const { return across_end > across_begin; }
+  /// \brief Whether `other` lies within this region's columns and (measured) rows.
+  bool contains(const LabelRegion& other) const {
+    return other.begin >= begin && other.end <= end &&
+           (!rows_measured() ||
+            (other.across_begin >= across_begin && other.across_end <= across_end));
+  }
+  /// \brief Whether `other` shares columns and (measured) rows with this region.
+  bool overlaps(const LabelRegion& other) const {
+    return other.begin < end && other.end > begin &&
+           (!rows_measured() ||
+            (other.across_begin < across_end && other.across_end > across_begin));
+  }
 };
 
 /// \brief Paper along x: columns where at least `min_fraction` of the pixels

@@ -150,11 +150,8 @@ std::vector<LabelRegion> regions_to_read(std::span<const LabelRegion> paper,
                                          std::span<const LabelRegion> code) {
   std::vector<LabelRegion> out(paper.begin(), paper.end());
   for (const LabelRegion& c : code) {
-    const bool inside = std::any_of(paper.begin(), paper.end(), [&](const LabelRegion& p) {
-      const bool rows = p.across_end <= p.across_begin ||
-                        (c.across_begin >= p.across_begin && c.across_end <= p.across_end);
-      return c.begin >= p.begin && c.end <= p.end && rows;
-    });
+    const bool inside = std::any_of(paper.begin(), paper.end(),
+                                    [&](const LabelRegion& p) { return p.contains(c); });
     if (!inside) out.push_back(c);
   }
   return out;

@@ -262,7 +262,7 @@ void judge_labels(const Decoded& decoded, const imaging::Plane& latent,
     if (!any) {
       Sighting s;
       s.position_px = 0.5 * (r.begin + r.end);
-      s.across_px = r.across_end > r.across_begin
+      s.across_px = r.rows_measured()
                         ? 0.5 * (r.across_begin + r.across_end)
                         : 0.5 * (imaging::moves_along_x(direction) ? latent.height : latent.width);
       out.sightings.push_back(std::move(s));

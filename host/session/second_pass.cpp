@@ -147,12 +147,8 @@ std::vector<reader::LabelRegion> retry_regions(std::span<const reader::LabelRegi
                                                std::span<const reader::LabelRegion> unread_code) {
   std::vector<reader::LabelRegion> out(unread_paper.begin(), unread_paper.end());
   for (const reader::LabelRegion& c : unread_code) {
-    const bool on_paper =
-        std::any_of(unread_paper.begin(), unread_paper.end(), [&](const reader::LabelRegion& p) {
-          const bool rows = p.across_end <= p.across_begin ||
-                            (c.across_begin < p.across_end && c.across_end > p.across_begin);
-          return c.begin < p.end && c.end > p.begin && rows;
-        });
+    const bool on_paper = std::any_of(unread_paper.begin(), unread_paper.end(),
+                                      [&](const reader::LabelRegion& p) { return p.overlaps(c); });
     if (!on_paper) out.push_back(c);
   }
   return out;
@@ -182,7 +178,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
     const int keep1 = std::min(along, run.end + kWindowMargin);
     const int c0 = std::max(0, keep0 - blur - kCropSlack);
     const int c1 = std::min(along, keep1 + blur + kCropSlack);
-    const bool rows_known = run.across_end > run.across_begin;
+    const bool rows_known = run.rows_measured();
     const int r0 = rows_known ? std::max(0, run.across_begin - kWindowMargin) : 0;
     const int r1 = rows_known ? std::min(lines, run.across_end + kWindowMargin) : lines;
     if (c1 - c0 <= blur || r1 <= r0) continue;
