@@ -49,8 +49,8 @@ modules=(virtio_ring virtio virtio_pci_legacy_dev virtio_pci_modern_dev virtio_p
   netfs fscache 9pnet 9pnet_virtio 9p
   mc videodev videobuf2-common videobuf2-v4l2 videobuf2-memops videobuf2-vmalloc
   videobuf2-dma-contig v4l2-tpg)
-now_ms() { echo $(($(date +%s%N) / 1000000)); }
-seconds_since() { local ms=$(($(now_ms) - $1)); printf "%d.%01d" $((ms / 1000)) $((ms % 1000 / 100)); }
+# shellcheck source=vm_kernel.sh
+source "$here/vm_kernel.sh"
 started=$(now_ms)
 
 say() { echo "libcamera-vm: $*" >&2; }
@@ -64,8 +64,6 @@ skip() {
 }
 
 if $prepare_only; then
-  # shellcheck source=vm_kernel.sh
-  source "$here/vm_kernel.sh"
   vm_kernel_prepare "$cache_dir"
   vm_kernel_build_vimc
   echo "libcamera-vm: kernel $VM_KERNEL_PACKAGE ($VM_KERNEL_VERSION) and $VM_VIMC_KO ready" \
@@ -75,14 +73,7 @@ fi
 [[ -x $flutterscan ]] || fail "flutterscan binary $flutterscan missing or not executable"
 [[ -x $check_program ]] || fail "check program $check_program missing or not executable"
 if ! [[ $frames =~ ^[0-9]+$ ]] || ((frames < 2)); then fail "FRAMES must be a number >= 2"; fi
-if ! command -v qemu-system-x86_64 >/dev/null; then
-  skip "qemu-system-x86_64 is not installed (run tools/install-deps: qemu-system-x86)"
-fi
-busybox=/bin/busybox
-if ! "$busybox" --help >/dev/null 2>&1 || ldd "$busybox" >/dev/null 2>&1; then
-  fail "$busybox is missing or not static (run tools/install-deps: busybox-static)"
-fi
-command -v cpio >/dev/null || fail "cpio is not installed (run tools/install-deps: cpio)"
+vm_guest_tools
 command -v python3 >/dev/null || fail "python3 is not installed (run tools/install-deps: python3)"
 ipa_dir=/usr/lib/x86_64-linux-gnu/libcamera
 [[ -f $ipa_dir/ipa_vimc.so && -x $ipa_dir/vimc_ipa_proxy ]] ||
@@ -92,8 +83,6 @@ ipa_dir=/usr/lib/x86_64-linux-gnu/libcamera
   fail "$flutterscan is not linked with libcamera (configure with -DFLUTTERSCAN_LIBCAMERA=ON)"
 
 # --- kernel, modules and vimc.ko, cached ------------------------------------------
-# shellcheck source=vm_kernel.sh
-source "$here/vm_kernel.sh"
 vm_kernel_prepare "$cache_dir"
 vm_kernel_build_vimc
 say "kernel $VM_KERNEL_PACKAGE ($VM_KERNEL_VERSION), vimc $VM_VIMC_KO"
@@ -104,7 +93,7 @@ trap 'rm -rf "$work"' EXIT
 root=$work/root
 out=$work/out
 mkdir -p "$root"/{bin,dev,proc,sys,host,out,lib/modules} "$out"
-cp "$busybox" "$root/bin/busybox"
+cp /bin/busybox "$root/bin/busybox"
 for m in "${modules[@]}"; do cp "$(vm_kernel_module "$m")" "$root/lib/modules/"; done
 cp "$VM_VIMC_KO" "$root/lib/modules/"
 # The session's camera settings: a small frame keeps the deblur of each frame short under TCG.
@@ -181,39 +170,16 @@ chmod +x "$root/init"
 # multidevs=remap: the host's /proc, /sys, /dev and /run are other file systems whose root
 # directories share inode numbers; exported as they are, the guest takes them for one directory
 # (proc mounted on /host/proc showed up on /host/sys, and the chroot had no /proc/self).
-log=$work/console.log
-boot_started=$(now_ms)
-set +e
-timeout --kill-after=5 "$vm_timeout" qemu-system-x86_64 -accel tcg -cpu max -m 1024 -smp 1 \
-  -nographic -no-reboot -monitor none \
-  -kernel "$VM_KERNEL_DIR/vmlinuz" -initrd "$work/initramfs.cpio" \
-  -append "console=ttyS0 panic=-1 quiet loglevel=3 rdinit=/init" \
+vm_boot "$work" "$vm_timeout" -cpu max -m 1024 \
   -virtfs local,path=/,mount_tag=hostroot,security_model=none,readonly=on,multidevs=remap \
-  -virtfs local,path="$out",mount_tag=out,security_model=none \
-  </dev/null >"$log" 2>"$work/qemu.err"
-qemu_status=$?
-set -e
-boot_seconds=$(seconds_since "$boot_started")
-tr -d '\r' <"$log" | sed 's/\x1b\[[0-9;?]*[a-zA-Z]//g' | grep -v '^\s*$' | sed 's/^/guest| /' >&2 || true
-
-if ! grep -q 'guest: up' "$log"; then
-  if ((qemu_status == 124 || qemu_status == 137)); then
-    fail "the guest did not come up within ${vm_timeout} s"
-  fi
-  if grep -q -e 'SeaBIOS' -e 'Booting' -e 'Kernel panic' "$log"; then
-    fail "QEMU ran (exit $qemu_status) but the guest's init never came up"
-  fi
-  skip "QEMU could not start (exit $qemu_status): $(head -c 400 "$work/qemu.err")"
-fi
-((qemu_status == 124 || qemu_status == 137)) && fail "the guest did not finish within ${vm_timeout} s"
-console=$(tr -d '\r' <"$log")
-grep -q '^LIBCAMERA-VM-DONE' <<<"$console" || fail "the guest's steps did not finish (no DONE line)"
-if grep '^LIBCAMERA-VM-FAIL' <<<"$console"; then fail "a guest step failed (see above)"; fi
-grep -q '^LIBCAMERA-VM-CAMERAS rc=0$' <<<"$console" || fail "flutterscan cameras failed"
-camera=$(sed -n 's/^LIBCAMERA-VM-CAMERA //p' <<<"$console" | head -n 1)
+  -virtfs local,path="$out",mount_tag=out,security_model=none
+grep -q '^LIBCAMERA-VM-DONE' <<<"$VM_CONSOLE" || fail "the guest's steps did not finish (no DONE line)"
+if grep '^LIBCAMERA-VM-FAIL' <<<"$VM_CONSOLE"; then fail "a guest step failed (see above)"; fi
+grep -q '^LIBCAMERA-VM-CAMERAS rc=0$' <<<"$VM_CONSOLE" || fail "flutterscan cameras failed"
+camera=$(sed -n 's/^LIBCAMERA-VM-CAMERA //p' <<<"$VM_CONSOLE" | head -n 1)
 [[ -n $camera ]] || fail "flutterscan cameras listed no libcamera camera"
 say "camera listed: $camera"
-grep -q '^LIBCAMERA-VM-SCAN rc=0$' <<<"$console" || fail "flutterscan scan through $camera failed"
+grep -q '^LIBCAMERA-VM-SCAN rc=0$' <<<"$VM_CONSOLE" || fail "flutterscan scan through $camera failed"
 
 # --- the session folder ------------------------------------------------------------
 session=$(find "$out/sessions" -mindepth 1 -maxdepth 1 -type d | head -n 1)
@@ -222,12 +188,12 @@ python3 "$here/check_libcamera_session.py" "$session" "$frames" "$width" "$heigh
   fail "the session through $camera does not hold the frames asked for (see above)"
 
 # --- the check program's lines ------------------------------------------------------
-results=$(grep '^LIBCAMERA-VM-RESULT' <<<"$console" || true)
+results=$(grep '^LIBCAMERA-VM-RESULT' <<<"$VM_CONSOLE" || true)
 [[ -n $results ]] || fail "the check program printed no LIBCAMERA-VM-RESULT line"
 echo "$results"
 if grep -q ' FAIL ' <<<"$results"; then fail "a libcamera_vimc_check check failed (see above)"; fi
-grep -q '^LIBCAMERA-VM-CHECK rc=0$' <<<"$console" || fail "libcamera_vimc_check did not exit 0"
+grep -q '^LIBCAMERA-VM-CHECK rc=0$' <<<"$VM_CONSOLE" || fail "libcamera_vimc_check did not exit 0"
 
 total_seconds=$(seconds_since "$started")
 echo "libcamera-vm: PASS ($camera: scan of $frames frames, $(grep -c ' PASS ' <<<"$results")" \
-  "checks; QEMU ${boot_seconds} s, total ${total_seconds} s)"
+  "checks; QEMU ${VM_BOOT_SECONDS} s, total ${total_seconds} s)"

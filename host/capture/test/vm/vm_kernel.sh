@@ -6,6 +6,15 @@
 #                                 version, e.g. 6.1.192-2) and VM_KERNEL_RELEASE (6.1.0-N-amd64)
 #   vm_kernel_module NAME         prints the path of module NAME (.ko) in that cache
 #   vm_kernel_build_vimc          sets VM_VIMC_KO, the path of vimc.ko, building it on the first call
+#   vm_guest_tools                checks QEMU (skips without it), busybox-static and cpio
+#   vm_boot WORK TIMEOUT [QEMU OPTION...]
+#                                 boots that kernel with WORK/initramfs.cpio under TCG, one CPU,
+#                                 for at most TIMEOUT s; the console goes to stderr as "guest| "
+#                                 lines and into VM_CONSOLE (carriage returns removed), the boot's
+#                                 time into VM_BOOT_SECONDS. A guest whose init never ran fails
+#                                 (or skips when QEMU itself could not start), as does one that
+#                                 did not power off in time.
+#   now_ms, seconds_since MS      the clock both use
 #
 # The kernel is the package linux-image-amd64 depends on, fetched with `apt-get download` (no
 # root needed) and unpacked with dpkg-deb: vmlinuz and the module folders the tests load from
@@ -19,7 +28,8 @@
 # CACHE_DIR/linux-image-<release>/ (vimc.ko under vimc/); downloads and sources are removed.
 # A lock file serialises tests sharing the cache (ctest -j).
 #
-# Callers define say() and fail() (fail exits).
+# Callers define say(), fail() and skip() (fail exits 1, skip 77). The guest's init prints
+# "guest: up" first.
 
 vm_kernel_module_trees=(drivers/media drivers/virtio fs/9p fs/netfs fs/fscache net/9p)
 
@@ -128,4 +138,47 @@ vm_kernel_build_vimc() {
   fi
   vm_kernel_unlock
   VM_VIMC_KO=$out/vimc.ko
+}
+
+now_ms() { echo $(($(date +%s%N) / 1000000)); }
+seconds_since() {
+  local ms=$(($(now_ms) - $1))
+  printf "%d.%01d" $((ms / 1000)) $((ms % 1000 / 100))
+}
+
+vm_guest_tools() {
+  if ! command -v qemu-system-x86_64 >/dev/null; then
+    skip "qemu-system-x86_64 is not installed (run tools/install-deps: qemu-system-x86)"
+  fi
+  if ! /bin/busybox --help >/dev/null 2>&1 || ldd /bin/busybox >/dev/null 2>&1; then
+    fail "/bin/busybox is missing or not static (run tools/install-deps: busybox-static)"
+  fi
+  command -v cpio >/dev/null || fail "cpio is not installed (run tools/install-deps: cpio)"
+}
+
+vm_boot() {
+  local work=$1 timeout_s=$2 started status
+  shift 2
+  started=$(now_ms)
+  set +e
+  timeout --kill-after=5 "$timeout_s" qemu-system-x86_64 -accel tcg -smp 1 \
+    -nographic -no-reboot -monitor none \
+    -kernel "$VM_KERNEL_DIR/vmlinuz" -initrd "$work/initramfs.cpio" \
+    -append "console=ttyS0 panic=-1 quiet loglevel=3 rdinit=/init" "$@" \
+    </dev/null >"$work/console.log" 2>"$work/qemu.err"
+  status=$?
+  set -e
+  VM_BOOT_SECONDS=$(seconds_since "$started")
+  VM_CONSOLE=$(tr -d '\r' <"$work/console.log")
+  sed 's/\x1b\[[0-9;?]*[a-zA-Z]//g' <<<"$VM_CONSOLE" | grep -v '^\s*$' | sed 's/^/guest| /' >&2 || true
+  if ! grep -q 'guest: up' <<<"$VM_CONSOLE"; then
+    if ((status == 124 || status == 137)); then
+      fail "the guest did not come up within ${timeout_s} s"
+    fi
+    if grep -q -e 'SeaBIOS' -e 'Booting' -e 'Kernel panic' <<<"$VM_CONSOLE"; then
+      fail "QEMU ran (exit $status) but the guest's init never came up"
+    fi
+    skip "QEMU could not start (exit $status): $(head -c 400 "$work/qemu.err")"
+  fi
+  if ((status == 124 || status == 137)); then fail "the guest did not finish within ${timeout_s} s"; fi
 }
