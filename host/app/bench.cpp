@@ -249,6 +249,12 @@ void add_bench(CLI::App& app) {
   stability_command->add_option("--threads", stability->threads, "frames solved at once")
       ->check(CLI::Range(1, 64))
       ->capture_default_str();
+  stability_command
+      ->add_option("--blur-tolerance", stability->blur_tolerance_pct,
+                   "refine the motion on every frame within +-PCT% of the given blur, as the "
+                   "session does (0: off)")
+      ->check(CLI::Range(0.0, 99.0))
+      ->capture_default_str();
   stability_command->callback([stability] {
     std::error_code error;
     std::filesystem::create_directories(stability->out_dir, error);

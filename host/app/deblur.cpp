@@ -249,13 +249,11 @@ void run(const DeblurFlags& f) {
       motion["refined_blur_px"] = r.blur_px;
       motion["standard_error_px"] = r.standard_error_px;
       motion["speed_ratio"] = r.speed_ratio;
-      motion["at_tolerance_edge"] = r.at_range_edge;
-      if (!r.at_range_edge) {
-        model.blur_px = r.blur_px;
-        model.speed_ratio = r.speed_ratio;
-      }
+      if (r.wandering) motion["block_offsets_px"] = r.block_offsets_px;
+      motion["outside_tolerance"] = r.outside_tolerance;
     }
-    motion["used"] = r.edges && !r.at_range_edge;
+    motion["used"] = imaging::refinement_usable(r);
+    if (imaging::refinement_usable(r)) model = imaging::with_refined_motion(std::move(model), r);
   }
   const double refine_ms = elapsed_ms(start);
   start = std::chrono::steady_clock::now();
@@ -333,9 +331,11 @@ void run(const DeblurFlags& f) {
       std::cout << "blur " << motion["given_blur_px"].get<double>() << " px refined to "
                 << motion["refined_blur_px"].get<double>() << " +- "
                 << motion["standard_error_px"].get<double>() << " px"
-                << (motion["used"].get<bool>() ? ""
-                                               : " (on the edge of the tolerance: not used, "
-                                                 "check the blur or widen --blur-tolerance)")
+                << (motion["used"].get<bool>()                  ? ""
+                    : motion["outside_tolerance"].get<bool>() ? " (outside the tolerance: not used, "
+                                                                "check the blur or widen --blur-tolerance)"
+                                                              : " (the grey model does not fit the "
+                                                                "frame: not used)")
                 << "\n";
   }
   if (!f.truth.empty())

@@ -23,7 +23,6 @@ namespace {
 constexpr int kFine = sim::kSimSupersample;
 constexpr double kBelt = 0.35;        // sim::SceneSpec's belt
 constexpr int kMarginPx = 8;          // belt kept downstream of the blur
-constexpr double kUnfitResidual = 3;  // the session's motion-unfit guard (session/model_fit.cpp)
 
 std::string random_content(sim::SceneKind kind, std::mt19937_64& rng) {
   static constexpr char kChars[] = "ABCDEFGHJKLMNPQRSTUVWXYZ0123456789";
@@ -159,10 +158,7 @@ bool LabelLine::reads(const imaging::CaptureModel& nominal, const LineMotion& mo
     const auto refined = imaging::refine_motion(frame.value(), assumed, options);
     if (refined.ok()) {
       const auto& m = refined.value();
-      if (m.edges && !m.at_range_edge && m.residual_per_sample <= kUnfitResidual) {
-        assumed.blur_px = m.blur_px;
-        assumed.speed_ratio = m.speed_ratio;
-      }
+      if (imaging::refinement_usable(m)) assumed = imaging::with_refined_motion(std::move(assumed), m);
     }
   }
   imaging::DeblurOptions options;

@@ -22,6 +22,9 @@ struct StabilityOptions {
   int width = 640, height = 360;                  ///< scene size
   std::vector<std::string> factors;               ///< empty = every factor
   int threads = 2;                                ///< frames simulated and solved at once
+  /// The session's per-frame motion refinement, +- this % of the given blur
+  /// (0: the methods take the given motion as it is).
+  double blur_tolerance_pct = 10;
 };
 
 /// \brief The factors' names, in the order they run (--factors takes these).

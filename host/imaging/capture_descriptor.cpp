@@ -91,7 +91,7 @@ nlohmann::json to_descriptor(const CaptureModel& m) {
       row.push_back(m.crosstalk[static_cast<std::size_t>(c * m.leds + k)]);
     crosstalk.push_back(row);
   }
-  return {
+  nlohmann::json out = {
       {"format", kDescriptorFormat},
       {"version", kDescriptorVersion},
       {"code", digits},
@@ -115,6 +115,8 @@ nlohmann::json to_descriptor(const CaptureModel& m) {
       {"gamma", m.gamma},
       {"bayer", m.bayer_rggb ? nlohmann::json("RGGB") : nlohmann::json(nullptr)},
   };
+  if (!m.block_offsets_px.empty()) out["block_offsets_px"] = m.block_offsets_px;
+  return out;
 }
 
 Result<CaptureModel, std::string> from_descriptor(const nlohmann::json& d) {
@@ -148,6 +150,8 @@ Result<CaptureModel, std::string> from_descriptor(const nlohmann::json& d) {
       m.led_of_bit[k] = small_integer(led_of_bit[k], std::string("led_of_bit"));
     m.blur_px = number(d, "blur_px");
     if (d.contains("speed_ratio")) m.speed_ratio = number(d, "speed_ratio");
+    if (d.contains("block_offsets_px"))
+      m.block_offsets_px = numbers(d.at("block_offsets_px"), "block_offsets_px");
     if (d.contains("pixel_model")) {
       const auto& pixel = d.at("pixel_model");
       if (pixel == "box-aperture")

@@ -36,6 +36,17 @@ std::string capture_model_problem(const CaptureModel& m) {
       m.speed_ratio > 1 / kMinSpeedRatio)
     return "the speed ratio (end / start of the exposure) must be between " +
            std::to_string(kMinSpeedRatio) + " and " + std::to_string(1 / kMinSpeedRatio);
+  if (static_cast<int>(m.block_offsets_px.size()) >= m.code.length())
+    return "the block offsets need fewer entries than the code has slots (" +
+           std::to_string(m.code.length()) + ")";
+  for (double v : m.block_offsets_px)
+    if (!std::isfinite(v)) return "the block offsets must be finite numbers (pixels)";
+  if (!m.block_offsets_px.empty()) {
+    const auto edges = slot_edges(m);
+    for (std::size_t t = 1; t < edges.size(); ++t)
+      if (edges[t] < edges[t - 1])
+        return "the block offsets make the object move backwards within the exposure";
+  }
   if (m.crosstalk.size() != static_cast<std::size_t>(m.channels * m.leds))
     return "the crosstalk matrix must have " + std::to_string(m.channels) + " rows of " +
            std::to_string(m.leds) + " entries";
@@ -70,7 +81,9 @@ std::vector<double> budgeted_led_electrons(const LedCode& code, double electrons
 }
 
 std::vector<double> slot_edges(const CaptureModel& m) {
-  return accelerating_slot_edges(m.code.length(), m.blur_px, m.speed_ratio);
+  auto edges = accelerating_slot_edges(m.code.length(), m.blur_px, m.speed_ratio);
+  add_block_offsets(edges, m.block_offsets_px);
+  return edges;
 }
 
 std::vector<double> channel_psf(const CaptureModel& m, int channel) {

@@ -37,6 +37,10 @@ struct CaptureModel {
   /// Speed at the end of the exposure / speed at its start (constant acceleration
   /// between them, same total motion); 1 = constant speed.
   double speed_ratio = 1;
+  /// A speed that wanders within the exposure on top of that (belt jitter):
+  /// extra displacement (px) at the ends of equal-time blocks but the last
+  /// (add_block_offsets(), motion_psf.hpp); empty = none.
+  std::vector<double> block_offsets_px;
   PixelModel pixel_model = PixelModel::kBoxAperture;  ///< how motion meets the pixel grid
   Direction direction = Direction::kPlusX;
   int channels = 3;  ///< camera channels: 3 (RGB) or 1 (mono)
@@ -64,7 +68,8 @@ std::string capture_model_problem(const CaptureModel& model);
 std::vector<double> budgeted_led_electrons(const LedCode& code, double electrons, double cap);
 
 /// \brief Object displacement (pixels) at the L + 1 slot edges: blur_px in all,
-/// quadratic in the slot index when speed_ratio != 1 (motion_psf.hpp).
+/// quadratic in the slot index when speed_ratio != 1, plus the block offsets
+/// (motion_psf.hpp).
 std::vector<double> slot_edges(const CaptureModel& model);
 
 /// \brief Channel c's motion PSF along the motion, in e- per unit reflectance:

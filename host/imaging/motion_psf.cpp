@@ -80,4 +80,19 @@ std::vector<double> accelerating_slot_edges(int slots, double blur_px, double sp
   return edges;
 }
 
+void add_block_offsets(std::vector<double>& edges, std::span<const double> offsets) {
+  if (offsets.empty() || edges.size() < 2) return;
+  const double slots = static_cast<double>(edges.size() - 1);
+  const double blocks = static_cast<double>(offsets.size() + 1);
+  const auto offset_at = [&](std::size_t knot) {
+    return knot == 0 || knot > offsets.size() ? 0.0 : offsets[knot - 1];
+  };
+  for (std::size_t t = 0; t < edges.size(); ++t) {
+    const double position = static_cast<double>(t) / slots * blocks;  // in blocks
+    const auto knot = std::min(static_cast<std::size_t>(position), offsets.size());
+    const double f = position - static_cast<double>(knot);
+    edges[t] += (1 - f) * offset_at(knot) + f * offset_at(knot + 1);
+  }
+}
+
 }  // namespace flutterscan::imaging

@@ -42,4 +42,11 @@ std::size_t pixel_model_taps(double end_px, PixelModel model);
 /// speed, edges at t blur / L). The displacement of slot t is quadratic in t.
 std::vector<double> accelerating_slot_edges(int slots, double blur_px, double speed_ratio);
 
+/// \brief Adds a wandering displacement to the L + 1 slot `edges`: the exposure
+/// is split into offsets.size() + 1 blocks of equal time, the object is
+/// offsets[i] pixels further than `edges` say at the end of block i (0 at the
+/// exposure's start and end) and the offset changes linearly within a block: a
+/// belt whose speed changes from block to block (jitter) with the same travel.
+void add_block_offsets(std::vector<double>& edges, std::span<const double> offsets);
+
 }  // namespace flutterscan::imaging

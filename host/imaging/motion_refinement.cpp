@@ -29,6 +29,21 @@ constexpr double kAboveNoise = 1.05;
 constexpr double kAccelerationGain = 0.05;
 /// Speed ratios searched: exp(+-kLogRatioRange).
 constexpr double kLogRatioRange = 0.8;  // 0.45 .. 2.2
+/// The wandering motion: offsets at the knots of this many equal-time blocks (at
+/// 52 slots about 3 per block: a belt's per-slot jitter leaves about a quarter
+/// of its displacement error between the knots, and finer knots found local
+/// minima of the residual rather than the belt's motion), ...
+constexpr int kWanderBlocks = 16;
+/// ... the prior's spread of one slot's travel around the smooth motion's, in
+/// slots (twice the jitter the stability study's 0.2 point has), ...
+constexpr double kJitterPrior = 0.4;
+/// ... at most this many damped Gauss-Newton steps per level, the taps
+/// differenced over this much motion, ...
+constexpr int kWanderIterations = 60;
+constexpr double kJacobianStepPx = 1e-3;
+/// ... kept when it lowers the residual by this share (a clearer gain than the
+/// accelerating motion's: it has many more parameters).
+constexpr double kWanderingGain = 0.10;
 /// Rows are read in batches, the first of this many; ...
 constexpr int kFirstRows = 32;
 /// ... then as many as the standard error of the first says bring it below this
@@ -42,6 +57,52 @@ constexpr double kClearlyFlat = kMinimumSignificance / 4;
 
 double square(double v) {
   return v * v;
+}
+
+/// Solves m x = b in place (b becomes x) for a symmetric positive definite
+/// n x n matrix m (row-major; overwritten) by Cholesky; false if m is not
+/// positive definite.
+bool solve_positive_definite(std::vector<double>& m, std::vector<double>& b) {
+  const std::size_t n = b.size();
+  for (std::size_t j = 0; j < n; ++j) {
+    double diagonal = m[j * n + j];
+    for (std::size_t k = 0; k < j; ++k) diagonal -= square(m[j * n + k]);
+    if (!(diagonal > 0)) return false;
+    const double root = std::sqrt(diagonal);
+    m[j * n + j] = root;
+    for (std::size_t i = j + 1; i < n; ++i) {
+      double sum = m[i * n + j];
+      for (std::size_t k = 0; k < j; ++k) sum -= m[i * n + k] * m[j * n + k];
+      m[i * n + j] = sum / root;
+    }
+  }
+  for (std::size_t i = 0; i < n; ++i) {  // L y = b
+    for (std::size_t k = 0; k < i; ++k) b[i] -= m[i * n + k] * b[k];
+    b[i] /= m[i * n + i];
+  }
+  for (std::size_t i = n; i-- > 0;) {  // L' x = y
+    for (std::size_t k = i + 1; k < n; ++k) b[i] -= m[k * n + i] * b[k];
+    b[i] /= m[i * n + i];
+  }
+  return true;
+}
+
+/// `theta` (a blur, then block offsets at the knots between equal-time blocks,
+/// 0 at both ends) with its offsets resampled at the knots of `blocks` blocks:
+/// the same piecewise-linear displacement, read at other knots.
+std::vector<double> resampled(const std::vector<double>& theta, int blocks) {
+  const std::size_t old_knots = theta.size() - 1;
+  const auto offset_at = [&](std::size_t knot) {  // 0 at both ends
+    return knot == 0 || knot > old_knots ? 0.0 : theta[knot];
+  };
+  std::vector<double> out = {theta[0]};
+  for (int i = 1; i < blocks; ++i) {
+    const double position = static_cast<double>(i) / blocks * static_cast<double>(old_knots + 1);
+    const auto knot = static_cast<std::size_t>(position);
+    const double f = position - static_cast<double>(knot);
+    out.push_back((1 - f) * offset_at(knot) + f * offset_at(knot + 1));
+  }
+  return out;
 }
 
 /// One differenced motion row per channel, all of one length.
@@ -206,33 +267,21 @@ class ResidualForms {
   Sum operator()(const std::vector<std::vector<double>>& taps, const std::vector<double>& variances,
                  int block) const {
     const auto p = static_cast<std::size_t>(taps_);
-    // |difference of h|^2: the noise of a differenced residual; and the taps up
-    // to the last one that is not 0 (shorter blurs than the longest searched).
-    std::array<double, kMaxChannels> power{};
-    std::array<std::size_t, kMaxChannels> support{};
-    for (std::size_t c = 0; c < taps.size(); ++c) {
-      double sum = 0, previous = 0;
-      for (std::size_t i = 0; i < p; ++i) {
-        sum += square(taps[c][i] - previous);
-        previous = taps[c][i];
-        if (previous != 0) support[c] = i + 1;
-      }
-      power[c] = sum + square(previous);
-    }
+    const auto shape = tap_shape(taps);
     Sum total;
     const auto k = static_cast<std::size_t>(block < 0 ? kBlocks : block);  // totals after blocks
     const auto rows = static_cast<std::size_t>(rows_in_block_[k]);
     for (int c = 0; c < channels_; ++c)
       for (int d = c + 1; d < channels_; ++d) {
         const auto uc = static_cast<std::size_t>(c), ud = static_cast<std::size_t>(d);
-        const double variance = variances[uc] * power[ud] + variances[ud] * power[uc];
+        const double variance = pair_variance(shape, variances, uc, ud);
         if (!(variance > 0)) continue;
         const auto& g_cc = gram_[k * pairs() + pair_index(c, c)];
         const auto& g_dd = gram_[k * pairs() + pair_index(d, d)];
         const auto& g_cd = gram_[k * pairs() + pair_index(c, d)];
         const auto& hc = taps[uc];
         const auto& hd = taps[ud];
-        const std::size_t sc = support[uc], sd = support[ud];
+        const std::size_t sc = shape.support[uc], sd = shape.support[ud];
         const double energy = form(hd, sd, g_cc, hd, sd, p) + form(hc, sc, g_dd, hc, sc, p) -
                               2 * form(hd, sd, g_cd, hc, sc, p);
         total.value += energy / variance;
@@ -241,7 +290,70 @@ class ResidualForms {
     return total;
   }
 
+  /// The matrix A of the residual over every row as a quadratic form h' A h of
+  /// all channels' taps stacked (channel c's tap i at c * taps + i; row-major),
+  /// with the pairs' weights 1 / var(e) taken at `taps`.
+  std::vector<double> hessian(const std::vector<std::vector<double>>& taps,
+                              const std::vector<double>& variances) const {
+    const auto p = static_cast<std::size_t>(taps_);
+    const std::size_t n = p * static_cast<std::size_t>(channels_);
+    const auto shape = tap_shape(taps);
+    std::vector<double> a(n * n, 0.0);
+    const auto add = [&](std::size_t row_channel, std::size_t column_channel,
+                         const std::vector<double>& g, double weight, bool transposed) {
+      for (std::size_t i = 0; i < p; ++i)
+        for (std::size_t j = 0; j < p; ++j)
+          a[(row_channel * p + i) * n + column_channel * p + j] +=
+              weight * (transposed ? g[j * p + i] : g[i * p + j]);
+    };
+    for (int c = 0; c < channels_; ++c)
+      for (int d = c + 1; d < channels_; ++d) {
+        const auto uc = static_cast<std::size_t>(c), ud = static_cast<std::size_t>(d);
+        const double variance = pair_variance(shape, variances, uc, ud);
+        if (!(variance > 0)) continue;
+        const double w = 1 / variance;
+        // h_d' G_cc h_d + h_c' G_dd h_c - 2 h_d' G_cd h_c
+        add(ud, ud, total_gram(c, c), w, false);
+        add(uc, uc, total_gram(d, d), w, false);
+        add(ud, uc, total_gram(c, d), -w, false);
+        add(uc, ud, total_gram(c, d), -w, true);
+      }
+    return a;
+  }
+
  private:
+  /// Per channel: |difference of h|^2 (the noise of a differenced residual) and
+  /// the taps up to the last one that is not 0 (shorter blurs than the longest searched).
+  struct TapShape {
+    std::array<double, kMaxChannels> power{};
+    std::array<std::size_t, kMaxChannels> support{};
+  };
+
+  TapShape tap_shape(const std::vector<std::vector<double>>& taps) const {
+    const auto p = static_cast<std::size_t>(taps_);
+    TapShape shape;
+    for (std::size_t c = 0; c < taps.size(); ++c) {
+      double sum = 0, previous = 0;
+      for (std::size_t i = 0; i < p; ++i) {
+        sum += square(taps[c][i] - previous);
+        previous = taps[c][i];
+        if (previous != 0) shape.support[c] = i + 1;
+      }
+      shape.power[c] = sum + square(previous);
+    }
+    return shape;
+  }
+
+  /// var(e_cd) per differenced sample.
+  static double pair_variance(const TapShape& shape, const std::vector<double>& variances,
+                              std::size_t c, std::size_t d) {
+    return variances[c] * shape.power[d] + variances[d] * shape.power[c];
+  }
+
+  const std::vector<double>& total_gram(int a, int b) const {
+    return gram_[kBlocks * pairs() + pair_index(a, b)];
+  }
+
   std::size_t pairs() const {
     return static_cast<std::size_t>(channels_ * (channels_ + 1) / 2);
   }
@@ -318,20 +430,55 @@ class ResidualForms {
   std::vector<int> rows_in_block_;  ///< kBlocks + 1 entries, the last all rows
 };
 
+/// The blurs the tolerance allows around a given one, and those searched.
+struct BlurRange {
+  /// The encoder's blur b within the tolerance t of the true one, either way
+  /// the tolerance is read (of b or of the truth): b (1 - t) .. b / (1 - t).
+  double lo = 0, hi = 0;
+  /// Two slots wider (a truth on the tolerance's edge is found, not clipped).
+  double search_lo = 0, search_hi = 0;
+};
+
+BlurRange blur_range(const CaptureModel& model, double tolerance) {
+  const double b = model.blur_px;
+  BlurRange r{b * (1 - tolerance), b / (1 - tolerance), 0, 0};
+  const double margin = tolerance > 0 ? 2 * b / model.code.length() : 0;
+  r.search_lo = std::max(r.lo - margin, r.lo / 2);
+  r.search_hi = r.hi + margin;
+  return r;
+}
+
+/// A candidate motion: total travel, end / start speed, block offsets (capture_model.hpp).
+struct Motion {
+  double blur = 0;
+  double ratio = 1;
+  std::vector<double> offsets;
+};
+
 /// The search over the motion on the rows `forms` holds (refine_motion()'s
 /// steps after reading the rows): blur_px within [lo, hi] at constant speed,
-/// the accelerating motion when the residual asks for it, and the standard error.
+/// the accelerating motion when the residual asks for it, and the standard
+/// error; then, on the last rows only, the wandering motion (wander()).
 class MotionSearch {
  public:
   MotionSearch(const ResidualForms& forms, const std::vector<double>& variances,
-               const CaptureModel& model, double lo, double hi, int taps)
-      : forms_(forms), variances_(variances), model_(model), lo_(lo), hi_(hi), taps_(taps) {}
+               const CaptureModel& model, const BlurRange& range, int taps)
+      : forms_(forms),
+        variances_(variances),
+        model_(model),
+        range_(range),
+        lo_(range.search_lo),
+        hi_(range.search_hi),
+        taps_(taps) {}
 
   MotionRefinement run(const MotionRefinementOptions& options) const {
     MotionRefinement out;
     out.rows_used = forms_.rows();
     out.blur_px = model_.blur_px;
     out.speed_ratio = model_.speed_ratio;
+    // Offsets the model already has (a descriptor's) stay as they are in this search.
+    const std::vector<double>& given = model_.block_offsets_px;
+    out.block_offsets_px = given;
     const double slot = model_.blur_px / model_.code.length();
     const double start_ratio = model_.speed_ratio;
 
@@ -344,15 +491,15 @@ class MotionSearch {
       const double step = std::max(0.02, slot);
       double best_cost = INFINITY;
       for (double b = lo_; b <= hi_ + 1e-9; b += step) {
-        const double c = mean(b, start_ratio);
+        const double c = mean({b, start_ratio, given});
         grid.push_back(c);
         if (c < best_cost) best_cost = c, best = b;
       }
-      best =
-          golden_minimum([&](double b) { return mean(b, start_ratio); }, std::max(lo_, best - step),
-                         std::min(hi_, best + step), 0.005 * std::max(1.0, slot));
+      best = golden_minimum([&](double b) { return mean({b, start_ratio, given}); },
+                            std::max(lo_, best - step), std::min(hi_, best + step),
+                            0.005 * std::max(1.0, slot));
     }
-    out.constant_speed_residual = mean(best, start_ratio);
+    out.constant_speed_residual = mean({best, start_ratio, given});
     out.residual_per_sample = out.constant_speed_residual;
     if (grid.empty()) return out;  // tolerance 0: the given motion, checked
     std::nth_element(grid.begin(), grid.begin() + static_cast<std::ptrdiff_t>(grid.size() / 2),
@@ -364,19 +511,20 @@ class MotionSearch {
     if (options.speed_change && out.contrast > 0 && out.constant_speed_residual > kAboveNoise) {
       double log_ratio = 0, best_cost = INFINITY;
       for (double x = -kLogRatioRange; x <= kLogRatioRange + 1e-9; x += 0.1) {
-        const double c = mean(best, std::exp(x));
+        const double c = mean({best, std::exp(x), given});
         if (c < best_cost) best_cost = c, log_ratio = x;
       }
       double blur = best;
       for (int pass = 0; pass < 2; ++pass) {
         const double r = std::exp(log_ratio);
-        blur = golden_minimum([&](double b) { return mean(b, r); }, std::max(lo_, blur - 2 * slot),
-                              std::min(hi_, blur + 2 * slot), 0.005 * std::max(1.0, slot));
-        log_ratio = golden_minimum([&](double x) { return mean(blur, std::exp(x)); },
+        blur = golden_minimum([&](double b) { return mean({b, r, given}); },
+                              std::max(lo_, blur - 2 * slot), std::min(hi_, blur + 2 * slot),
+                              0.005 * std::max(1.0, slot));
+        log_ratio = golden_minimum([&](double x) { return mean({blur, std::exp(x), given}); },
                                    std::max(-kLogRatioRange, log_ratio - 0.15),
                                    std::min(kLogRatioRange, log_ratio + 0.15), 0.002);
       }
-      const double accelerating = mean(blur, std::exp(log_ratio));
+      const double accelerating = mean({blur, std::exp(log_ratio), given});
       if (accelerating < out.constant_speed_residual * (1 - kAccelerationGain)) {
         out.accelerating = true;
         best = blur;
@@ -385,12 +533,198 @@ class MotionSearch {
       }
     }
 
-    // Sandwich standard error of the blur over the blocks of rows.
+    // Edges: the best blur explains the frame better than a typical one by far
+    // more than noise could (the residual's spread over the samples is about
+    // sqrt(2 / samples) per sample), and the residual curves up around it.
+    const Motion motion{best, ratio, given};
+    const double samples = static_cast<double>(forms_(taps_of(motion), variances_, -1).samples);
+    out.significance = out.contrast * out.constant_speed_residual * std::sqrt(samples / 2);
+    const double error = standard_error(motion);
+    out.edges = out.significance >= kMinimumSignificance && std::isfinite(error);
+    out.standard_error_px = out.edges ? error : std::numeric_limits<double>::infinity();
+    if (!out.edges) {
+      out.accelerating = false;
+      out.residual_per_sample = out.constant_speed_residual;
+      return out;
+    }
+    out.blur_px = best;
+    out.speed_ratio = ratio;
+    mark_range_edge(out);
+    return out;
+  }
+
+  /// The wandering motion (an offset at every slot edge on top of `out`'s
+  /// motion: belt jitter), fitted when `out` leaves a residual above the noise
+  /// on a frame with edges and kept when it explains the frame clearly better.
+  /// Levenberg-Marquardt over the blur and the offsets, the residual being a
+  /// quadratic form in the taps (ResidualForms::hessian) and the taps nearly
+  /// linear in the motion; a prior holds each slot's travel near the smooth
+  /// motion's (the directions the frame barely constrains stay put).
+  void wander(MotionRefinement& out) const {
+    if (!out.edges || out.residual_per_sample <= kAboveNoise) return;
+    const int slots = model_.code.length();
+    const double slot = out.blur_px / slots;
+    std::vector<double> theta = {out.blur_px};  // the blur, then the offsets
+    theta.insert(theta.end(), out.block_offsets_px.begin(), out.block_offsets_px.end());
+    const auto motion_of = [&](const std::vector<double>& t) {
+      return Motion{t[0], out.speed_ratio, std::vector<double>(t.begin() + 1, t.end())};
+    };
+    // Coarse to fine (fewer knots first: the residual has fewer local minima
+    // there), each level starting from the last one's motion.
+    for (const int blocks : {4, 8, kWanderBlocks}) {
+      if (blocks > slots) continue;
+      theta = resampled(theta, blocks);
+      // A block's travel off the smooth motion's (the differences of the offsets,
+      // 0 at both ends) spreads as a random walk over its slots.
+      const double prior_weight =
+          1 / (square(kJitterPrior * slot) * static_cast<double>(slots) / blocks);
+      const auto prior = [&](const std::vector<double>& t) {
+        double sum = 0, previous = 0;
+        for (std::size_t k = 1; k < t.size(); ++k) sum += square(t[k] - previous), previous = t[k];
+        return 0.5 * prior_weight * (sum + square(previous));
+      };
+      const auto objective = [&](const std::vector<double>& t) {
+        if (t[0] < lo_ || t[0] > hi_) return std::numeric_limits<double>::infinity();
+        const auto taps = taps_of(motion_of(t));
+        if (taps.empty()) return std::numeric_limits<double>::infinity();
+        return 0.5 * forms_(taps, variances_, -1).value + prior(t);
+      };
+      double cost = objective(theta);
+      // Coarse levels: each knot searched on a grid first (the residual along one
+      // knot has minima about a slot apart; a Gauss-Newton step finds the nearest).
+      if (blocks <= 8) {
+        const double reach = (blocks <= 4 ? 1.5 : 0.75) * std::max(1.0, slot);
+        const double step = reach / 6;
+        for (int sweep = 0; sweep < 2; ++sweep)
+          for (std::size_t k = 1; k < theta.size(); ++k) {
+            const double centre = theta[k];
+            const auto at = [&](double v) {
+              auto t = theta;
+              t[k] = v;
+              return objective(t);
+            };
+            double best = centre;
+            for (double v = centre - reach; v <= centre + reach + 1e-9; v += step)
+              if (const double c = at(v); c < cost) cost = c, best = v;
+            theta[k] = best;
+          }
+      }
+      double damping = 1e-3;
+      for (int iteration = 0; iteration < kWanderIterations; ++iteration) {
+        const auto step = levenberg_marquardt_step(theta, motion_of, prior_weight, damping);
+        if (step.empty()) break;
+        // (A step that would move a slot backwards costs infinity: more damping.)
+        std::vector<double> next = theta;
+        for (std::size_t k = 0; k < theta.size(); ++k) next[k] += step[k];
+        const double next_cost = objective(next);
+
+        if (next_cost < cost) {
+          const bool converged = cost - next_cost < 1e-5 * cost;
+          theta = std::move(next);
+          cost = next_cost;
+          damping /= 3;
+          if (converged) break;
+        } else {
+          damping *= 4;
+        }
+      }
+    }
+    const Motion motion = motion_of(theta);
+    const double residual = mean(motion);
+    if (!(residual < out.residual_per_sample * (1 - kWanderingGain))) return;
+    const double error = standard_error(motion);
+    if (!std::isfinite(error)) return;
+    out.wandering = true;
+    out.blur_px = motion.blur;
+    out.block_offsets_px = motion.offsets;
+    out.residual_per_sample = residual;
+    out.standard_error_px = error;
+    mark_range_edge(out);
+  }
+
+ private:
+  /// One damped Gauss-Newton step of wander()'s objective at `theta` (empty if
+  /// the normal equations cannot be solved): the taps' Jacobian by forward
+  /// differences, J' A J and J' A h from the residual's matrix A, the prior's
+  /// tridiagonal terms on the offsets.
+  template <typename MotionOf>
+  std::vector<double> levenberg_marquardt_step(const std::vector<double>& theta,
+                                               const MotionOf& motion_of, double prior_weight,
+                                               double damping) const {
+    const std::size_t n = theta.size();
+    const auto h = taps_of(motion_of(theta));
+    if (h.empty()) return {};
+    const std::size_t p = static_cast<std::size_t>(taps_), rows = p * h.size();
+    const auto a = forms_.hessian(h, variances_);
+    std::vector<double> stacked(rows);
+    for (std::size_t c = 0; c < h.size(); ++c)
+      std::copy(h[c].begin(), h[c].end(), stacked.begin() + static_cast<std::ptrdiff_t>(c * p));
+    // Columns of the Jacobian, each as its non-zero entries.
+    std::vector<std::vector<std::pair<std::size_t, double>>> jacobian(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      double delta = kJacobianStepPx;
+      std::vector<double> moved = theta;
+      moved[k] += delta;
+      auto shifted = taps_of(motion_of(moved));
+      if (shifted.empty()) {  // a slot would go backwards: difference the other way
+        delta = -delta;
+        moved[k] = theta[k] + delta;
+        shifted = taps_of(motion_of(moved));
+        if (shifted.empty()) continue;
+      }
+      for (std::size_t c = 0; c < h.size(); ++c)
+        for (std::size_t i = 0; i < p; ++i)
+          if (const double d = shifted[c][i] - h[c][i]; d != 0)
+            jacobian[k].emplace_back(c * p + i, d / delta);
+    }
+    // A J (dense columns) and A h.
+    std::vector<double> aj(rows * n, 0.0), ah(rows, 0.0);
+    for (std::size_t r = 0; r < rows; ++r) {
+      const double* row = a.data() + r * rows;
+      double sum = 0;
+      for (std::size_t i = 0; i < rows; ++i) sum += row[i] * stacked[i];
+      ah[r] = sum;
+      for (std::size_t k = 0; k < n; ++k) {
+        double column = 0;
+        for (const auto& [i, v] : jacobian[k]) column += row[i] * v;
+        aj[k * rows + r] = column;
+      }
+    }
+    std::vector<double> normal(n * n, 0.0), gradient(n, 0.0);
+    for (std::size_t k = 0; k < n; ++k) {
+      for (const auto& [i, v] : jacobian[k]) gradient[k] += v * ah[i];
+      for (std::size_t l = 0; l <= k; ++l) {
+        double sum = 0;
+        for (const auto& [i, v] : jacobian[k]) sum += v * aj[l * rows + i];
+        normal[k * n + l] = normal[l * n + k] = sum;
+      }
+    }
+    // The prior 0.5 w sum (o_k - o_{k-1})^2 over the offsets (indices 1..n-1, 0 at both ends).
+    for (std::size_t k = 1; k < n; ++k) {
+      const double before = k > 1 ? theta[k - 1] : 0, after = k + 1 < n ? theta[k + 1] : 0;
+      gradient[k] += prior_weight * (2 * theta[k] - before - after);
+      normal[k * n + k] += 2 * prior_weight;
+      if (k > 1) normal[k * n + k - 1] -= prior_weight, normal[(k - 1) * n + k] -= prior_weight;
+    }
+    for (std::size_t k = 0; k < n; ++k) normal[k * n + k] *= 1 + damping;
+    for (double& g : gradient) g = -g;
+    if (!solve_positive_definite(normal, gradient)) return {};
+    return gradient;
+  }
+
+  /// Sandwich standard error of the blur over the blocks of rows (infinite where
+  /// the residual does not curve up around `motion`).
+  double standard_error(const Motion& motion) const {
+    const double slot = model_.blur_px / model_.code.length();
     const double h = std::max(0.02, 0.1 * slot);
-    const double below = std::max(lo_, best - h), above = std::min(hi_, best + h);
-    const auto taps_below = taps_of(below, ratio), taps_above = taps_of(above, ratio);
+    const double below = std::max(lo_, motion.blur - h), above = std::min(hi_, motion.blur + h);
+    const auto taps_below = taps_of({below, motion.ratio, motion.offsets});
+    const auto taps_above = taps_of({above, motion.ratio, motion.offsets});
+    const auto taps = taps_of(motion);
+    if (taps_below.empty() || taps_above.empty() || taps.empty())  // a slot would go backwards
+      return std::numeric_limits<double>::infinity();
     // The blocks' residuals sum to the whole: the curvature needs the whole only.
-    const auto whole = forms_(taps_of(best, ratio), variances_, -1);
+    const auto whole = forms_(taps, variances_, -1);
     double gradient_variance = 0, sum_below = 0, sum_above = 0;
     for (int k = 0; k < kBlocks; ++k) {
       const double fb = forms_(taps_below, variances_, k).value,
@@ -401,53 +735,57 @@ class MotionSearch {
     }
     const double half = (above - below) / 2;
     const double curvature = (sum_above - 2 * whole.value + sum_below) / (half * half);
-    // Edges: the best blur explains the frame better than a typical one by far
-    // more than noise could (the residual's spread over the samples is about
-    // sqrt(2 / samples) per sample), and the residual curves up around it.
-    const double samples = static_cast<double>(whole.samples);
-    out.significance = out.contrast * out.constant_speed_residual * std::sqrt(samples / 2);
-    out.edges = out.significance >= kMinimumSignificance && curvature > 0;
-    out.standard_error_px = out.edges ? std::sqrt(gradient_variance) / curvature
-                                      : std::numeric_limits<double>::infinity();
-    if (!out.edges) {
-      out.accelerating = false;
-      out.residual_per_sample = out.constant_speed_residual;
-      return out;
-    }
-    out.blur_px = best;
-    out.speed_ratio = ratio;
-    const double edge_margin = std::max(0.02, slot / 4);
-    out.at_range_edge = best - lo_ < edge_margin || hi_ - best < edge_margin;
-    return out;
+    return curvature > 0 ? std::sqrt(gradient_variance) / curvature
+                         : std::numeric_limits<double>::infinity();
   }
 
- private:
-  /// Each channel's PSF taps for the motion (blur, end / start speed ratio).
-  std::vector<std::vector<double>> taps_of(double blur, double ratio) const {
+  /// Whether the encoder's blur is off by more than the tolerance (the refined
+  /// blur outside range_, beyond 3 standard errors) or the search's best blur
+  /// lies on its edge (the best may lie beyond it).
+  void mark_range_edge(MotionRefinement& out) const {
+    const double slot = model_.blur_px / model_.code.length();
+    const double edge_margin = std::max(0.02, slot / 4);
+    const double grace = 3 * out.standard_error_px;
+    out.outside_tolerance = out.blur_px < range_.lo - grace || out.blur_px > range_.hi + grace ||
+                            out.blur_px - lo_ < edge_margin || hi_ - out.blur_px < edge_margin;
+  }
+
+  /// Each channel's PSF taps for `motion`; empty when its offsets would move
+  /// the object backwards.
+  std::vector<std::vector<double>> taps_of(const Motion& motion) const {
     CaptureModel m = model_;
-    m.blur_px = std::clamp(blur, lo_, hi_);
-    m.speed_ratio = ratio;
-    auto out = timeline_channel_psfs(m, slot_segments(m));
+    m.blur_px = std::clamp(motion.blur, lo_, hi_);
+    m.speed_ratio = motion.ratio;
+    m.block_offsets_px = motion.offsets;
+    const auto edges = slot_edges(m);
+    for (std::size_t t = 1; t < edges.size(); ++t)
+      if (edges[t] < edges[t - 1]) return {};
+    auto out = timeline_channel_psfs(m, segments_from_boundaries(m.code, edges));
     for (auto& t : out) t.resize(static_cast<std::size_t>(taps_), 0.0);
     return out;
   }
 
-  /// The residual per sample of the motion over every row.
-  double mean(double blur, double ratio) const {
-    return forms_(taps_of(blur, ratio), variances_, -1).mean();
+  /// The residual per sample of `motion` over every row (infinite for a motion
+  /// that moves backwards).
+  double mean(const Motion& motion) const {
+    const auto taps = taps_of(motion);
+    if (taps.empty()) return std::numeric_limits<double>::infinity();
+    return forms_(taps, variances_, -1).mean();
   }
 
   const ResidualForms& forms_;
   const std::vector<double>& variances_;
   const CaptureModel& model_;
-  double lo_, hi_;
+  BlurRange range_;
+  double lo_, hi_;  ///< the blurs searched
   int taps_;
 };
 
 }  // namespace
 
 bool refinement_fits(const CaptureModel& model, double tolerance, int along) {
-  const double hi = model.blur_px * (1 + tolerance);
+  if (!(tolerance >= 0 && tolerance < kMaxBlurTolerance)) return false;
+  const double hi = blur_range(model, tolerance).search_hi;
   if (!(hi >= 0 && hi < along)) return false;  // also: not a number
   // Differenced rows are one shorter than the frame.
   return 2 * static_cast<double>(pixel_model_taps(hi, model.pixel_model)) + 1 <= along;
@@ -470,8 +808,8 @@ Result<MotionRefinement, std::string> refine_motion(const MotionFrame& frame,
     return Out::failure(
         "every channel sees the same code, so the frame carries no motion information this way: "
         "refining the motion needs a multi-LED code such as a one-of-3 triplet");
-  const double lo = model.blur_px * (1 - options.tolerance);
-  const double hi = model.blur_px * (1 + options.tolerance);
+  const BlurRange range = blur_range(model, options.tolerance);
+  const double hi = range.search_hi;
   if (!refinement_fits(model, options.tolerance, frame.along()))
     return Out::failure("the largest blur searched (" + std::to_string(hi) +
                         " px) does not fit the frame along the motion (" +
@@ -529,10 +867,14 @@ Result<MotionRefinement, std::string> refine_motion(const MotionFrame& frame,
     for (std::size_t c = 0; c < sums.size(); ++c)
       variances[c] =
           channel_noise_variance(model, std::max(0.0, sums[c] / static_cast<double>(rows.size())));
-    out = MotionSearch(forms, variances, model, lo, hi, taps).run(options);
+    const MotionSearch search(forms, variances, model, range, taps);
+    out = search.run(options);
     const bool precise = out.edges && out.standard_error_px <= kEnoughPrecisionPx;
     const bool flat = !out.edges && out.significance < kClearlyFlat;
-    if (rows.size() == chosen.size() || precise || flat || options.tolerance == 0) break;
+    if (rows.size() == chosen.size() || precise || flat || options.tolerance == 0) {
+      if (options.speed_change && options.tolerance > 0) search.wander(out);
+      break;
+    }
     // The rows that bring the error below kEnoughPrecisionPx (a fifth more, whole
     // blocks), at least twice as many when the frame gave no error yet.
     const double wanted = out.edges ? 1.2 * static_cast<double>(rows.size()) *
@@ -542,6 +884,17 @@ Result<MotionRefinement, std::string> refine_motion(const MotionFrame& frame,
     batch = std::min(chosen.size(), std::max(rows.size() + kBlocks, blocks * kBlocks));
   }
   return Out::success(out);
+}
+
+bool refinement_usable(const MotionRefinement& r) {
+  return r.edges && !r.outside_tolerance && r.residual_per_sample <= kUnfitMotionResidual;
+}
+
+CaptureModel with_refined_motion(CaptureModel model, const MotionRefinement& refinement) {
+  model.blur_px = refinement.blur_px;
+  model.speed_ratio = refinement.speed_ratio;
+  model.block_offsets_px = refinement.block_offsets_px;
+  return model;
 }
 
 }  // namespace flutterscan::imaging

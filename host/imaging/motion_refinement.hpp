@@ -25,11 +25,15 @@
 // after the first batch, and a bright label reads a quarter of the rows. A grid and golden section
 // over blur_px within the tolerance find the constant-speed motion; when its residual stays above
 // the noise, a two-parameter motion (blur and the end / start speed ratio, constant acceleration)
-// is fitted as well and kept only if it explains the frame clearly better. Standard errors are
+// is fitted as well and kept only if it explains the frame clearly better; when even that leaves
+// the residual above the noise, a speed that wanders from block to block of the exposure (block
+// offsets at 7 knots, capture_model.hpp: belt jitter) is fitted on the last batch of rows and
+// kept on the same terms, with a clearer gain. Standard errors are
 // sandwich estimates over blocks of rows; a frame whose residual hardly depends on the blur (no
 // edges along the motion) gets none and keeps the given motion.
 
 #include <string>
+#include <vector>
 
 #include "flutterscan/common/result.hpp"
 #include "imaging/capture_model.hpp"
@@ -41,20 +45,30 @@ namespace flutterscan::imaging {
 inline constexpr double kMaxBlurTolerance = 1.0;
 
 struct MotionRefinementOptions {
-  double tolerance = 0.10;   ///< search blur_px (1 +- tolerance); 0 <= tolerance < 1
+  /// The given blur b is taken as within this share of the true one, either
+  /// way it is read: the truth within b (1 - tolerance) .. b / (1 - tolerance)
+  /// (searched two slots wider); 0 <= tolerance < 1.
+  double tolerance = 0.10;
   int rows = 128;            ///< most rows along the motion to use (the most edgy ones)
-  bool speed_change = true;  ///< try the two-parameter (accelerating) motion
+  /// Try the two-parameter (accelerating) motion, and then the wandering one.
+  bool speed_change = true;
 };
 
 struct MotionRefinement {
   double blur_px = 0;            ///< refined (the given value when !edges)
   double standard_error_px = 0;  ///< sandwich over row blocks; infinite when !edges
   double speed_ratio = 1;        ///< end / start speed; 1 unless `accelerating`
+  /// Block offsets (CaptureModel::block_offsets_px) on top of that; empty unless `wandering`.
+  std::vector<double> block_offsets_px;
   /// Whether the frame constrained the motion: edges along it (a residual that
   /// depends on the blur) and a finite standard error.
   bool edges = false;
   bool accelerating = false;   ///< the two-parameter motion explained the frame better
-  bool at_range_edge = false;  ///< the best blur lies on the edge of the tolerance
+  bool wandering = false;      ///< the block offsets explained it better still
+  /// The encoder's blur is off by more than the tolerance: the refined blur lies
+  /// outside given (1 - tolerance) .. given / (1 - tolerance) by more than 3
+  /// standard errors, or on the edge of the (two slots wider) search.
+  bool outside_tolerance = false;
   double contrast = 0;         ///< median residual over the searched blurs / the best one - 1
   /// How far the best blur stands out: (median - best residual) over the noise
   /// of the residual; edges need 20 or more (a flat frame gives a few).
@@ -64,8 +78,8 @@ struct MotionRefinement {
   int rows_used = 0;
 };
 
-/// \brief Whether refine_motion() can search `model.blur_px` (1 +- tolerance)
-/// on a frame `along` pixels long along the motion: the longest PSF searched
+/// \brief Whether refine_motion() can search around `model.blur_px` with
+/// `tolerance` on a frame `along` pixels long along the motion: the longest PSF searched
 /// must leave at least as many valid samples as it has taps.
 bool refinement_fits(const CaptureModel& model, double tolerance, int along);
 
@@ -77,5 +91,17 @@ bool refinement_fits(const CaptureModel& model, double tolerance, int along);
 Result<MotionRefinement, std::string> refine_motion(const MotionFrame& frame,
                                                     const CaptureModel& model,
                                                     const MotionRefinementOptions& options);
+
+/// \brief Above this residual per sample (about 1 when the grey model fits) a
+/// refined motion is not trusted: colour print, or no model fits.
+inline constexpr double kUnfitMotionResidual = 3.0;
+
+/// \brief Whether a deblur should take the refined motion: the frame has edges
+/// along the motion, the blur is within the tolerance and the model fits
+/// (residual <= kUnfitMotionResidual).
+bool refinement_usable(const MotionRefinement& refinement);
+
+/// \brief `model` with the motion `refinement` found (blur, speed ratio, block offsets).
+CaptureModel with_refined_motion(CaptureModel model, const MotionRefinement& refinement);
 
 }  // namespace flutterscan::imaging

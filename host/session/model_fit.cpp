@@ -21,10 +21,6 @@ double lap_ms(std::chrono::steady_clock::time_point& since) {
   return rounded(ms, 2);
 }
 
-/// Above this cross-channel residual per sample (about 1 when the grey model
-/// fits) a refined motion is not trusted: colour print, or no model fits.
-constexpr double kUnfitResidual = 3.0;
-
 /// Refines the encoder's motion on the frame (ModelFitConfig::blur_tolerance):
 /// `model` takes the refined motion when the frame has edges along it and the
 /// result is neither on the tolerance's edge nor unfit (then flagged).
@@ -45,17 +41,21 @@ void refine_encoder_motion(const imaging::MotionFrame& frame, imaging::CaptureMo
     log["refined_blur_px"] = rounded(m.blur_px, 3);
     log["standard_error_px"] = rounded(m.standard_error_px, 3);
     if (m.accelerating) log["speed_ratio"] = rounded(m.speed_ratio, 3);
+    if (m.wandering) {
+      nlohmann::json offsets = nlohmann::json::array();
+      for (double v : m.block_offsets_px) offsets.push_back(rounded(v, 2));
+      log["block_offsets_px"] = std::move(offsets);
+    }
   }
   out.refinement = m;
-  if (m.edges && m.at_range_edge) {
+  if (m.edges && m.outside_tolerance) {
     out.flags.emplace_back("blur-off-encoder");
     log["used"] = false;
-  } else if (m.edges && m.residual_per_sample > kUnfitResidual) {
+  } else if (m.edges && m.residual_per_sample > imaging::kUnfitMotionResidual) {
     out.flags.emplace_back("motion-unfit");
     log["used"] = false;
   } else if (m.edges) {
-    model.blur_px = m.blur_px;
-    model.speed_ratio = m.speed_ratio;
+    model = imaging::with_refined_motion(std::move(model), m);
     out.refinement_used = true;
     log["used"] = true;
   } else {

@@ -145,6 +145,7 @@ TEST(CaptureDescriptor, RoundTrips) {
   m.crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
   m.encoding = Encoding::kSrgb;
   m.black_level = 64;
+  m.block_offsets_px = {0.25, -0.5, 0.125};
   const auto back = from_descriptor(to_descriptor(m));
   ASSERT_TRUE(back.ok()) << back.error();
   EXPECT_EQ(back.value().code, m.code);
@@ -153,7 +154,9 @@ TEST(CaptureDescriptor, RoundTrips) {
   EXPECT_EQ(back.value().blur_px, 37.5);
   EXPECT_EQ(back.value().encoding, Encoding::kSrgb);
   EXPECT_EQ(back.value().black_level, 64);
+  EXPECT_EQ(back.value().block_offsets_px, m.block_offsets_px);
   EXPECT_EQ(to_descriptor(back.value()), to_descriptor(m));
+  EXPECT_FALSE(to_descriptor(seed_capture(52)).contains("block_offsets_px"));  // none: not written
 }
 
 TEST(CaptureDescriptor, BadFieldsAreNamed) {
@@ -172,6 +175,11 @@ TEST(CaptureDescriptor, BadFieldsAreNamed) {
   d = to_descriptor(seed_capture(52));
   d["crosstalk"][1] = {1, 2};
   EXPECT_NE(from_descriptor(d).error().find("row 1"), std::string::npos);
+  d = to_descriptor(seed_capture(52));
+  d["block_offsets_px"] = {0.5, "x"};
+  EXPECT_NE(from_descriptor(d).error().find("block_offsets_px"), std::string::npos);
+  d["block_offsets_px"] = {0.5, 1e9};
+  EXPECT_NE(from_descriptor(d).error().find("backwards"), std::string::npos);
   EXPECT_FALSE(from_descriptor(nlohmann::json::array()).ok());
 }
 

@@ -107,6 +107,47 @@ TEST(MotionPsf, ChannelPsfKeepsTheWhiteLevelWhateverTheMotion) {
       }
 }
 
+TEST(MotionPsf, BlockOffsetsMoveTheKnotsAndKeepTheTravel) {
+  // 52 slots in 4 blocks: knots at slots 13, 26 and 39, linear between, 0 at the ends.
+  auto edges = accelerating_slot_edges(52, 52, 1.0);
+  const std::vector<double> offsets = {0.8, -0.4, 0.2};
+  add_block_offsets(edges, offsets);
+  EXPECT_NEAR(edges[0], 0, 1e-12);
+  EXPECT_NEAR(edges[52], 52, 1e-12);
+  EXPECT_NEAR(edges[13], 13.8, 1e-12);
+  EXPECT_NEAR(edges[26], 25.6, 1e-12);
+  EXPECT_NEAR(edges[39], 39.2, 1e-12);
+  EXPECT_NEAR(edges[20], 20 + 0.8 + (7.0 / 13) * (-0.4 - 0.8), 1e-12);  // within block 1
+  EXPECT_NEAR(edges[45], 45 + 0.2 * (7.0 / 13), 1e-12);                 // the last block
+  // One offset per interior edge: each edge moved by its own offset.
+  auto per_slot = accelerating_slot_edges(52, 52, 1.0);
+  std::vector<double> each(51);
+  for (std::size_t t = 0; t < each.size(); ++t) each[t] = 0.01 * static_cast<double>(t % 7);
+  add_block_offsets(per_slot, each);
+  for (std::size_t t = 1; t < 52; ++t) EXPECT_NEAR(per_slot[t], t + each[t - 1], 1e-12);
+}
+
+TEST(MotionPsf, BlockOffsetsOutsideTheModelAreRefused) {
+  CaptureModel m;
+  m.code = LedCode::parse("4242221144411121214241142422112112214412414144224412", 3).value();
+  m.led_electrons = {1, 1, 1};
+  m.block_offsets_px = {0.5, -0.5, 0.3};
+  EXPECT_EQ(capture_model_problem(m), "");
+  EXPECT_NEAR(slot_edges(m)[13], 13.5, 1e-12);
+  CaptureModel steady = m;
+  steady.block_offsets_px.clear();
+  for (int c = 0; c < 3; ++c) {  // the light is the same; only where it lands moves
+    EXPECT_NEAR(sum(channel_psf(m, c)), sum(channel_psf(steady, c)), 1e-9) << c;
+    EXPECT_NE(channel_psf(m, c), channel_psf(steady, c)) << c;
+  }
+  m.block_offsets_px = {14.0, 0, 0};  // block 0 travels 27 px, block 1 goes back 1
+  EXPECT_NE(capture_model_problem(m).find("backwards"), std::string::npos);
+  m.block_offsets_px = {0.5, double{NAN}, 0};
+  EXPECT_NE(capture_model_problem(m).find("finite"), std::string::npos);
+  m.block_offsets_px.assign(52, 0.0);
+  EXPECT_NE(capture_model_problem(m).find("fewer entries"), std::string::npos);
+}
+
 TEST(MotionPsf, SpeedRatioOutsideTheModelIsRefused) {
   CaptureModel m;
   m.code = LedCode::parse("124", 3).value();
