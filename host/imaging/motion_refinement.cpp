@@ -39,11 +39,14 @@ constexpr int kWanderBlocks = 16;
 constexpr double kJitterPrior = 0.4;
 /// ... at most this many damped Gauss-Newton steps per level, the taps
 /// differenced over this much motion, ...
-constexpr int kWanderIterations = 60;
+constexpr int kWanderIterations = 15;
 constexpr double kJacobianStepPx = 1e-3;
+/// ... stopping when a step lowers the objective (half the residual sum: a log
+/// likelihood) by less than this, ...
+constexpr double kWanderConverged = 1.0;
 /// ... kept when it lowers the residual by this share (a clearer gain than the
 /// accelerating motion's: it has many more parameters).
-constexpr double kWanderingGain = 0.10;
+constexpr double kWanderingGain = 0.03;
 /// Rows are read in batches, the first of this many; ...
 constexpr int kFirstRows = 32;
 /// ... then as many as the standard error of the first says bring it below this
@@ -300,11 +303,13 @@ class ResidualForms {
     const auto shape = tap_shape(taps);
     std::vector<double> a(n * n, 0.0);
     const auto add = [&](std::size_t row_channel, std::size_t column_channel,
-                         const std::vector<double>& g, double weight, bool transposed) {
-      for (std::size_t i = 0; i < p; ++i)
-        for (std::size_t j = 0; j < p; ++j)
-          a[(row_channel * p + i) * n + column_channel * p + j] +=
-              weight * (transposed ? g[j * p + i] : g[i * p + j]);
+                         const std::vector<double>& g, double weight) {
+      for (std::size_t i = 0; i < p; ++i) {
+        double* out = a.data() + (row_channel * p + i) * n + column_channel * p;
+        const double* in = g.data() + i * p;
+#pragma omp simd
+        for (std::size_t j = 0; j < p; ++j) out[j] += weight * in[j];
+      }
     };
     for (int c = 0; c < channels_; ++c)
       for (int d = c + 1; d < channels_; ++d) {
@@ -312,12 +317,17 @@ class ResidualForms {
         const double variance = pair_variance(shape, variances, uc, ud);
         if (!(variance > 0)) continue;
         const double w = 1 / variance;
-        // h_d' G_cc h_d + h_c' G_dd h_c - 2 h_d' G_cd h_c
-        add(ud, ud, total_gram(c, c), w, false);
-        add(uc, uc, total_gram(d, d), w, false);
-        add(ud, uc, total_gram(c, d), -w, false);
-        add(uc, ud, total_gram(c, d), -w, true);
+        // h_d' G_cc h_d + h_c' G_dd h_c - 2 h_d' G_cd h_c: the (d, c) block here,
+        // its mirror (c, d) below.
+        add(ud, ud, total_gram(c, c), w);
+        add(uc, uc, total_gram(d, d), w);
+        add(ud, uc, total_gram(c, d), -w);
       }
+    for (std::size_t c = 0; c < static_cast<std::size_t>(channels_); ++c)
+      for (std::size_t d = c + 1; d < static_cast<std::size_t>(channels_); ++d)
+        for (std::size_t i = 0; i < p; ++i)
+          for (std::size_t j = 0; j < p; ++j)
+            a[(c * p + i) * n + d * p + j] = a[(d * p + j) * n + c * p + i];
     return a;
   }
 
@@ -509,20 +519,23 @@ class MotionSearch {
     // The accelerating motion, when the constant one leaves a residual above the noise.
     double ratio = start_ratio;
     if (options.speed_change && out.contrast > 0 && out.constant_speed_residual > kAboveNoise) {
-      double log_ratio = 0, best_cost = INFINITY;
-      for (double x = -kLogRatioRange; x <= kLogRatioRange + 1e-9; x += 0.1) {
-        const double c = mean({best, std::exp(x), given});
-        if (c < best_cost) best_cost = c, log_ratio = x;
-      }
-      double blur = best;
+      // A grid over both (a strong speed change moves the constant-speed blur off
+      // the true one, so the ratio cannot be searched at that blur alone) ...
+      double log_ratio = 0, best_cost = INFINITY, blur = best;
+      const double step = std::max(0.02, slot);
+      for (double x = -kLogRatioRange; x <= kLogRatioRange + 1e-9; x += 0.2)
+        for (double b = lo_; b <= hi_ + 1e-9; b += step)
+          if (const double c = mean({b, std::exp(x), given}); c < best_cost)
+            best_cost = c, log_ratio = x, blur = b;
+      // ... then each in turn by golden section.
       for (int pass = 0; pass < 2; ++pass) {
         const double r = std::exp(log_ratio);
         blur = golden_minimum([&](double b) { return mean({b, r, given}); },
                               std::max(lo_, blur - 2 * slot), std::min(hi_, blur + 2 * slot),
                               0.005 * std::max(1.0, slot));
         log_ratio = golden_minimum([&](double x) { return mean({blur, std::exp(x), given}); },
-                                   std::max(-kLogRatioRange, log_ratio - 0.15),
-                                   std::min(kLogRatioRange, log_ratio + 0.15), 0.002);
+                                   std::max(-kLogRatioRange, log_ratio - 0.2),
+                                   std::min(kLogRatioRange, log_ratio + 0.2), 0.002);
       }
       const double accelerating = mean({blur, std::exp(log_ratio), given});
       if (accelerating < out.constant_speed_residual * (1 - kAccelerationGain)) {
@@ -594,8 +607,8 @@ class MotionSearch {
       // knot has minima about a slot apart; a Gauss-Newton step finds the nearest).
       if (blocks <= 8) {
         const double reach = (blocks <= 4 ? 1.5 : 0.75) * std::max(1.0, slot);
-        const double step = reach / 6;
-        for (int sweep = 0; sweep < 2; ++sweep)
+        const double step = reach / (blocks <= 4 ? 6 : 3);
+        for (int sweep = 0; sweep < (blocks <= 4 ? 2 : 1); ++sweep)
           for (std::size_t k = 1; k < theta.size(); ++k) {
             const double centre = theta[k];
             const auto at = [&](double v) {
@@ -609,21 +622,29 @@ class MotionSearch {
             theta[k] = best;
           }
       }
+      // Levenberg-Marquardt: the normal equations at each accepted motion, solved
+      // with more damping (a shorter, steeper step) until a step lowers the cost.
       double damping = 1e-3;
-      for (int iteration = 0; iteration < kWanderIterations; ++iteration) {
-        const auto step = levenberg_marquardt_step(theta, motion_of, prior_weight, damping);
-        if (step.empty()) break;
+      auto equations = normal_equations(theta, motion_of, prior_weight);
+      const std::size_t n = theta.size();
+      for (int iteration = 0; iteration < kWanderIterations && !equations.first.empty();
+           ++iteration) {
+        auto damped = equations.first;
+        for (std::size_t k = 0; k < n; ++k) damped[k * n + k] *= 1 + damping;
+        std::vector<double> step = equations.second;
+        for (double& g : step) g = -g;
+        if (!solve_positive_definite(damped, step)) break;
         // (A step that would move a slot backwards costs infinity: more damping.)
         std::vector<double> next = theta;
-        for (std::size_t k = 0; k < theta.size(); ++k) next[k] += step[k];
+        for (std::size_t k = 0; k < n; ++k) next[k] += step[k];
         const double next_cost = objective(next);
-
         if (next_cost < cost) {
-          const bool converged = cost - next_cost < 1e-5 * cost;
+          const bool converged = cost - next_cost < kWanderConverged;
           theta = std::move(next);
           cost = next_cost;
           damping /= 3;
           if (converged) break;
+          equations = normal_equations(theta, motion_of, prior_weight);
         } else {
           damping *= 4;
         }
@@ -643,14 +664,13 @@ class MotionSearch {
   }
 
  private:
-  /// One damped Gauss-Newton step of wander()'s objective at `theta` (empty if
-  /// the normal equations cannot be solved): the taps' Jacobian by forward
-  /// differences, J' A J and J' A h from the residual's matrix A, the prior's
-  /// tridiagonal terms on the offsets.
+  /// Gauss-Newton's normal equations N step = -g of wander()'s objective at
+  /// `theta` (n x n row-major N, then g; empty for a motion that goes
+  /// backwards): the taps' Jacobian by forward differences, J' A J and J' A h
+  /// from the residual's matrix A, the prior's tridiagonal terms on the offsets.
   template <typename MotionOf>
-  std::vector<double> levenberg_marquardt_step(const std::vector<double>& theta,
-                                               const MotionOf& motion_of, double prior_weight,
-                                               double damping) const {
+  std::pair<std::vector<double>, std::vector<double>> normal_equations(
+      const std::vector<double>& theta, const MotionOf& motion_of, double prior_weight) const {
     const std::size_t n = theta.size();
     const auto h = taps_of(motion_of(theta));
     if (h.empty()) return {};
@@ -677,17 +697,22 @@ class MotionSearch {
           if (const double d = shifted[c][i] - h[c][i]; d != 0)
             jacobian[k].emplace_back(c * p + i, d / delta);
     }
-    // A J (dense columns) and A h.
+    // A h, and A J column by column as the sum of A's rows (A is symmetric)
+    // weighted by the column's non-zero entries: contiguous, so it vectorises.
     std::vector<double> aj(rows * n, 0.0), ah(rows, 0.0);
     for (std::size_t r = 0; r < rows; ++r) {
       const double* row = a.data() + r * rows;
       double sum = 0;
+#pragma omp simd reduction(+ : sum)
       for (std::size_t i = 0; i < rows; ++i) sum += row[i] * stacked[i];
       ah[r] = sum;
-      for (std::size_t k = 0; k < n; ++k) {
-        double column = 0;
-        for (const auto& [i, v] : jacobian[k]) column += row[i] * v;
-        aj[k * rows + r] = column;
+    }
+    for (std::size_t k = 0; k < n; ++k) {
+      double* column = aj.data() + k * rows;
+      for (const auto& [i, v] : jacobian[k]) {
+        const double* row = a.data() + i * rows;
+#pragma omp simd
+        for (std::size_t r = 0; r < rows; ++r) column[r] += v * row[r];
       }
     }
     std::vector<double> normal(n * n, 0.0), gradient(n, 0.0);
@@ -706,10 +731,7 @@ class MotionSearch {
       normal[k * n + k] += 2 * prior_weight;
       if (k > 1) normal[k * n + k - 1] -= prior_weight, normal[(k - 1) * n + k] -= prior_weight;
     }
-    for (std::size_t k = 0; k < n; ++k) normal[k * n + k] *= 1 + damping;
-    for (double& g : gradient) g = -g;
-    if (!solve_positive_definite(normal, gradient)) return {};
-    return gradient;
+    return {std::move(normal), std::move(gradient)};
   }
 
   /// Sandwich standard error of the blur over the blocks of rows (infinite where
@@ -753,14 +775,13 @@ class MotionSearch {
   /// Each channel's PSF taps for `motion`; empty when its offsets would move
   /// the object backwards.
   std::vector<std::vector<double>> taps_of(const Motion& motion) const {
-    CaptureModel m = model_;
-    m.blur_px = std::clamp(motion.blur, lo_, hi_);
-    m.speed_ratio = motion.ratio;
-    m.block_offsets_px = motion.offsets;
-    const auto edges = slot_edges(m);
+    // (slot_edges() of the model with this motion, without copying the model.)
+    auto edges = accelerating_slot_edges(model_.code.length(), std::clamp(motion.blur, lo_, hi_),
+                                         motion.ratio);
+    add_block_offsets(edges, motion.offsets);
     for (std::size_t t = 1; t < edges.size(); ++t)
       if (edges[t] < edges[t - 1]) return {};
-    auto out = timeline_channel_psfs(m, segments_from_boundaries(m.code, edges));
+    auto out = timeline_channel_psfs(model_, segments_from_boundaries(model_.code, edges));
     for (auto& t : out) t.resize(static_cast<std::size_t>(taps_), 0.0);
     return out;
   }
