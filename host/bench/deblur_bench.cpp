@@ -1,8 +1,10 @@
 // Deblurring speed on a 1920x1080 RGB8 frame, frame in memory to fused grey
 // latent, against the OpenCV way a user would write it (bench::OpenCvWiener,
-// cv::setNumThreads(2)); and tv on a 700x250 label window on one thread (what
-// a session deblurs when it restores one label's window, not the frame).
-// Medians of repeated runs (Google Benchmark).
+// cv::setNumThreads(2)); tv on a 700x250 label window on one thread (what
+// a session deblurs when it restores one label's window, not the frame); and
+// the motion refinement on one thread, on the same frame at a constant speed
+// and with a belt that jitters 0.2 of its speed per slot (the wandering motion
+// fitted). Medians of repeated runs (Google Benchmark).
 
 #include <benchmark/benchmark.h>
 
@@ -10,8 +12,11 @@
 #include "codes/library.hpp"
 #include "imaging/deblur.hpp"
 #include "imaging/joint_wiener.hpp"
+#include "imaging/motion_frame.hpp"
+#include "imaging/motion_refinement.hpp"
 #include "imaging/richardson_lucy.hpp"
 #include "imaging/total_variation.hpp"
+#include "sim/speed_profile.hpp"
 
 namespace {
 
@@ -50,6 +55,56 @@ void JointWienerRgb8(benchmark::State& state) {
     benchmark::DoNotOptimize(latent.pixels.data());
   }
   state.counters["padded_length"] = wiener.padded_length();
+}
+
+/// The 1080p frame with the belt jittering 0.2 of its speed per slot: every slot
+/// edge off the constant-speed one (0.7 px rms).
+const bench::SpeedFrame& jittered_frame() {
+  static const bench::SpeedFrame made = [] {
+    const auto code = codes::to_code(*codes::find_library_code("seed-maxmin-1"));
+    const auto edges = sim::jittered_slot_boundaries(code.length(), 52, 0.2, 4);
+    std::vector<double> offsets;
+    for (int t = 1; t < code.length(); ++t)
+      offsets.push_back(edges[static_cast<std::size_t>(t)] - 52.0 * t / code.length());
+    return bench::make_speed_frame(kWidth, kHeight, code, 52, offsets);
+  }();
+  return made;
+}
+
+/// `f` in electrons, turned into the motion frame (as the session hands it on).
+imaging::MotionFrame motion_frame(const bench::SpeedFrame& f) {
+  imaging::Image electrons;
+  electrons.channels.assign(3, Plane(kWidth, kHeight));
+  std::vector<float> rows(3 * static_cast<std::size_t>(kWidth));
+  const std::span<float> spans[] = {{rows.data(), static_cast<std::size_t>(kWidth)},
+                                    {rows.data() + kWidth, static_cast<std::size_t>(kWidth)},
+                                    {rows.data() + 2 * kWidth, static_cast<std::size_t>(kWidth)}};
+  const auto load = bench::rgb8_row_loader(f);
+  for (int y = 0; y < kHeight; ++y) {
+    load(y, spans);
+    for (int c = 0; c < 3; ++c)
+      std::copy(spans[c].begin(), spans[c].end(),
+                electrons.channels[static_cast<std::size_t>(c)].row(y).begin());
+  }
+  return imaging::MotionFrame::make(std::move(electrons), imaging::Direction::kPlusX).value();
+}
+
+/// Arg 0: constant speed; 1: the jittering belt. The refinement starts from the
+/// constant-speed motion the encoder would give, 52 px, tolerance 10%.
+void RefineMotion(benchmark::State& state) {
+  const auto& f = state.range(0) ? jittered_frame() : frame();
+  const auto electrons = motion_frame(f);
+  imaging::CaptureModel encoder = f.model;
+  encoder.block_offsets_px.clear();
+  imaging::MotionRefinement r;
+  for (auto _ : state) {
+    r = imaging::refine_motion(electrons, encoder, {}).value();
+    benchmark::DoNotOptimize(r.blur_px);
+  }
+  state.counters["wandering"] = r.wandering;
+  state.counters["accelerating"] = r.accelerating;
+  state.counters["residual"] = r.residual_per_sample;
+  state.counters["rows"] = r.rows_used;
 }
 
 void OpenCvWiener2d(benchmark::State& state) {
@@ -147,4 +202,12 @@ BENCHMARK(TotalVariationWindow)
     ->ReportAggregatesOnly(true)
     ->UseRealTime()
     ->Iterations(10);
+BENCHMARK(RefineMotion)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->Repetitions(9)
+    ->ReportAggregatesOnly(true)
+    ->MeasureProcessCPUTime()
+    ->Iterations(5);
 BENCHMARK_MAIN();

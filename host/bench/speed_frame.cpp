@@ -8,10 +8,12 @@
 
 namespace flutterscan::bench {
 
-SpeedFrame make_speed_frame(int width, int height, const LedCode& code, double blur_px) {
+SpeedFrame make_speed_frame(int width, int height, const LedCode& code, double blur_px,
+                            const std::vector<double>& block_offsets_px) {
   SpeedFrame f;
   f.model.code = code;
   f.model.blur_px = blur_px;
+  f.model.block_offsets_px = block_offsets_px;
   f.model.led_electrons = imaging::budgeted_led_electrons(code, 3000, 3);
   f.model.bit_depth = 8;
   f.model.full_well = 12000;

@@ -21,8 +21,10 @@ struct SpeedFrame {
 };
 
 /// \brief A width x height frame of random bars blurred by `code` over `blur_px`
-/// at 3000 e- (cap 3), recorded as 8-bit linear RGB.
-SpeedFrame make_speed_frame(int width, int height, const LedCode& code, double blur_px);
+/// at 3000 e- (cap 3), recorded as 8-bit linear RGB; the belt's speed wandering
+/// within the exposure by `block_offsets_px` (CaptureModel; empty: constant).
+SpeedFrame make_speed_frame(int width, int height, const LedCode& code, double blur_px,
+                            const std::vector<double>& block_offsets_px = {});
 
 /// \brief The row loader for `frame`: one pass over the interleaved row, DN to electrons.
 imaging::JointWiener::RowLoader rgb8_row_loader(const SpeedFrame& frame);
