@@ -10,9 +10,8 @@
 // - the peer's own reconstruction, the exact inverse filter of its float data;
 // - the same inverse filter on the 8-bit output (what 8 bits leave);
 // - `imaging::deblur` (joint Wiener and tv) on the 8-bit output, told the
-//   capture as a descriptor would tell it;
-// - joint Wiener given band-limited taps instead of the product's box-aperture
-//   ones (what a band-limited pixel model would add).
+//   capture as a descriptor would tell it: with the default pixel model (box
+//   aperture) and with pixel_model "band-limited" (the peer's).
 // Usage: peer_check [PHOTO_DIR [SNR]] (default ../shared/data/real-labels, 100).
 // The renderer: each row's DFT times the continuous code's transform,
 // K(w) = (1 / n) sum over open slots t of sinc(w / 2 pi) exp(-i w (t + 1/2)),
@@ -36,7 +35,6 @@
 #include "imaging/capture_model.hpp"
 #include "imaging/deblur.hpp"
 #include "imaging/image.hpp"
-#include "imaging/joint_wiener.hpp"
 
 namespace {
 
@@ -117,31 +115,10 @@ imaging::CaptureModel told_model(const LedCode& code, double sigma_dn) {
 }
 
 struct Scores {
-  double peer_float = 0, inverse_8bit = 0, joint_wiener = 0, tv = 0, band_limited = 0;
+  double peer_float = 0, inverse_8bit = 0;
+  double box_wiener = 0, box_tv = 0;  ///< the default pixel model (box aperture)
+  double band_wiener = 0, band_tv = 0;  ///< told pixel_model "band-limited"
 };
-
-/// Taps that lay each open slot onto the pixels band-limited (the mean of
-/// sinc(j - d) over the slot's motion d; by quadrature), from kLead taps before
-/// the motion's start: what a band-limited pixel model would give the deblur
-/// (the product has none: docs/algorithms.md, "Pixel model").
-constexpr int kLead = 12;
-std::vector<double> band_limited_taps(const std::string& bits, double weight) {
-  std::vector<double> taps(52 + 2 * kLead + 2, 0.0);
-  for (std::size_t t = 0; t < bits.size(); ++t) {
-    if (bits[t] != '1') continue;
-    for (int j = -kLead; j < 52 + kLead + 2; ++j) {
-      double sum = 0;
-      const int nodes = 64;
-      for (int q = 0; q < nodes; ++q) {
-        const double d = static_cast<double>(t) + (q + 0.5) / nodes;
-        const double x = kPi * (j - d);
-        sum += x == 0 ? 1.0 : std::sin(x) / x;
-      }
-      taps[static_cast<std::size_t>(j + kLead)] += weight * sum / nodes;
-    }
-  }
-  return taps;
-}
 
 Scores check(const cv::Mat& scene, const std::string& bits, const LedCode& code, double snr,
              std::uint64_t seed) {
@@ -160,38 +137,32 @@ Scores check(const cv::Mat& scene, const std::string& bits, const LedCode& code,
       eight.at<double>(y, x) = std::clamp(std::round(eight.at<double>(y, x)), 0.0, 255.0);
   s.inverse_8bit = interior_psnr(scene, filter_rows(eight, bits, true));
 
-  const auto model = told_model(code, std::sqrt(sigma * sigma + 1.0 / 12));
+  auto model = told_model(code, std::sqrt(sigma * sigma + 1.0 / 12));
   imaging::Image electrons;
   electrons.channels.assign(1, imaging::Plane(eight.cols, eight.rows));
   for (int y = 0; y < eight.rows; ++y)
     for (int x = 0; x < eight.cols; ++x)
       electrons.channels[0].at(x, y) = static_cast<float>(eight.at<double>(y, x) * model.gain);
-  for (const auto method : {imaging::Method::kJointWiener, imaging::Method::kTotalVariation}) {
-    imaging::DeblurOptions options;
-    options.method = method;
-    options.threads = 2;
-    const auto r = imaging::deblur(electrons, model, options);
-    if (!r.ok()) {
-      std::fprintf(stderr, "deblur failed: %s\n", r.error().c_str());
-      continue;
+  for (const auto pixels : {imaging::PixelModel::kBoxAperture, imaging::PixelModel::kBandLimited})
+    for (const auto method : {imaging::Method::kJointWiener, imaging::Method::kTotalVariation}) {
+      model.pixel_model = pixels;
+      imaging::DeblurOptions options;
+      options.method = method;
+      options.threads = 2;
+      const auto r = imaging::deblur(electrons, model, options);
+      if (!r.ok()) {
+        std::fprintf(stderr, "deblur failed: %s\n", r.error().c_str());
+        continue;
+      }
+      cv::Mat latent(eight.rows, eight.cols, CV_64F);
+      for (int y = 0; y < eight.rows; ++y)
+        for (int x = 0; x < eight.cols; ++x)
+          latent.at<double>(y, x) = 255.0 * r.value().latent.at(x, y);
+      const bool box = pixels == imaging::PixelModel::kBoxAperture;
+      const bool wiener = method == imaging::Method::kJointWiener;
+      (box ? (wiener ? s.box_wiener : s.box_tv) : (wiener ? s.band_wiener : s.band_tv)) =
+          interior_psnr(scene, latent);
     }
-    cv::Mat latent(eight.rows, eight.cols, CV_64F);
-    for (int y = 0; y < eight.rows; ++y)
-      for (int x = 0; x < eight.cols; ++x)
-        latent.at<double>(y, x) = 255.0 * r.value().latent.at(x, y);
-    (method == imaging::Method::kJointWiener ? s.joint_wiener : s.tv) =
-        interior_psnr(scene, latent);
-  }
-  {  // joint Wiener given the band-limited taps, its latent moved back by the lead
-    imaging::ChannelPsf psf{band_limited_taps(bits, model.led_electrons[0]),
-                            imaging::channel_noise_variance(model, cv::mean(eight)[0] * model.gain)};
-    imaging::JointWiener w({&psf, 1}, eight.cols, 1.0 / imaging::kLabelGradientVariance);
-    const auto latent = w.deconvolve({&electrons.channels[0], 1}, 2);
-    cv::Mat out(eight.rows, eight.cols, CV_64F, 0.0);
-    for (int y = 0; y < eight.rows; ++y)
-      for (int x = kLead; x < eight.cols; ++x) out.at<double>(y, x) = 255.0 * latent.at(x - kLead, y);
-    s.band_limited = interior_psnr(scene, out);
-  }
   return s;
 }
 
@@ -220,9 +191,9 @@ int main(int argc, char** argv) {
   std::printf("CPU: %s\n\npeer check: %zu photos as band-limited scenes, Raskar's code, 52 px "
               "(one per slot), SNR %.0f, 8-bit; PSNR dB over the interior (%d px borders "
               "excluded)\n\n| photo | peer, float | inverse filter, 8-bit | joint Wiener | tv | joint "
-              "Wiener, band-limited taps |\n|---|---|---|---|---|---|\n",
+              "Wiener, band-limited | tv, band-limited |\n|---|---|---|---|---|---|---|\n",
               bench::cpu_model().c_str(), files.size(), snr, kBorder);
-  std::vector<double> peer, inverse, wiener, tv, band_limited;
+  std::vector<std::vector<double>> columns(6);
   std::uint64_t seed = 1;
   for (const auto& path : files) {
     cv::Mat grey = cv::imread(path.string(), cv::IMREAD_GRAYSCALE);
@@ -230,15 +201,17 @@ int main(int argc, char** argv) {
     cv::Mat scene;
     grey.convertTo(scene, CV_64F);
     const auto s = check(scene, bits, code, snr, seed++);
-    std::printf("| %s | %.1f | %.1f | %.1f | %.1f | %.1f |\n", path.filename().string().c_str(),
-                s.peer_float, s.inverse_8bit, s.joint_wiener, s.tv, s.band_limited);
-    peer.push_back(s.peer_float);
-    inverse.push_back(s.inverse_8bit);
-    wiener.push_back(s.joint_wiener);
-    tv.push_back(s.tv);
-    band_limited.push_back(s.band_limited);
+    const double row[] = {s.peer_float, s.inverse_8bit, s.box_wiener,
+                          s.box_tv,     s.band_wiener,  s.band_tv};
+    std::printf("| %s |", path.filename().string().c_str());
+    for (std::size_t i = 0; i < columns.size(); ++i) {
+      std::printf(" %.1f |", row[i]);
+      columns[i].push_back(row[i]);
+    }
+    std::printf("\n");
   }
-  std::printf("| **median** | **%.1f** | **%.1f** | **%.1f** | **%.1f** | **%.1f** |\n",
-              median(peer), median(inverse), median(wiener), median(tv), median(band_limited));
+  std::printf("| **median** |");
+  for (const auto& column : columns) std::printf(" **%.1f** |", median(column));
+  std::printf("\n");
   return 0;
 }

@@ -44,6 +44,18 @@ std::vector<double> numbers(const nlohmann::json& value, const std::string& name
   return out;
 }
 
+const char* pixel_model_name(PixelModel model) {
+  switch (model) {
+    case PixelModel::kBandLimited:
+      return "band-limited";
+    case PixelModel::kTapGrid:
+      return "tap-grid";
+    case PixelModel::kBoxAperture:
+      break;
+  }
+  return "box-aperture";
+}
+
 const char* encoding_name(Encoding encoding) {
   switch (encoding) {
     case Encoding::kLinear:
@@ -99,7 +111,7 @@ nlohmann::json to_descriptor(const CaptureModel& m) {
       {"led_of_bit", std::vector<int>(m.led_of_bit.begin(), m.led_of_bit.begin() + m.code.leds())},
       {"blur_px", m.blur_px},
       {"speed_ratio", m.speed_ratio},
-      {"pixel_model", m.pixel_model == PixelModel::kTapGrid ? "tap-grid" : "box-aperture"},
+      {"pixel_model", pixel_model_name(m.pixel_model)},
       {"direction", direction_name(m.direction)},
       {"channels", m.channels},
       {"leds", m.leds},
@@ -156,10 +168,13 @@ Result<CaptureModel, std::string> from_descriptor(const nlohmann::json& d) {
       const auto& pixel = d.at("pixel_model");
       if (pixel == "box-aperture")
         m.pixel_model = PixelModel::kBoxAperture;
+      else if (pixel == "band-limited")
+        m.pixel_model = PixelModel::kBandLimited;
       else if (pixel == "tap-grid")
         m.pixel_model = PixelModel::kTapGrid;
       else
-        throw FieldError("field 'pixel_model' must be \"box-aperture\" or \"tap-grid\"");
+        throw FieldError(
+            "field 'pixel_model' must be \"box-aperture\", \"band-limited\" or \"tap-grid\"");
     }
     const auto& direction = field(d, "direction");
     if (!direction.is_string() || !parse_direction(direction.get<std::string>(), m.direction))

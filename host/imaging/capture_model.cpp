@@ -67,6 +67,8 @@ std::string capture_model_problem(const CaptureModel& m) {
   if (m.bit_depth < 1 || m.bit_depth > 16) return "bit depth must be 1 to 16";
   if (!std::isfinite(m.gamma) || m.gamma <= 0) return "gamma must be finite and > 0";
   if (m.bayer_rggb && m.channels != 3) return "a Bayer mosaic needs 3 channels";
+  if (m.bayer_rggb && m.pixel_model == PixelModel::kBandLimited)
+    return "a Bayer mosaic takes the box-aperture or tap-grid pixel model, not band-limited";
   return {};
 }
 

@@ -124,6 +124,7 @@ Result<DeblurResult, std::string> deblur(const MotionFrame& frame, const Capture
 
   result.latent = deconvolve_motion_rows(psfs, rows, 1.0 / options.gradient_variance,
                                          model.read_noise * model.read_noise, options);
+  undo_psf_lead(result.latent, pixel_model_lead(model.pixel_model));
   return Out::success(std::move(result));
 }
 

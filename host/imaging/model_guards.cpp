@@ -31,25 +31,28 @@ double residual_ratio(const MotionFrame& frame, const Plane& latent, const Captu
   std::vector<float> predicted;
   if (frame.along() != latent.width || frame.lines() != latent.height) return INFINITY;
   const int width = frame.along();
+  // Tap j of a PSF with a lead moves the latent j - lead pixels downstream.
+  const int lead = pixel_model_lead(model.pixel_model);
   for (int c = 0; c < frame.channel_count(); ++c) {
     const Plane& plane = frame.channel(c);
     const auto psf = channel_psf(model, c);
     const std::vector<float> taps(psf.begin(), psf.end());
     const int k = static_cast<int>(taps.size());
-    if (k >= width) return INFINITY;
+    if (k >= width || lead >= k) return INFINITY;
     double squares = 0, signal = 0;
     std::size_t samples = 0;
     for (int row = 0; row < frame.lines(); row += std::max(1, row_step)) {
       const auto observed = plane.row(row);
       const auto sharp = latent.row(row);
-      // The blurred row, tap by tap over the whole row (vectorises).
+      // The blurred row, tap by tap over the whole row (vectorises): sample n
+      // sees latent n - j + lead through tap j, valid from n = k - 1 - lead.
       predicted.assign(static_cast<std::size_t>(width), 0.0f);
       for (int j = 0; j < k; ++j) {
         const float tap = taps[static_cast<std::size_t>(j)];
-        for (int n = k - 1; n < width; ++n) predicted[n] += tap * sharp[n - j];
+        for (int n = k - 1 - lead; n < width - lead; ++n) predicted[n] += tap * sharp[n - j + lead];
       }
-      const float* seen = observed.data() + (k - 1);
-      const float* blurred = predicted.data() + (k - 1);
+      const float* seen = observed.data() + (k - 1 - lead);
+      const float* blurred = predicted.data() + (k - 1 - lead);
       const auto valid = static_cast<std::size_t>(width - k + 1);
       squares += lane_sum(valid, [&](std::size_t n) {
         const float r = seen[n] - blurred[n];

@@ -12,11 +12,20 @@
 // over the taps as the average of tri(j - d) over d in [a, b]: at one pixel of
 // motion per slot that is [0.5, 0.5] per slot, not one whole tap.
 //
+// PixelModel::kBandLimited takes the latent as the samples of a band-limited
+// image instead (Shannon: sinc interpolation, what a peer simulator that
+// moves a band-limited scene continuously assumes): a slot's light goes to
+// tap j as the mean of sinc(j - d) over its motion, on both sides of it. Its
+// PSFs start kBandLimitedLead taps before the motion does (the latent a
+// method solves for with them is shifted by that much: undo_psf_lead()).
+//
 // PixelModel::kTapGrid keeps the older model that deposits each slot's box
 // straight onto the taps (no aperture): only for comparisons with it.
 
 #include <span>
 #include <vector>
+
+#include "imaging/image.hpp"
 
 namespace flutterscan::imaging {
 
@@ -24,11 +33,25 @@ namespace flutterscan::imaging {
 enum class PixelModel {
   kBoxAperture,  ///< box pixel aperture over a pixel-wise constant latent (the default)
   kTapGrid,      ///< each slot's box deposited on whole taps (the model before the aperture)
+  kBandLimited,  ///< a band-limited latent: each slot's box through sinc interpolation
 };
+
+/// \brief Taps a band-limited PSF carries on either side of the motion (the
+/// sinc's tails beyond are cut, each slot's light kept whole).
+inline constexpr int kBandLimitedLead = 12;
+
+/// \brief How many taps a PSF of `model` has before the motion's start (tap
+/// `lead` is displacement 0): kBandLimitedLead for kBandLimited, else 0.
+int pixel_model_lead(PixelModel model);
+
+/// \brief Moves `latent` (motion frame) `lead` pixels along the motion: the
+/// latent a method solved for with PSFs that lead by that much, back where
+/// displacement 0 puts it (the first `lead` columns repeat the first solved one).
+void undo_psf_lead(Plane& latent, int lead);
 
 /// \brief Adds the light `weight` of one slot, during which the scene moved
 /// from `start_px` to `start_px + width_px` (>= 0), to `taps` (tap j: light a
-/// white point deposits j pixels downstream). `taps` must hold
+/// white point deposits j - pixel_model_lead() pixels downstream). `taps` must hold
 /// pixel_model_taps(start_px + width_px) entries, or the light past them is lost.
 void deposit_slot(std::vector<double>& taps, double start_px, double width_px, double weight,
                   PixelModel model);

@@ -196,6 +196,7 @@ std::vector<Plane> solve_latents(const std::vector<Plane>& rows, const CaptureMo
       }
     }
   });
+  for (auto& latent : out) undo_psf_lead(latent, pixel_model_lead(model.pixel_model));
   return out;
 }
 

@@ -91,6 +91,7 @@ Result<Plane, std::string> deblur_row_phases(const MotionFrame& frame, const Cap
       std::copy(source.begin(), source.end(), latent.row(members[i]).begin());
     }
   }
+  undo_psf_lead(latent, pixel_model_lead(model.pixel_model));
   return Out::success(std::move(latent));
 }
 

@@ -14,7 +14,7 @@ using imaging::Plane;
 imaging::Image expected_electrons(const Plane& reflectance, const imaging::CaptureModel& model,
                                   int supersample) {
   const Plane moving = imaging::to_motion_frame(reflectance, model.direction);
-  imaging::CaptureModel fine = model;
+  imaging::CaptureModel fine = rendered_pixels(model);
   fine.blur_px = model.blur_px * supersample;
   imaging::Image out;
   for (int c = 0; c < model.channels; ++c)

@@ -4,6 +4,12 @@
 
 namespace flutterscan::sim {
 
+imaging::CaptureModel rendered_pixels(imaging::CaptureModel model) {
+  if (model.pixel_model == imaging::PixelModel::kBandLimited)
+    model.pixel_model = imaging::PixelModel::kBoxAperture;
+  return model;
+}
+
 using imaging::Plane;
 
 Plane bin_pixels(const Plane& fine, int k) {

@@ -8,6 +8,7 @@
 
 #include <vector>
 
+#include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
 
 namespace flutterscan::sim {
@@ -15,6 +16,11 @@ namespace flutterscan::sim {
 /// \brief How much finer than the camera's pixels the simulator renders
 /// scenes by default.
 inline constexpr int kSimSupersample = 4;
+
+/// \brief `model` as the simulator renders it: its pixels are boxes over a
+/// scene rendered finer, so a band-limited pixel model (the deblur's view of a
+/// peer's frames) renders as the box aperture; any other model as it is.
+imaging::CaptureModel rendered_pixels(imaging::CaptureModel model);
 
 /// \brief The camera's sharp view of a scene rendered `k` times finer: the
 /// mean of each k x k block (width and height divided by k, rounded down).

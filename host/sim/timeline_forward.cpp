@@ -25,9 +25,10 @@ std::vector<imaging::ExposureSegment> finer(std::span<const imaging::ExposureSeg
 }  // namespace
 
 imaging::Image expected_electrons_timeline(const Plane& reflectance,
-                                           const imaging::CaptureModel& model,
+                                           const imaging::CaptureModel& given,
                                            std::span<const imaging::ExposureSegment> segments,
                                            int supersample) {
+  const auto model = rendered_pixels(given);
   const Plane moving = imaging::to_motion_frame(reflectance, model.direction);
   const auto fine = finer(segments, supersample);
   imaging::Image out;
@@ -45,9 +46,10 @@ double rolling_shutter_phase(int row, double line_time, double slot_time, int sl
 }
 
 Result<imaging::Image, std::string> expected_rolling_shutter_electrons(
-    const Plane& reflectance, const imaging::CaptureModel& model, double line_time,
+    const Plane& reflectance, const imaging::CaptureModel& given, double line_time,
     double slot_time) {
   using Out = Result<imaging::Image, std::string>;
+  const auto model = rendered_pixels(given);
   if (model.direction != imaging::Direction::kPlusX &&
       model.direction != imaging::Direction::kMinusX)
     return Out::failure(
@@ -76,9 +78,10 @@ Result<imaging::Image, std::string> expected_rolling_shutter_electrons(
 }
 
 Result<imaging::Image, std::string> expected_colour_electrons(std::span<const Plane> bands,
-                                                              const imaging::CaptureModel& model,
+                                                              const imaging::CaptureModel& given,
                                                               int supersample) {
   using Out = Result<imaging::Image, std::string>;
+  const auto model = rendered_pixels(given);
   if (model.channels != 3 || model.leds != 3)
     return Out::failure("colour scene: the capture model needs 3 channels and 3 LEDs");
   if (bands.size() != 3) return Out::failure("colour scene: one reflectance plane per LED (3)");

@@ -157,6 +157,13 @@ TEST(CaptureDescriptor, RoundTrips) {
   EXPECT_EQ(back.value().block_offsets_px, m.block_offsets_px);
   EXPECT_EQ(to_descriptor(back.value()), to_descriptor(m));
   EXPECT_FALSE(to_descriptor(seed_capture(52)).contains("block_offsets_px"));  // none: not written
+  for (PixelModel pixel : {PixelModel::kBoxAperture, PixelModel::kBandLimited, PixelModel::kTapGrid}) {
+    CaptureModel p = seed_capture(52);
+    p.pixel_model = pixel;
+    const auto read = from_descriptor(to_descriptor(p));
+    ASSERT_TRUE(read.ok()) << read.error();
+    EXPECT_EQ(read.value().pixel_model, pixel);
+  }
 }
 
 TEST(CaptureDescriptor, BadFieldsAreNamed) {
@@ -180,6 +187,9 @@ TEST(CaptureDescriptor, BadFieldsAreNamed) {
   EXPECT_NE(from_descriptor(d).error().find("block_offsets_px"), std::string::npos);
   d["block_offsets_px"] = {0.5, 1e9};
   EXPECT_NE(from_descriptor(d).error().find("backwards"), std::string::npos);
+  d = to_descriptor(seed_capture(52));
+  d["pixel_model"] = "gaussian";
+  EXPECT_NE(from_descriptor(d).error().find("band-limited"), std::string::npos);
   EXPECT_FALSE(from_descriptor(nlohmann::json::array()).ok());
 }
 

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <complex>
 #include <numeric>
 #include <random>
 
@@ -93,7 +94,8 @@ TEST(MotionPsf, ChannelPsfKeepsTheWhiteLevelWhateverTheMotion) {
   m.ambient_electrons = {40, 0, 10};
   for (double blur : {0.0, 13.3, 52.0, 77.7})
     for (double ratio : {1.0, 1.5, 0.7})
-      for (PixelModel pixel : {PixelModel::kBoxAperture, PixelModel::kTapGrid}) {
+      for (PixelModel pixel :
+           {PixelModel::kBoxAperture, PixelModel::kBandLimited, PixelModel::kTapGrid}) {
         m.blur_px = blur;
         m.speed_ratio = ratio;
         m.pixel_model = pixel;
@@ -105,6 +107,58 @@ TEST(MotionPsf, ChannelPsfKeepsTheWhiteLevelWhateverTheMotion) {
           EXPECT_NEAR(sum(channel_psf(m, c)), white, 1e-6 * white) << blur << " " << ratio;
         }
       }
+}
+
+/// The mean of sinc(j - d) over d in [a, b], by the midpoint rule.
+double sinc_mean(int j, double a, double b) {
+  const int nodes = 4000;
+  double sum = 0;
+  for (int q = 0; q < nodes; ++q) {
+    const double x = 3.14159265358979323846 * (j - (a + (b - a) * (q + 0.5) / nodes));
+    sum += x == 0 ? 1.0 : std::sin(x) / x;
+  }
+  return sum / nodes;
+}
+
+TEST(MotionPsf, BandLimitedSlotsAreTheSincsMeanFromALeadOfTaps) {
+  EXPECT_EQ(pixel_model_lead(PixelModel::kBandLimited), kBandLimitedLead);
+  EXPECT_EQ(pixel_model_lead(PixelModel::kBoxAperture), 0);
+  // A still scene at a whole pixel: the identity, at tap `lead`.
+  std::vector<double> still(pixel_model_taps(3, PixelModel::kBandLimited), 0.0);
+  deposit_slot(still, 3, 0, 1, PixelModel::kBandLimited);
+  for (std::size_t j = 0; j < still.size(); ++j)
+    EXPECT_NEAR(still[j], j == 3 + kBandLimitedLead ? 1.0 : 0.0, 1e-12) << j;
+  // A slot moving 0.3 .. 1.7 px: each tap the sinc's mean over the motion (the cut
+  // tails' light shared out, a part in a thousand).
+  std::vector<double> taps(pixel_model_taps(1.7, PixelModel::kBandLimited), 0.0);
+  deposit_slot(taps, 0.3, 1.4, 1, PixelModel::kBandLimited);
+  EXPECT_NEAR(sum(taps), 1.0, 1e-12);
+  for (int j = -kBandLimitedLead; j <= 2 + kBandLimitedLead; ++j)
+    EXPECT_NEAR(taps[static_cast<std::size_t>(j + kBandLimitedLead)], sinc_mean(j, 0.3, 1.7),
+                2e-3)
+        << j;
+  // One pixel per slot: the box's band-limited samples, not [0.5, 0.5]. Near Nyquist (0.4
+  // cycles per pixel) they pass the box's sinc, 0.757; the box aperture's pair passes
+  // cos(0.4 pi) = 0.309.
+  std::vector<double> one(pixel_model_taps(1, PixelModel::kBandLimited), 0.0);
+  deposit_slot(one, 0, 1, 1, PixelModel::kBandLimited);
+  std::complex<double> response = 0;
+  const double w = 0.8 * 3.14159265358979323846;
+  for (std::size_t j = 0; j < one.size(); ++j)
+    response += one[j] * std::polar(1.0, -w * static_cast<double>(j));
+  EXPECT_NEAR(std::abs(response), std::sin(w / 2) / (w / 2), 0.01);
+}
+
+TEST(MotionPsf, UndoingTheLeadMovesTheLatentDownstream) {
+  Plane latent(6, 2);
+  for (int y = 0; y < 2; ++y)
+    for (int x = 0; x < 6; ++x) latent.at(x, y) = static_cast<float>(10 * y + x);
+  undo_psf_lead(latent, 2);
+  const float expected[] = {0, 0, 0, 1, 2, 3};
+  for (int x = 0; x < 6; ++x) {
+    EXPECT_EQ(latent.at(x, 0), expected[x]) << x;
+    EXPECT_EQ(latent.at(x, 1), expected[x] + 10) << x;
+  }
 }
 
 TEST(MotionPsf, BlockOffsetsMoveTheKnotsAndKeepTheTravel) {
