@@ -39,6 +39,7 @@ struct DeblurFlags {
   double blur = -1;
   double blur_tolerance_pct = -1;  ///< -1: 10 for codes of two or more LEDs, else 0
   std::string direction = "+x";
+  std::string pixel_model;  ///< empty: the descriptor's (or box-aperture)
   std::string crosstalk;
   double black_level = 0;
   double gain = 1;
@@ -196,11 +197,20 @@ void run(const DeblurFlags& f) {
     throw UsageError("--bayer-mode must be raw or demosaic, not '" + f.bayer_mode + "'");
   if (!f.descriptor.empty() && f.blur >= 0)
     throw UsageError("give either --descriptor or --blur, not both");
+  imaging::PixelModel pixel_model{};
+  if (!f.pixel_model.empty() && !imaging::parse_pixel_model(f.pixel_model, pixel_model))
+    throw UsageError("--pixel-model must be box-aperture, band-limited or tap-grid, not '" +
+                     f.pixel_model + "'");
   auto start = std::chrono::steady_clock::now();
   const auto frame = read_frame(f.input);
   if (!frame.ok()) throw UsageError(frame.error());
   imaging::CaptureModel model = f.descriptor.empty() ? model_from_flags(f, frame.value())
                                                      : model_from_descriptor(f, frame.value());
+  if (!f.pixel_model.empty()) {
+    model.pixel_model = pixel_model;
+    if (const auto problem = imaging::capture_model_problem(model); !problem.empty())
+      throw UsageError("--pixel-model " + f.pixel_model + ": " + problem);
+  }
   const double read_ms = elapsed_ms(start);
   if (f.blur_tolerance_pct >= 0 && !(f.blur_tolerance_pct < 100))
     throw UsageError("--blur-tolerance must be a percentage >= 0 and < 100, not " +
@@ -309,6 +319,7 @@ void run(const DeblurFlags& f) {
         {"input", f.input},
         {"output", f.output},
         {"method", f.method},
+        {"pixel_model", imaging::pixel_model_name(model.pixel_model)},
         {"timings_ms",
          {{"read", read_ms}, {"refine", refine_ms}, {"deblur", deblur_ms}, {"write", write_ms}}},
         {"noise_variance_e2", deblurred.noise_variance}};
@@ -368,6 +379,9 @@ void add_deblur(CLI::App& app) {
                    "blur_px (0: use it exactly; default 10 for codes of two or more LEDs)")
       ->check(CLI::Range(0.0, 1e9));
   command->add_option("--direction", f->direction, "+x, -x, +y or -y")->capture_default_str();
+  command->add_option("--pixel-model", f->pixel_model,
+                      "box-aperture (default), band-limited (frames of a band-limited scene) or "
+                      "tap-grid; overrides the descriptor's");
   command->add_option("--crosstalk", f->crosstalk, "LED-to-channel matrix \"m00,m01,m02;m10,...\"");
   command->add_option("--black-level", f->black_level, "DN")->capture_default_str();
   command->add_option("--gain", f->gain, "e- per DN")->capture_default_str();

@@ -44,18 +44,6 @@ std::vector<double> numbers(const nlohmann::json& value, const std::string& name
   return out;
 }
 
-const char* pixel_model_name(PixelModel model) {
-  switch (model) {
-    case PixelModel::kBandLimited:
-      return "band-limited";
-    case PixelModel::kTapGrid:
-      return "tap-grid";
-    case PixelModel::kBoxAperture:
-      break;
-  }
-  return "box-aperture";
-}
-
 const char* encoding_name(Encoding encoding) {
   switch (encoding) {
     case Encoding::kLinear:
@@ -82,6 +70,27 @@ std::string direction_name(Direction direction) {
       return "-y";
   }
   return "+x";
+}
+
+std::string pixel_model_name(PixelModel model) {
+  switch (model) {
+    case PixelModel::kBandLimited:
+      return "band-limited";
+    case PixelModel::kTapGrid:
+      return "tap-grid";
+    case PixelModel::kBoxAperture:
+      break;
+  }
+  return "box-aperture";
+}
+
+bool parse_pixel_model(const std::string& text, PixelModel& model) {
+  for (PixelModel m : {PixelModel::kBoxAperture, PixelModel::kBandLimited, PixelModel::kTapGrid})
+    if (pixel_model_name(m) == text) {
+      model = m;
+      return true;
+    }
+  return false;
 }
 
 bool parse_direction(const std::string& text, Direction& direction) {
@@ -166,13 +175,7 @@ Result<CaptureModel, std::string> from_descriptor(const nlohmann::json& d) {
       m.block_offsets_px = numbers(d.at("block_offsets_px"), "block_offsets_px");
     if (d.contains("pixel_model")) {
       const auto& pixel = d.at("pixel_model");
-      if (pixel == "box-aperture")
-        m.pixel_model = PixelModel::kBoxAperture;
-      else if (pixel == "band-limited")
-        m.pixel_model = PixelModel::kBandLimited;
-      else if (pixel == "tap-grid")
-        m.pixel_model = PixelModel::kTapGrid;
-      else
+      if (!pixel.is_string() || !parse_pixel_model(pixel.get<std::string>(), m.pixel_model))
         throw FieldError(
             "field 'pixel_model' must be \"box-aperture\", \"band-limited\" or \"tap-grid\"");
     }

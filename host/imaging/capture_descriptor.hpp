@@ -25,4 +25,9 @@ std::string direction_name(Direction direction);
 /// \brief Parses a direction name; false if it is none of the four.
 bool parse_direction(const std::string& text, Direction& direction);
 
+/// \brief "box-aperture", "band-limited" or "tap-grid" (the descriptor's pixel_model).
+std::string pixel_model_name(PixelModel model);
+/// \brief Reads pixel_model_name()'s text; false (and `model` untouched) for anything else.
+bool parse_pixel_model(const std::string& text, PixelModel& model);
+
 }  // namespace flutterscan::imaging

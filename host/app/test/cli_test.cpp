@@ -619,7 +619,26 @@ TEST_F(ImagingCliTest, DeblurRefusesBadInputNamingIt) {
       {"unknown method 'magic'"});
   expect_usage_error({"deblur", frame(), "--code", "raskar", "--blur", "52", "-o", output()},
                      {"grey frame"});
+  expect_usage_error({"deblur", frame(), "--descriptor", descriptor(), "--pixel-model", "gaussian",
+                      "-o", output()},
+                     {"--pixel-model", "band-limited"});
   EXPECT_FALSE(fs::exists(output()));
+}
+
+TEST_F(ImagingCliTest, DeblurTakesThePixelModelItIsTold) {
+  // The simulator's frames are box pixels: told band-limited, the deblur still runs and reads,
+  // and its JSON says which model it used.
+  simulate_label();
+  for (const char* pixels : {"box-aperture", "band-limited"}) {
+    const RunResult result = run({"deblur", frame(), "--descriptor", descriptor(), "--pixel-model",
+                                  pixels, "--decode", "--json", "-o", output()});
+    ASSERT_EQ(result.exit_code, 0) << result;
+    const auto objects = json_lines(result.out);
+    ASSERT_EQ(objects.size(), 1U);
+    EXPECT_EQ(objects[0]["pixel_model"], pixels) << result;
+    ASSERT_TRUE(objects[0]["decoded"].is_array()) << result;
+    EXPECT_EQ(objects[0]["decoded"].size(), 1U) << pixels << ": " << result;
+  }
 }
 
 TEST_F(ImagingCliTest, FailedDeblurLeavesAnExistingOutputAlone) {
