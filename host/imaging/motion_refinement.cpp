@@ -45,8 +45,10 @@ constexpr double kJacobianStepPx = 1e-3;
 /// likelihood) by less than this, ...
 constexpr double kWanderConverged = 1.0;
 /// ... kept when it lowers the residual by this share (a clearer gain than the
-/// accelerating motion's: it has many more parameters).
+/// accelerating motion's: it has many more parameters), and given up after the
+/// 4 blocks when they lower it by less than this.
 constexpr double kWanderingGain = 0.03;
+constexpr double kWanderFirstLevelGain = 0.01;
 /// Rows are read in batches, the first of this many; ...
 constexpr int kFirstRows = 32;
 /// ... then as many as the standard error of the first says bring it below this
@@ -649,6 +651,11 @@ class MotionSearch {
           damping *= 4;
         }
       }
+      // A frame whose residual the coarsest blocks barely move is not jitter (colour
+      // print the grey model cannot fit, say): the finer levels would not pay.
+      if (blocks == 4 && !(mean(motion_of(theta)) <
+                           out.residual_per_sample * (1 - kWanderFirstLevelGain)))
+        return;
     }
     const Motion motion = motion_of(theta);
     const double residual = mean(motion);

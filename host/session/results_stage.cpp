@@ -71,10 +71,12 @@ void ResultsStage::handle_processed(FrameOutcome& f) {
   f.log["latency_ms"] = std::round(f.latency_ms * 100) / 100;
   results_.latency_ms.add(f.latency_ms);
   if (const auto motion = f.log.find("motion"); motion != f.log.end() && motion->is_object()) {
-    if (motion->value("used", false))
+    if (motion->value("used", false)) {
       results_.refined_minus_encoder_px.add(motion->value("refined_blur_px", 0.0) -
                                             motion->value("encoder_blur_px", 0.0));
-    else if (!motion->value("edges", true))
+      results_.frames_speed_change += motion->contains("speed_ratio");
+      results_.frames_wandering += motion->contains("block_offsets_px");
+    } else if (!motion->value("edges", true))
       ++results_.frames_without_motion_edges;
   }
   count_second_pass(f.log);

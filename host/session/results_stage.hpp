@@ -88,6 +88,9 @@ struct SessionResults {
   /// its refined blur, and how many frames had no edges to refine it on.
   ValueDistribution refined_minus_encoder_px;
   std::uint64_t frames_without_motion_edges = 0;
+  /// Of those: deblurred with a speed change within the exposure, and with a
+  /// speed that wandered within it (belt jitter: block offsets).
+  std::uint64_t frames_speed_change = 0, frames_wandering = 0;
   ReadRecordTruth read_record_truth;
   /// Reads by indicative grade ("A" .. "F"), every frame.
   std::map<std::string, std::uint64_t> reads_by_grade;

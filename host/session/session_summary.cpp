@@ -82,6 +82,8 @@ nlohmann::json session_summary(const SessionConfig& config, const SessionCounts&
   const auto px = [](double v) { return std::round(v * 1000) / 1000; };
   s["motion_refinement"] = {{"frames_refined", delta.count()},
                             {"frames_without_edges", results.frames_without_motion_edges},
+                            {"frames_speed_change", results.frames_speed_change},
+                            {"frames_wandering", results.frames_wandering},
                             {"refined_minus_encoder_px_p5", px(delta.percentile(5))},
                             {"refined_minus_encoder_px_p50", px(delta.percentile(50))},
                             {"refined_minus_encoder_px_p95", px(delta.percentile(95))}};

@@ -52,6 +52,11 @@ TEST(SimSession, EveryLabelReadEqualsItsGroundTruthAtNominalNoise) {
   EXPECT_GT(motion["frames_refined"].get<int>(), 10) << motion.dump();
   EXPECT_GT(motion["frames_without_edges"].get<int>() + motion["frames_refined"].get<int>(), 0);
   EXPECT_LT(std::abs(motion["refined_minus_encoder_px_p50"].get<double>()), 0.05) << motion.dump();
+  // The sim line runs at a constant speed: a speed change or wandering motion is the exception.
+  EXPECT_LE(2 * motion["frames_speed_change"].get<int>(), motion["frames_refined"].get<int>())
+      << motion.dump();
+  EXPECT_LE(2 * motion["frames_wandering"].get<int>(), motion["frames_refined"].get<int>())
+      << motion.dump();
   EXPECT_LT(std::abs(motion["refined_minus_encoder_px_p5"].get<double>()), 0.2) << motion.dump();
   EXPECT_LT(std::abs(motion["refined_minus_encoder_px_p95"].get<double>()), 0.2) << motion.dump();
   // Every object read, each as one object over several frames, with its read record.
