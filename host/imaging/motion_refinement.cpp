@@ -525,7 +525,7 @@ class MotionSearch {
       // the true one, so the ratio cannot be searched at that blur alone) ...
       double log_ratio = 0, best_cost = INFINITY, blur = best;
       const double step = std::max(0.02, slot);
-      for (double x = -kLogRatioRange; x <= kLogRatioRange + 1e-9; x += 0.2)
+      for (double x = -kLogRatioRange; x <= kLogRatioRange + 1e-9; x += 0.4)
         for (double b = lo_; b <= hi_ + 1e-9; b += step)
           if (const double c = mean({b, std::exp(x), given}); c < best_cost)
             best_cost = c, log_ratio = x, blur = b;
@@ -536,8 +536,8 @@ class MotionSearch {
                               std::max(lo_, blur - 2 * slot), std::min(hi_, blur + 2 * slot),
                               0.005 * std::max(1.0, slot));
         log_ratio = golden_minimum([&](double x) { return mean({blur, std::exp(x), given}); },
-                                   std::max(-kLogRatioRange, log_ratio - 0.2),
-                                   std::min(kLogRatioRange, log_ratio + 0.2), 0.002);
+                                   std::max(-kLogRatioRange, log_ratio - 0.4),
+                                   std::min(kLogRatioRange, log_ratio + 0.4), 0.002);
       }
       const double accelerating = mean({blur, std::exp(log_ratio), given});
       if (accelerating < out.constant_speed_residual * (1 - kAccelerationGain)) {
@@ -610,7 +610,7 @@ class MotionSearch {
       if (blocks <= 8) {
         const double reach = (blocks <= 4 ? 1.5 : 0.75) * std::max(1.0, slot);
         const double step = reach / (blocks <= 4 ? 6 : 3);
-        for (int sweep = 0; sweep < (blocks <= 4 ? 2 : 1); ++sweep)
+        for (int sweep = 0; sweep < 1; ++sweep)
           for (std::size_t k = 1; k < theta.size(); ++k) {
             const double centre = theta[k];
             const auto at = [&](double v) {
