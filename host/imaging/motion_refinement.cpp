@@ -524,7 +524,7 @@ class MotionSearch {
       // A grid over both (a strong speed change moves the constant-speed blur off
       // the true one, so the ratio cannot be searched at that blur alone) ...
       double log_ratio = 0, best_cost = INFINITY, blur = best;
-      const double step = std::max(0.02, slot);
+      const double step = std::max(0.04, 2 * slot);
       for (double x = -kLogRatioRange; x <= kLogRatioRange + 1e-9; x += 0.4)
         for (double b = lo_; b <= hi_ + 1e-9; b += step)
           if (const double c = mean({b, std::exp(x), given}); c < best_cost)
@@ -605,56 +605,57 @@ class MotionSearch {
         return 0.5 * forms_(taps, variances_, -1).value + prior(t);
       };
       double cost = objective(theta);
-      // Coarse levels: each knot searched on a grid first (the residual along one
-      // knot has minima about a slot apart; a Gauss-Newton step finds the nearest).
+      // Levenberg-Marquardt: the normal equations at each accepted motion, solved
+      // with more damping (a shorter, steeper step) until a step lowers the cost.
+      const auto descend = [&] {
+        double damping = 1e-3;
+        auto equations = normal_equations(theta, motion_of, prior_weight);
+        const std::size_t n = theta.size();
+        for (int iteration = 0; iteration < kWanderIterations && !equations.first.empty();
+             ++iteration) {
+          auto damped = equations.first;
+          for (std::size_t k = 0; k < n; ++k) damped[k * n + k] *= 1 + damping;
+          std::vector<double> step = equations.second;
+          for (double& g : step) g = -g;
+          if (!solve_positive_definite(damped, step)) break;
+          // (A step that would move a slot backwards costs infinity: more damping.)
+          std::vector<double> next = theta;
+          for (std::size_t k = 0; k < n; ++k) next[k] += step[k];
+          const double next_cost = objective(next);
+          if (next_cost < cost) {
+            const bool converged = cost - next_cost < kWanderConverged;
+            theta = std::move(next);
+            cost = next_cost;
+            damping /= 3;
+            if (converged) break;
+            equations = normal_equations(theta, motion_of, prior_weight);
+          } else {
+            damping *= 4;
+          }
+        }
+      };
+      // Coarse levels: each knot searched on a grid (the residual along one knot
+      // has minima about a slot apart; a Gauss-Newton step finds the nearest), then
+      // descent from the best.
       if (blocks <= 8) {
         const double reach = (blocks <= 4 ? 1.5 : 0.75) * std::max(1.0, slot);
         const double step = reach / (blocks <= 4 ? 6 : 3);
-        for (int sweep = 0; sweep < 1; ++sweep)
-          for (std::size_t k = 1; k < theta.size(); ++k) {
-            const double centre = theta[k];
-            const auto at = [&](double v) {
-              auto t = theta;
-              t[k] = v;
-              return objective(t);
-            };
-            double best = centre;
-            for (double v = centre - reach; v <= centre + reach + 1e-9; v += step)
-              if (const double c = at(v); c < cost) cost = c, best = v;
-            theta[k] = best;
+        for (std::size_t k = 1; k < theta.size(); ++k) {
+          const double centre = theta[k];
+          double best = centre;
+          for (double v = centre - reach; v <= centre + reach + 1e-9; v += step) {
+            auto t = theta;
+            t[k] = v;
+            if (const double c = objective(t); c < cost) cost = c, best = v;
           }
-      }
-      // Levenberg-Marquardt: the normal equations at each accepted motion, solved
-      // with more damping (a shorter, steeper step) until a step lowers the cost.
-      double damping = 1e-3;
-      auto equations = normal_equations(theta, motion_of, prior_weight);
-      const std::size_t n = theta.size();
-      for (int iteration = 0; iteration < kWanderIterations && !equations.first.empty();
-           ++iteration) {
-        auto damped = equations.first;
-        for (std::size_t k = 0; k < n; ++k) damped[k * n + k] *= 1 + damping;
-        std::vector<double> step = equations.second;
-        for (double& g : step) g = -g;
-        if (!solve_positive_definite(damped, step)) break;
-        // (A step that would move a slot backwards costs infinity: more damping.)
-        std::vector<double> next = theta;
-        for (std::size_t k = 0; k < n; ++k) next[k] += step[k];
-        const double next_cost = objective(next);
-        if (next_cost < cost) {
-          const bool converged = cost - next_cost < kWanderConverged;
-          theta = std::move(next);
-          cost = next_cost;
-          damping /= 3;
-          if (converged) break;
-          equations = normal_equations(theta, motion_of, prior_weight);
-        } else {
-          damping *= 4;
+          theta[k] = best;
         }
       }
+      descend();
       // A frame whose residual the coarsest blocks barely move is not jitter (colour
       // print the grey model cannot fit, say): the finer levels would not pay.
-      if (blocks == 4 && !(mean(motion_of(theta)) <
-                           out.residual_per_sample * (1 - kWanderFirstLevelGain)))
+      if (blocks == 4 &&
+          !(mean(motion_of(theta)) < out.residual_per_sample * (1 - kWanderFirstLevelGain)))
         return;
     }
     const Motion motion = motion_of(theta);
