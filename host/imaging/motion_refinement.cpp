@@ -552,7 +552,9 @@ class MotionSearch {
     // more than noise could (the residual's spread over the samples is about
     // sqrt(2 / samples) per sample), and the residual curves up around it.
     const Motion motion{best, ratio, given};
-    const double samples = static_cast<double>(forms_(taps_of(motion), variances_, -1).samples);
+    const auto best_taps = taps_of(motion);  // (none if the given offsets went backwards there)
+    const double samples =
+        best_taps.empty() ? 0.0 : static_cast<double>(forms_(best_taps, variances_, -1).samples);
     out.significance = out.contrast * out.constant_speed_residual * std::sqrt(samples / 2);
     const double error = standard_error(motion);
     out.edges = out.significance >= kMinimumSignificance && std::isfinite(error);
@@ -564,17 +566,18 @@ class MotionSearch {
     }
     out.blur_px = best;
     out.speed_ratio = ratio;
-    mark_range_edge(out);
+    mark_outside_tolerance(out);
     return out;
   }
 
-  /// The wandering motion (an offset at every slot edge on top of `out`'s
-  /// motion: belt jitter), fitted when `out` leaves a residual above the noise
-  /// on a frame with edges and kept when it explains the frame clearly better.
-  /// Levenberg-Marquardt over the blur and the offsets, the residual being a
-  /// quadratic form in the taps (ResidualForms::hessian) and the taps nearly
-  /// linear in the motion; a prior holds each slot's travel near the smooth
-  /// motion's (the directions the frame barely constrains stay put).
+  /// The wandering motion (block offsets on top of `out`'s motion: belt
+  /// jitter), fitted when `out` leaves a residual above the noise on a frame
+  /// with edges and kept when it explains the frame clearly better. Coarse to
+  /// fine over 4, 8 and kWanderBlocks blocks, each level by Levenberg-Marquardt
+  /// over the blur and the offsets (the residual a quadratic form in the taps,
+  /// ResidualForms::hessian, the taps nearly linear in the motion); a prior
+  /// holds each slot's travel near the smooth motion's (the directions the
+  /// frame barely constrains stay put).
   void wander(MotionRefinement& out) const {
     if (!out.edges || out.residual_per_sample <= kAboveNoise) return;
     const int slots = model_.code.length();
@@ -668,7 +671,7 @@ class MotionSearch {
     out.block_offsets_px = motion.offsets;
     out.residual_per_sample = residual;
     out.standard_error_px = error;
-    mark_range_edge(out);
+    mark_outside_tolerance(out);
   }
 
  private:
@@ -772,7 +775,7 @@ class MotionSearch {
   /// Whether the encoder's blur is off by more than the tolerance (the refined
   /// blur outside range_, beyond 3 standard errors) or the search's best blur
   /// lies on its edge (the best may lie beyond it).
-  void mark_range_edge(MotionRefinement& out) const {
+  void mark_outside_tolerance(MotionRefinement& out) const {
     const double slot = model_.blur_px / model_.code.length();
     const double edge_margin = std::max(0.02, slot / 4);
     const double grace = 3 * out.standard_error_px;
