@@ -342,11 +342,12 @@ void run(const DeblurFlags& f) {
       std::cout << "blur " << motion["given_blur_px"].get<double>() << " px refined to "
                 << motion["refined_blur_px"].get<double>() << " +- "
                 << motion["standard_error_px"].get<double>() << " px"
-                << (motion["used"].get<bool>()                  ? ""
-                    : motion["outside_tolerance"].get<bool>() ? " (outside the tolerance: not used, "
-                                                                "check the blur or widen --blur-tolerance)"
-                                                              : " (the grey model does not fit the "
-                                                                "frame: not used)")
+                << (motion["used"].get<bool>() ? ""
+                    : motion["outside_tolerance"].get<bool>()
+                        ? " (outside the tolerance: not used, "
+                          "check the blur or widen --blur-tolerance)"
+                        : " (the grey model does not fit the "
+                          "frame: not used)")
                 << "\n";
   }
   if (!f.truth.empty())

@@ -21,8 +21,8 @@ namespace flutterscan::bench {
 namespace {
 
 constexpr int kFine = sim::kSimSupersample;
-constexpr double kBelt = 0.35;        // sim::SceneSpec's belt
-constexpr int kMarginPx = 8;          // belt kept downstream of the blur
+constexpr double kBelt = 0.35;  // sim::SceneSpec's belt
+constexpr int kMarginPx = 8;    // belt kept downstream of the blur
 
 std::string random_content(sim::SceneKind kind, std::mt19937_64& rng) {
   static constexpr char kChars[] = "ABCDEFGHJKLMNPQRSTUVWXYZ0123456789";
@@ -158,7 +158,8 @@ bool LabelLine::reads(const imaging::CaptureModel& nominal, const LineMotion& mo
     const auto refined = imaging::refine_motion(frame.value(), assumed, options);
     if (refined.ok()) {
       const auto& m = refined.value();
-      if (imaging::refinement_usable(m)) assumed = imaging::with_refined_motion(std::move(assumed), m);
+      if (imaging::refinement_usable(m))
+        assumed = imaging::with_refined_motion(std::move(assumed), m);
     }
   }
   imaging::DeblurOptions options;

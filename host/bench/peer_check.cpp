@@ -23,8 +23,8 @@
 #include <algorithm>
 #include <cmath>
 #include <complex>
-#include <cstdlib>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -116,7 +116,7 @@ imaging::CaptureModel told_model(const LedCode& code, double sigma_dn) {
 
 struct Scores {
   double peer_float = 0, inverse_8bit = 0;
-  double box_wiener = 0, box_tv = 0;  ///< the default pixel model (box aperture)
+  double box_wiener = 0, box_tv = 0;    ///< the default pixel model (box aperture)
   double band_wiener = 0, band_tv = 0;  ///< told pixel_model "band-limited"
 };
 
@@ -188,11 +188,12 @@ int main(int argc, char** argv) {
   for (const auto& f : fs::directory_iterator(photos))
     if (f.path().extension() == ".png" || f.path().extension() == ".jpg") files.push_back(f.path());
   std::sort(files.begin(), files.end());
-  std::printf("CPU: %s\n\npeer check: %zu photos as band-limited scenes, Raskar's code, 52 px "
-              "(one per slot), SNR %.0f, 8-bit; PSNR dB over the interior (%d px borders "
-              "excluded)\n\n| photo | peer, float | inverse filter, 8-bit | joint Wiener | tv | joint "
-              "Wiener, band-limited | tv, band-limited |\n|---|---|---|---|---|---|---|\n",
-              bench::cpu_model().c_str(), files.size(), snr, kBorder);
+  std::printf(
+      "CPU: %s\n\npeer check: %zu photos as band-limited scenes, Raskar's code, 52 px "
+      "(one per slot), SNR %.0f, 8-bit; PSNR dB over the interior (%d px borders "
+      "excluded)\n\n| photo | peer, float | inverse filter, 8-bit | joint Wiener | tv | joint "
+      "Wiener, band-limited | tv, band-limited |\n|---|---|---|---|---|---|---|\n",
+      bench::cpu_model().c_str(), files.size(), snr, kBorder);
   std::vector<std::vector<double>> columns(6);
   std::uint64_t seed = 1;
   for (const auto& path : files) {

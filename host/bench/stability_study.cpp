@@ -601,8 +601,7 @@ std::string run_stability_study(const StabilityOptions& options, std::FILE* repo
       "(0: off). %zu frames in %.0f s on %d threads.\n",
       kNominalElectrons, kCap, kReadNoise, kBlur, options.width, options.height, options.seeds,
       scenes.size() * static_cast<std::size_t>(options.seeds), options.blur_tolerance_pct,
-      jobs.size(), seconds,
-      options.threads);
+      jobs.size(), seconds, options.threads);
   const int frames_per_point = static_cast<int>(scenes.size()) * options.seeds;
   for (std::size_t f = 0; f < factors.size(); ++f) {
     const Factor& factor = factors[f];

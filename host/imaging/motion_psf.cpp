@@ -87,7 +87,8 @@ void deposit_band_limited(std::vector<double>& taps, double start, double width,
   for (int j = first; j <= last; ++j) {
     const long index = static_cast<long>(j) + kBandLimitedLead;
     if (index < 0 || index >= static_cast<long>(taps.size())) continue;
-    taps[static_cast<std::size_t>(index)] += weight * shape[static_cast<std::size_t>(j - first)] / sum;
+    taps[static_cast<std::size_t>(index)] +=
+        weight * shape[static_cast<std::size_t>(j - first)] / sum;
   }
 }
 

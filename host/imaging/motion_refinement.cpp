@@ -507,9 +507,11 @@ class MotionSearch {
         grid.push_back(c);
         if (c < best_cost) best_cost = c, best = b;
       }
-      best = golden_minimum([&](double b) { return mean({b, start_ratio, given}); },
-                            std::max(lo_, best - step), std::min(hi_, best + step),
-                            0.005 * std::max(1.0, slot));
+      best = golden_minimum(
+          [&](double b) {
+            return mean({b, start_ratio, given});
+          },
+          std::max(lo_, best - step), std::min(hi_, best + step), 0.005 * std::max(1.0, slot));
     }
     out.constant_speed_residual = mean({best, start_ratio, given});
     out.residual_per_sample = out.constant_speed_residual;
@@ -532,12 +534,18 @@ class MotionSearch {
       // ... then each in turn by golden section.
       for (int pass = 0; pass < 2; ++pass) {
         const double r = std::exp(log_ratio);
-        blur = golden_minimum([&](double b) { return mean({b, r, given}); },
-                              std::max(lo_, blur - 2 * slot), std::min(hi_, blur + 2 * slot),
-                              0.005 * std::max(1.0, slot));
-        log_ratio = golden_minimum([&](double x) { return mean({blur, std::exp(x), given}); },
-                                   std::max(-kLogRatioRange, log_ratio - 0.4),
-                                   std::min(kLogRatioRange, log_ratio + 0.4), 0.002);
+        blur = golden_minimum(
+            [&](double b) {
+              return mean({b, r, given});
+            },
+            std::max(lo_, blur - 2 * slot), std::min(hi_, blur + 2 * slot),
+            0.005 * std::max(1.0, slot));
+        log_ratio = golden_minimum(
+            [&](double x) {
+              return mean({blur, std::exp(x), given});
+            },
+            std::max(-kLogRatioRange, log_ratio - 0.4), std::min(kLogRatioRange, log_ratio + 0.4),
+            0.002);
       }
       const double accelerating = mean({blur, std::exp(log_ratio), given});
       if (accelerating < out.constant_speed_residual * (1 - kAccelerationGain)) {

@@ -49,7 +49,7 @@ struct MotionRefinementOptions {
   /// way it is read: the truth within b (1 - tolerance) .. b / (1 - tolerance)
   /// (searched two slots wider); 0 <= tolerance < 1.
   double tolerance = 0.10;
-  int rows = 128;            ///< most rows along the motion to use (the most edgy ones)
+  int rows = 128;  ///< most rows along the motion to use (the most edgy ones)
   /// Try the two-parameter (accelerating) motion, and then the wandering one.
   bool speed_change = true;
 };
@@ -63,13 +63,13 @@ struct MotionRefinement {
   /// Whether the frame constrained the motion: edges along it (a residual that
   /// depends on the blur) and a finite standard error.
   bool edges = false;
-  bool accelerating = false;   ///< the two-parameter motion explained the frame better
-  bool wandering = false;      ///< the block offsets explained it better still
+  bool accelerating = false;  ///< the two-parameter motion explained the frame better
+  bool wandering = false;     ///< the block offsets explained it better still
   /// The encoder's blur is off by more than the tolerance: the refined blur lies
   /// outside given (1 - tolerance) .. given / (1 - tolerance) by more than 3
   /// standard errors, or on the edge of the (two slots wider) search.
   bool outside_tolerance = false;
-  double contrast = 0;         ///< median residual over the searched blurs / the best one - 1
+  double contrast = 0;  ///< median residual over the searched blurs / the best one - 1
   /// How far the best blur stands out: (median - best residual) over the noise
   /// of the residual; edges need 20 or more (a flat frame gives a few).
   double significance = 0;

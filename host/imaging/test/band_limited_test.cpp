@@ -40,8 +40,8 @@ std::complex<double> code_transform(double w) {
 }
 
 struct Frames {
-  Plane scene;   ///< reflectance
-  Image frame;   ///< electrons, noisy
+  Plane scene;  ///< reflectance
+  Image frame;  ///< electrons, noisy
 };
 
 Frames render() {

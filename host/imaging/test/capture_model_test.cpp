@@ -157,7 +157,8 @@ TEST(CaptureDescriptor, RoundTrips) {
   EXPECT_EQ(back.value().block_offsets_px, m.block_offsets_px);
   EXPECT_EQ(to_descriptor(back.value()), to_descriptor(m));
   EXPECT_FALSE(to_descriptor(seed_capture(52)).contains("block_offsets_px"));  // none: not written
-  for (PixelModel pixel : {PixelModel::kBoxAperture, PixelModel::kBandLimited, PixelModel::kTapGrid}) {
+  for (PixelModel pixel :
+       {PixelModel::kBoxAperture, PixelModel::kBandLimited, PixelModel::kTapGrid}) {
     CaptureModel p = seed_capture(52);
     p.pixel_model = pixel;
     const auto read = from_descriptor(to_descriptor(p));

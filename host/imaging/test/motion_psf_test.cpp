@@ -134,8 +134,7 @@ TEST(MotionPsf, BandLimitedSlotsAreTheSincsMeanFromALeadOfTaps) {
   deposit_slot(taps, 0.3, 1.4, 1, PixelModel::kBandLimited);
   EXPECT_NEAR(sum(taps), 1.0, 1e-12);
   for (int j = -kBandLimitedLead; j <= 2 + kBandLimitedLead; ++j)
-    EXPECT_NEAR(taps[static_cast<std::size_t>(j + kBandLimitedLead)], sinc_mean(j, 0.3, 1.7),
-                2e-3)
+    EXPECT_NEAR(taps[static_cast<std::size_t>(j + kBandLimitedLead)], sinc_mean(j, 0.3, 1.7), 2e-3)
         << j;
   // One pixel per slot: the box's band-limited samples, not [0.5, 0.5]. Near Nyquist (0.4
   // cycles per pixel) they pass the box's sinc, 0.757; the box aperture's pair passes

@@ -13,8 +13,8 @@
 #include "imaging/capture_descriptor.hpp"
 #include "imaging/deblur.hpp"
 #include "imaging/exposure_timeline.hpp"
-#include "imaging/metrics.hpp"
 #include "imaging/frame_conversion.hpp"
+#include "imaging/metrics.hpp"
 #include "imaging/motion_frame.hpp"
 #include "sim/forward_model.hpp"
 #include "sim/pixel_integration.hpp"
@@ -175,22 +175,22 @@ TEST(MotionRefinement, FollowsABeltThatJittersWithinTheExposure) {
   const auto scene = fine_label(SceneKind::kCode128, "FLUTTER-0042");
   int wandering = 0;
   double before_sum = 0, after_sum = 0, psnr_before = 0, psnr_after = 0;
-  const imaging::Region scored = imaging::scored_region(scene.width / kSimSupersample,
-                                                        scene.height / kSimSupersample, 52,
-                                                        Direction::kPlusX);
+  const imaging::Region scored = imaging::scored_region(
+      scene.width / kSimSupersample, scene.height / kSimSupersample, 52, Direction::kPlusX);
   const imaging::Plane truth_grey = bin_pixels(scene, kSimSupersample);
   for (std::uint64_t seed = 1; seed <= 4; ++seed) {
     const CaptureModel m = triplet_capture(52, 3000);
     const auto edges = jittered_slot_boundaries(m.code.length(), 52, 0.2, seed * 3 + 1);
-    const auto frame = imaging::MotionFrame::make(
-                           imaging::dn_to_electrons(
-                               record_frame(expected_electrons_timeline(
-                                                scene, m, imaging::segments_from_boundaries(m.code, edges),
-                                                kSimSupersample),
-                                            m, seed),
-                               m),
-                           m.direction)
-                           .value();
+    const auto frame =
+        imaging::MotionFrame::make(
+            imaging::dn_to_electrons(
+                record_frame(expected_electrons_timeline(
+                                 scene, m, imaging::segments_from_boundaries(m.code, edges),
+                                 kSimSupersample),
+                             m, seed),
+                m),
+            m.direction)
+            .value();
     const auto r = imaging::refine_motion(frame, m, {});
     ASSERT_TRUE(r.ok()) << r.error();
     ASSERT_TRUE(r.value().edges) << seed;
@@ -202,15 +202,17 @@ TEST(MotionRefinement, FollowsABeltThatJittersWithinTheExposure) {
     after_sum += after;
     imaging::DeblurOptions options;
     options.method = imaging::Method::kJointWiener;
-    const double p0 = imaging::psnr(truth_grey, imaging::deblur(frame, m, options).value().latent, scored);
+    const double p0 =
+        imaging::psnr(truth_grey, imaging::deblur(frame, m, options).value().latent, scored);
     const double p1 =
         imaging::psnr(truth_grey, imaging::deblur(frame, refined, options).value().latent, scored);
     psnr_before += p0;
     psnr_after += p1;
-    std::printf("seed %d: edges %.3f -> %.3f px rms, residual %.2f -> %.2f, joint Wiener %.1f -> "
-                "%.1f dB, wandering %d\n",
-                static_cast<int>(seed), before, after, r.value().constant_speed_residual,
-                r.value().residual_per_sample, p0, p1, r.value().wandering);
+    std::printf(
+        "seed %d: edges %.3f -> %.3f px rms, residual %.2f -> %.2f, joint Wiener %.1f -> "
+        "%.1f dB, wandering %d\n",
+        static_cast<int>(seed), before, after, r.value().constant_speed_residual,
+        r.value().residual_per_sample, p0, p1, r.value().wandering);
   }
   EXPECT_GE(wandering, 3);
   EXPECT_LT(after_sum, 0.6 * before_sum);
