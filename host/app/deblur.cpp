@@ -262,8 +262,9 @@ void run(const DeblurFlags& f) {
       if (r.wandering) motion["block_offsets_px"] = r.block_offsets_px;
       motion["outside_tolerance"] = r.outside_tolerance;
     }
-    motion["used"] = imaging::refinement_usable(r);
-    if (imaging::refinement_usable(r)) model = imaging::with_refined_motion(std::move(model), r);
+    const bool used = imaging::refinement_usable(r);
+    motion["used"] = used;
+    if (used) model = imaging::with_refined_motion(std::move(model), r);
   }
   const double refine_ms = elapsed_ms(start);
   start = std::chrono::steady_clock::now();

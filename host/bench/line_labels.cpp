@@ -151,17 +151,7 @@ bool LabelLine::reads(const imaging::CaptureModel& nominal, const LineMotion& mo
   assumed.speed_ratio = 1;
   auto frame = imaging::MotionFrame::make(electrons, assumed.direction);
   if (!frame.ok()) return false;
-  if (motion.refine_tolerance > 0 && !imaging::channels_share_one_code(assumed) &&
-      imaging::refinement_fits(assumed, motion.refine_tolerance, frame.value().along())) {
-    imaging::MotionRefinementOptions options;
-    options.tolerance = motion.refine_tolerance;
-    const auto refined = imaging::refine_motion(frame.value(), assumed, options);
-    if (refined.ok()) {
-      const auto& m = refined.value();
-      if (imaging::refinement_usable(m))
-        assumed = imaging::with_refined_motion(std::move(assumed), m);
-    }
-  }
+  assumed = imaging::motion_refined(frame.value(), assumed, motion.refine_tolerance);
   imaging::DeblurOptions options;
   options.method = imaging::Method::kJointWiener;
   options.threads = 1;

@@ -120,27 +120,15 @@ imaging::DeblurOptions options_for(imaging::Method method) {
 const imaging::Method kMethods[] = {imaging::Method::kJointWiener, imaging::Method::kRichardsonLucy,
                                     imaging::Method::kTotalVariation};
 
-/// The model the methods get: `assumed` with its motion refined on the frame
-/// as the session does (codes of two or more LEDs; the refined motion taken
-/// where imaging::refinement_usable() says so).
-CaptureModel refined(const Image& electrons, const CaptureModel& assumed, double tolerance) {
-  if (!(tolerance > 0) || imaging::channels_share_one_code(assumed)) return assumed;
-  const auto frame = imaging::MotionFrame::make(Image(electrons), assumed.direction);
-  if (!frame.ok() || !imaging::refinement_fits(assumed, tolerance, frame.value().along()))
-    return assumed;
-  imaging::MotionRefinementOptions options;
-  options.tolerance = tolerance;
-  const auto r = imaging::refine_motion(frame.value(), assumed, options);
-  return r.ok() && imaging::refinement_usable(r.value())
-             ? imaging::with_refined_motion(assumed, r.value())
-             : assumed;
-}
-
 /// joint-wiener, rl and tv on one frame (electrons) under the model the solver
 /// assumes, its motion refined on the frame when the trial says so.
 std::vector<Score> standard_methods(const Image& electrons, const CaptureModel& given,
                                     const Plane& truth, const Trial& t) {
-  const auto assumed = refined(electrons, given, t.blur_tolerance);
+  CaptureModel assumed = given;  // its motion refined as the session does, when the trial asks
+  if (t.blur_tolerance > 0)
+    if (const auto frame = imaging::MotionFrame::make(Image(electrons), given.direction);
+        frame.ok())
+      assumed = imaging::motion_refined(frame.value(), given, t.blur_tolerance);
   std::vector<Score> scores;
   for (const auto method : kMethods) {
     const auto result = imaging::deblur(electrons, assumed, options_for(method));

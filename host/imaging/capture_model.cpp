@@ -41,12 +41,8 @@ std::string capture_model_problem(const CaptureModel& m) {
            std::to_string(m.code.length()) + ")";
   for (double v : m.block_offsets_px)
     if (!std::isfinite(v)) return "the block offsets must be finite numbers (pixels)";
-  if (!m.block_offsets_px.empty()) {
-    const auto edges = slot_edges(m);
-    for (std::size_t t = 1; t < edges.size(); ++t)
-      if (edges[t] < edges[t - 1])
-        return "the block offsets make the object move backwards within the exposure";
-  }
+  if (!m.block_offsets_px.empty() && !edges_move_forward(slot_edges(m)))
+    return "the block offsets make the object move backwards within the exposure";
   if (m.crosstalk.size() != static_cast<std::size_t>(m.channels * m.leds))
     return "the crosstalk matrix must have " + std::to_string(m.channels) + " rows of " +
            std::to_string(m.leds) + " entries";

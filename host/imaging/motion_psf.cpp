@@ -183,4 +183,8 @@ void add_block_offsets(std::vector<double>& edges, std::span<const double> offse
   }
 }
 
+bool edges_move_forward(std::span<const double> edges) {
+  return std::is_sorted(edges.begin(), edges.end());
+}
+
 }  // namespace flutterscan::imaging

@@ -72,4 +72,7 @@ std::vector<double> accelerating_slot_edges(int slots, double blur_px, double sp
 /// belt whose speed changes from block to block (jitter) with the same travel.
 void add_block_offsets(std::vector<double>& edges, std::span<const double> offsets);
 
+/// \brief Whether slot `edges` never decrease: the object never moves backwards.
+bool edges_move_forward(std::span<const double> edges);
+
 }  // namespace flutterscan::imaging

@@ -798,8 +798,7 @@ class MotionSearch {
     auto edges = accelerating_slot_edges(model_.code.length(), std::clamp(motion.blur, lo_, hi_),
                                          motion.ratio);
     add_block_offsets(edges, motion.offsets);
-    for (std::size_t t = 1; t < edges.size(); ++t)
-      if (edges[t] < edges[t - 1]) return {};
+    if (!edges_move_forward(edges)) return {};
     auto out = timeline_channel_psfs(model_, segments_from_boundaries(model_.code, edges));
     for (auto& t : out) t.resize(static_cast<std::size_t>(taps_), 0.0);
     return out;
@@ -935,6 +934,16 @@ CaptureModel with_refined_motion(CaptureModel model, const MotionRefinement& ref
   model.speed_ratio = refinement.speed_ratio;
   model.block_offsets_px = refinement.block_offsets_px;
   return model;
+}
+
+CaptureModel motion_refined(const MotionFrame& frame, const CaptureModel& model, double tolerance) {
+  if (!(tolerance > 0) || channels_share_one_code(model) ||
+      !refinement_fits(model, tolerance, frame.along()))
+    return model;
+  MotionRefinementOptions options;
+  options.tolerance = tolerance;
+  const auto r = refine_motion(frame, model, options);
+  return r.ok() && refinement_usable(r.value()) ? with_refined_motion(model, r.value()) : model;
 }
 
 }  // namespace flutterscan::imaging

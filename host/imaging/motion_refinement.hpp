@@ -104,4 +104,10 @@ bool refinement_usable(const MotionRefinement& refinement);
 /// \brief `model` with the motion `refinement` found (blur, speed ratio, block offsets).
 CaptureModel with_refined_motion(CaptureModel model, const MotionRefinement& refinement);
 
+/// \brief `model` with its motion refined on `frame` within `tolerance`, where
+/// that can be done (tolerance > 0, channels that do not share one code, a
+/// search that fits the frame) and the result is usable (refinement_usable());
+/// else `model` as it is. For callers that want the deblur's model, not the log.
+CaptureModel motion_refined(const MotionFrame& frame, const CaptureModel& model, double tolerance);
+
 }  // namespace flutterscan::imaging
