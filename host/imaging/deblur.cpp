@@ -122,8 +122,16 @@ Result<DeblurResult, std::string> deblur(const MotionFrame& frame, const Capture
     return Out::failure("the capture model lights no channel: every PSF is zero (or below " +
                         std::to_string(kMinLitElectrons) + " e-)");
 
-  result.latent = deconvolve_motion_rows(psfs, rows, 1.0 / options.gradient_variance,
-                                         model.read_noise * model.read_noise, options);
+  if (options.skip_flat_rows && options.method == Method::kJointWiener) {
+    JointWiener wiener(psfs, rows[0].width, 1.0 / options.gradient_variance, options.plan_effort);
+    wiener.skip_flat_rows(
+        std::vector<double>(psfs.size(), channel_noise_variance(model, 0)));  // without shot noise
+    result.latent = wiener.deconvolve(rows, options.threads);
+    result.flat_rows = wiener.flat_rows();
+  } else {
+    result.latent = deconvolve_motion_rows(psfs, rows, 1.0 / options.gradient_variance,
+                                           model.read_noise * model.read_noise, options);
+  }
   undo_psf_lead(result.latent, pixel_model_lead(model.pixel_model));
   return Out::success(std::move(result));
 }

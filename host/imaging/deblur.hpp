@@ -52,11 +52,17 @@ struct DeblurOptions {
   /// joint-wiener and wiener-avg: FFTW planning (row_fft.hpp). A session measures
   /// before it streams and deblurs with kMeasuredIfKnown.
   PlanEffort plan_effort = PlanEffort::kEstimate;
+  /// joint-wiener: rows that carry only noise are filled with the latent of a
+  /// constant row instead of transformed (JointWiener::skip_flat_rows). A
+  /// session does (its belt between labels costs a row's statistics, not four
+  /// FFTs); off elsewhere, so offline deblurs and accuracy figures see every row.
+  bool skip_flat_rows = false;
 };
 
 struct DeblurResult {
   Plane latent;                        ///< reflectance, same size and orientation as the input
   std::vector<double> noise_variance;  ///< per channel, e-^2, at the frame's mean signal
+  int flat_rows = 0;                   ///< rows filled as flat (DeblurOptions::skip_flat_rows)
 };
 
 /// \brief The method dispatch on rows already in the motion frame: `rows[c]`

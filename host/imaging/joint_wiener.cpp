@@ -3,6 +3,8 @@
 #include <cmath>
 #include <numbers>
 
+#include "imaging/lane_sum.hpp"
+
 namespace flutterscan::imaging {
 
 std::vector<float> periodic_blend(int width, int padded) {
@@ -84,12 +86,50 @@ JointWiener::JointWiener(std::span<const ChannelPsf> channels, int width, double
     filters_.push_back(std::move(filter));
   }
   blend_ = periodic_blend(width, n);
+  // A constant row m_c has bin 0 = n m_c and nothing else: its latent is
+  // sum_c Re(filter_c[0]) n m_c everywhere.
+  for (const auto& filter : filters_) dc_gains_.push_back(filter[0].real() * static_cast<float>(n));
+}
+
+void JointWiener::skip_flat_rows(std::vector<double> base_variance) {
+  flat_base_variance_ = std::move(base_variance);
+  flat_base_variance_.resize(filters_.size(), 0.0);
+}
+
+bool JointWiener::fill_if_flat(std::span<const std::span<float>> rows, std::span<float> out) const {
+  const std::size_t n = static_cast<std::size_t>(width_);
+  if (flat_base_variance_.empty() || n < 2) return false;
+  // Stretches of kFlatRowStretch samples (the last takes the remainder), each
+  // judged about the row's mean: a small code on a wide row, or one stretch's
+  // level off the rest's, is not averaged away by the row's other samples.
+  const std::size_t stretches = std::max<std::size_t>(1, n / kFlatRowStretch);
+  const std::size_t shortest = n / stretches;
+  // A sample variance of m noise samples has a relative standard error of about sqrt(2 / m).
+  const double allowed = 1 + kFlatRowSigmas * std::sqrt(2.0 / static_cast<double>(shortest));
+  float fill = 0;
+  for (std::size_t c = 0; c < rows.size(); ++c) {
+    const float* row = rows[c].data();
+    const float mean = lane_sum(n, [&](std::size_t x) { return row[x]; }) / static_cast<float>(n);
+    const double noise = flat_base_variance_[c] + std::max(0.0, static_cast<double>(mean));
+    for (std::size_t k = 0; k < stretches; ++k) {
+      const std::size_t from = k * shortest, to = k + 1 == stretches ? n : from + shortest;
+      const float* part = row + from;
+      const float squares = lane_sum(to - from, [&](std::size_t x) {
+        const float d = part[x] - mean;
+        return d * d;
+      });
+      if (!(squares / static_cast<double>(to - from) <= allowed * noise)) return false;
+    }
+    fill += dc_gains_[c] * mean;
+  }
+  std::fill(out.begin(), out.end(), fill);
+  return true;
 }
 
 JointWiener::Scratch JointWiener::make_scratch() const {
   const auto n = static_cast<std::size_t>(fft_.length());
   const auto complex_floats = static_cast<std::size_t>(2 * fft_.bins());
-  Scratch scratch{{}, {}, AlignedFloats(complex_floats), AlignedFloats(complex_floats)};
+  Scratch scratch{{}, {}, AlignedFloats(complex_floats), AlignedFloats(complex_floats), 0};
   for (std::size_t c = 0; c < filters_.size(); ++c) {
     scratch.padded.emplace_back(n);
     scratch.rows.push_back(scratch.padded.back().span().first(static_cast<std::size_t>(width_)));
@@ -100,6 +140,10 @@ JointWiener::Scratch JointWiener::make_scratch() const {
 void JointWiener::deconvolve_row(int y, const RowLoader& load, std::span<float> out,
                                  Scratch& scratch) const {
   load(y, scratch.rows);
+  if (fill_if_flat(scratch.rows, out)) {
+    ++scratch.flat_rows;
+    return;
+  }
   filter_and_sum_channels(fft_, filters_, width_, blend_, scratch.padded, scratch.spectrum,
                           scratch.sum.data());
   float* result = scratch.padded[0].data();
@@ -109,10 +153,13 @@ void JointWiener::deconvolve_row(int y, const RowLoader& load, std::span<float> 
 
 void JointWiener::deconvolve(const RowLoader& load, int height, Plane& out, RowPool& pool) {
   while (static_cast<int>(workers_.size()) < pool.threads()) workers_.push_back(make_scratch());
+  for (Scratch& scratch : workers_) scratch.flat_rows = 0;
   pool.run(height, [&](int first, int last, int worker) {
     Scratch& scratch = workers_[static_cast<std::size_t>(worker)];
     for (int y = first; y < last; ++y) deconvolve_row(y, load, out.row(y), scratch);
   });
+  flat_rows_ = 0;
+  for (const Scratch& scratch : workers_) flat_rows_ += scratch.flat_rows;
 }
 
 JointWiener::RowLoader plane_row_loader(std::span<const Plane> channels) {

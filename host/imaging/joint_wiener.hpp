@@ -11,6 +11,12 @@
 // deconvolution then has no edge to ring at, and the extension absorbs the
 // blur tail that entered the frame from the left. Output column n is the
 // latent at column n (registered at the start of slot 0).
+//
+// Flat rows (optional, skip_flat_rows()): a row whose every channel varies
+// about its mean no more than its noise would is not transformed; its latent
+// is the constant the filter makes of a constant row (the DC gains times the
+// channels' means). A belt between labels is such rows; anything a code could
+// be printed with lifts a row's variance far above its noise, even blurred.
 
 #include <complex>
 #include <functional>
@@ -64,6 +70,7 @@ class JointWiener {
     std::vector<std::span<float>> rows;  ///< the first width() samples of each
     AlignedFloats spectrum;
     AlignedFloats sum;
+    int flat_rows = 0;  ///< rows this scratch found flat (skip_flat_rows())
   };
   Scratch make_scratch() const;
   /// \brief Writes row `y` of every channel (electrons, width() samples) into `rows[c]`.
@@ -78,13 +85,40 @@ class JointWiener {
   /// \brief Deconvolves whole planes (rows in the motion frame) on `threads` threads.
   Plane deconvolve(std::span<const Plane> channels, int threads);
 
+  /// \brief From now on, rows that carry only noise are filled, not transformed
+  /// (the header's "Flat rows"): channel c's noise variance at a row mean m e-
+  /// is base_variance[c] + m (read noise and quantisation, then shot noise). A
+  /// row is flat when, in every channel and every stretch of kFlatRowStretch
+  /// samples, the mean square about the row's mean is at most kFlatRowSigmas
+  /// standard errors above that.
+  void skip_flat_rows(std::vector<double> base_variance);
+  /// \brief How many rows the last deconvolve() found flat.
+  int flat_rows() const { return flat_rows_; }
+
  private:
   int width_;
   RowFft fft_;
   std::vector<std::vector<std::complex<float>>> filters_;  ///< conj(G_c) / v_c / D / N
   std::vector<float> blend_;
   std::vector<Scratch> workers_;
+  std::vector<double> flat_base_variance_;  ///< empty: every row transformed
+  std::vector<float> dc_gains_;             ///< latent of a constant row per e- of channel c
+  int flat_rows_ = 0;
+
+  bool fill_if_flat(std::span<const std::span<float>> rows, std::span<float> out) const;
 };
+
+/// \brief Standard errors of a noise-only stretch's mean square above its
+/// expected value that a stretch may reach and still count as flat (four: a
+/// 1920-px row of noise alone is judged busy about once in a thousand rows) ...
+inline constexpr double kFlatRowSigmas = 4;
+/// \brief ... in stretches this long. The coded blur keeps print's variance
+/// but spreads it over the code's lit slots (about 1/17 of it per sample at 52
+/// slots): a 100-px code of 25% and 75% reflectance at 300 e- lifts its
+/// stretch's mean square about 2 noise variances above the noise, where the
+/// whole row's would move 0.1; print of +-12% there (0.5 above) is the
+/// limit, and is filled as flat.
+inline constexpr std::size_t kFlatRowStretch = 128;
 
 /// \brief A row loader reading row y of each plane of `channels` (motion frame).
 JointWiener::RowLoader plane_row_loader(std::span<const Plane> channels);

@@ -74,14 +74,21 @@ std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent) {
     spread[i] = std::sqrt(std::max(0.0, c.square / c.samples - mean * mean));
     steps[i] = c.across / c.samples + (c.along_steps > 0 ? c.along / c.along_steps : 0.0);
   }
-  // The frame's noise: its flattest cells' spread and steps.
+  // The frame's noise: its flattest cells' spread and steps, among the cells that
+  // change at all along their rows (a constant cell, from rows the deblur found
+  // flat and filled or from clipped light, says nothing about the noise).
+  std::vector<double> noisy_spread, noisy_steps;
+  for (std::size_t i = 0; i < cells.size(); ++i)
+    if (cells[i].along > 0) noisy_spread.push_back(spread[i]), noisy_steps.push_back(steps[i]);
   auto percentile = [](std::vector<double> values) {
+    if (values.empty()) return 0.0;
     const auto nth =
         values.begin() + static_cast<std::ptrdiff_t>(kNoisePercentile * (values.size() - 1));
     std::nth_element(values.begin(), nth, values.end());
     return *nth;
   };
-  const double noise = percentile(spread), noise_steps = percentile(steps);
+  const double noise = percentile(std::move(noisy_spread)),
+               noise_steps = percentile(std::move(noisy_steps));
   const double need = std::max(kMinContrast, kNoiseMultiple * noise);
   std::vector<char> busy(cells.size(), 0);
   int busy_count = 0;

@@ -110,6 +110,7 @@ imaging::DeblurOptions deblur_options(const ProcessingConfig& processing) {
   options.method = processing.method;
   options.threads = processing.threads_per_worker;
   options.plan_effort = imaging::PlanEffort::kMeasuredIfKnown;  // measured before streaming
+  options.skip_flat_rows = true;                                // the belt between labels
   return options;
 }
 

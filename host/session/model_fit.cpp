@@ -150,6 +150,7 @@ Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
     if (!result.ok()) return Out::failure(result.error());
     out.latent = std::move(result.value().latent);
     out.grey_global = true;
+    if (options.skip_flat_rows) out.log["model"]["flat_rows"] = result.value().flat_rows;
     times["deblur"] = lap_ms(lap);
     // The residual check needs the grey global model the frame was deblurred with.
     guards.residual_ratio =

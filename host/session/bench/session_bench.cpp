@@ -227,6 +227,7 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
   options.threads = 1;
   imaging::measure_row_ffts(width, 258);  // as the session does before it streams
   options.plan_effort = imaging::PlanEffort::kMeasuredIfKnown;
+  options.skip_flat_rows = true;  // as the session
   std::map<std::string, std::vector<double>> samples;
   std::size_t record_bytes = 0;
   for (int r = 0; r < repeats; ++r) {
@@ -258,9 +259,9 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
         reader::regions_to_read(reader::find_paper_runs(latent), reader::find_code_regions(latent));
     lap("regions");
     // The session's reader options; the frame moves along +x.
-    const auto readout =
-        reader::read_codes(latent, regions, imaging::Direction::kPlusX, reader::ReaderOptions{})
-            .readout;
+    const auto reading =
+        reader::read_codes(latent, regions, imaging::Direction::kPlusX, reader::ReaderOptions{});
+    const auto& readout = reading.readout;
     lap("decode");
     // The read record of each code read (issue 19's cost target): its measurement on the
     // latent (read_barcodes made it inside "decode" already; made again here to time it
@@ -281,7 +282,8 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
                 << (refined.ok() ? refined.value().blur_px : -1) << " +- "
                 << (refined.ok() ? refined.value().standard_error_px : -1) << " px; model "
                 << choice.describe() << ", residual ratio " << ratio << ", saturated " << saturated
-                << ", " << readout.codes.size() << " code(s) read"
+                << ", " << deblurred.value().flat_rows << " of " << height << " rows flat, "
+                << readout.codes.size() << " code(s) read"
                 << (readout.decoder_fault.empty() ? "" : ", decoder fault") << "\n";
   }
   for (auto& [stage, v] : samples) out[stage] = median(v);

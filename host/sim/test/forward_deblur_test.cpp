@@ -4,6 +4,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -170,6 +171,76 @@ TEST(Deblur, RichardsonLucyConvergesTowardTheScene) {
   const double after_twenty = deblurred_psnr(scene, m, twenty);
   EXPECT_GT(after_twenty, after_one + 3.0);
   EXPECT_GT(after_twenty, 17.0);
+}
+
+// The session's flat rows: belt rows are filled with the latent of a constant
+// row, and every row with print on it (bars, or just a label's edges) is
+// deconvolved exactly as without the option.
+TEST(Deblur, FlatRowsAreFilledAndRowsWithPrintAreNot) {
+  for (const double electrons : {300.0, 3000.0}) {
+    SCOPED_TRACE(electrons);
+    Plane scene = bars(640, 96, 5);  // belt rows 0-11 and 84-95, bars between
+    // Rows 2-4: a label's paper edge to edge (0.9 from x = 200 to 440), no print.
+    for (int y = 2; y < 5; ++y)
+      for (int x = 200; x < 440; ++x) scene.at(x, y) = 0.9f;
+    const CaptureModel m = coded_capture(electrons, 52);
+    const imaging::Image frame = simulate(scene, m, 11);
+    imaging::DeblurOptions every_row;
+    imaging::DeblurOptions skipping = every_row;
+    skipping.skip_flat_rows = true;
+    const auto full = imaging::deblur(frame, m, every_row);
+    const auto skipped = imaging::deblur(frame, m, skipping);
+    ASSERT_TRUE(full.ok() && skipped.ok());
+    EXPECT_EQ(full.value().flat_rows, 0);
+    EXPECT_EQ(skipped.value().flat_rows, 24 - 3);  // the belt rows, not the paper's
+    for (int y = 0; y < scene.height; ++y) {
+      const auto a = full.value().latent.row(y), b = skipped.value().latent.row(y);
+      const bool belt = (y < 12 || y >= 84) && !(y >= 2 && y < 5);
+      if (!belt) {
+        EXPECT_TRUE(std::equal(a.begin(), a.end(), b.begin())) << "row " << y;
+        continue;
+      }
+      // A constant: the deconvolved row's mean, and the belt's reflectance.
+      double mean = 0;
+      for (float v : a) mean += v;
+      mean /= static_cast<double>(a.size());
+      EXPECT_EQ(*std::min_element(b.begin(), b.end()), *std::max_element(b.begin(), b.end()))
+          << "row " << y;
+      EXPECT_NEAR(b[0], mean, 0.01) << "row " << y;
+      EXPECT_NEAR(b[0], 0.35, 0.02) << "row " << y;
+    }
+  }
+}
+
+// Noise alone, at a level of its own per row: every row is flat; rows that
+// carry a small code (100 px of 1-px bars, 25% and 75% reflectance) at 300 e-,
+// or a ramp of 5% along them at 3000 e-, are not.
+TEST(Deblur, FlatRowsFollowTheNoiseOfTheirLevel) {
+  const CaptureModel m = coded_capture(3000, 52);
+  Plane ramp(512, 40);
+  for (int y = 0; y < ramp.height; ++y)
+    for (int x = 0; x < ramp.width; ++x) ramp.at(x, y) = 0.05f + 0.9f * y / ramp.height;
+  imaging::DeblurOptions skipping;
+  skipping.skip_flat_rows = true;
+  const auto flat = imaging::deblur(simulate(ramp, m, 3), m, skipping);
+  ASSERT_TRUE(flat.ok());
+  EXPECT_EQ(flat.value().flat_rows, ramp.height);
+  Plane small_code(1920, 40, 0.5f);
+  std::mt19937 rng(4);
+  for (int x = 900; x < 1000; ++x) {
+    const float v = rng() % 2 ? 0.75f : 0.25f;
+    for (int y = 0; y < small_code.height; ++y) small_code.at(x, y) = v;
+  }
+  const CaptureModel dim = coded_capture(300, 52);
+  const auto code = imaging::deblur(simulate(small_code, dim, 3), dim, skipping);
+  ASSERT_TRUE(code.ok());
+  EXPECT_EQ(code.value().flat_rows, 0);
+  Plane shaded(1920, 40);
+  for (int y = 0; y < shaded.height; ++y)
+    for (int x = 0; x < shaded.width; ++x) shaded.at(x, y) = 0.5f * (1 + 0.05f * x / 1920);
+  const auto shading = imaging::deblur(simulate(shaded, m, 3), m, skipping);
+  ASSERT_TRUE(shading.ok());
+  EXPECT_EQ(shading.value().flat_rows, 0);
 }
 
 TEST(Deblur, RefusesBlurLongerThanTheImageAndChannelMismatch) {
