@@ -283,7 +283,8 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
                 << (refined.ok() ? refined.value().standard_error_px : -1) << " px; model "
                 << choice.describe() << ", residual ratio " << ratio << ", saturated " << saturated
                 << ", " << deblurred.value().flat_rows << " of " << height << " rows flat, "
-                << readout.codes.size() << " code(s) read"
+                << readout.codes.size() << " code(s) read in " << reading.windows.value_or(0)
+                << " window(s)"
                 << (readout.decoder_fault.empty() ? "" : ", decoder fault") << "\n";
   }
   for (auto& [stage, v] : samples) out[stage] = median(v);
