@@ -46,10 +46,13 @@ struct DecodedCode {
 
 /// \brief The symbologies read unless `processing.symbologies` names others.
 /// Left out: Micro QR, whose sampler in Debian's ZXing 1.4 fails an assertion
-/// on some deblurred frames (see assertion_guard.hpp), and DataBar, which
-/// conveyor labels rarely carry. ZXing's names, comma-separated.
+/// on some deblurred frames (see assertion_guard.hpp); PDF417, whose error
+/// correction in ZXing 1.4 has spun for more than 20 minutes on a noisy
+/// deblurred frame (twice, docs/benchmarks.md: a worker would stop that long),
+/// so a line reads it only where it names it; and DataBar, which conveyor
+/// labels rarely carry. ZXing's names, comma-separated.
 inline constexpr const char* kDefaultSymbologies =
-    "Aztec,Codabar,Code39,Code93,Code128,DataMatrix,EAN-8,EAN-13,ITF,PDF417,QRCode,UPC-A,UPC-E";
+    "Aztec,Codabar,Code39,Code93,Code128,DataMatrix,EAN-8,EAN-13,ITF,QRCode,UPC-A,UPC-E";
 
 /// \brief "" if `symbologies` is a list of ZXing format names ZXing knows
 /// (comma-separated, e.g. "Code128,QRCode"), else what is wrong with it.
