@@ -93,11 +93,12 @@ void ResultsStage::handle_processed(FrameOutcome& f) {
     }
   const bool keep = static_cast<int>(results_.frames_saved) < config_.output.keep_first_frames ||
                     ((f.decode_failed || low_grade) && config_.output.keep_failed_frames);
-  // The report shows the first frames with a read label, and failures.
+  // The report shows the first frames with a read label, and failures (made only
+  // for a report: each costs tens of ms of this thread in the session's first second).
   const bool read_something = std::any_of(f.sightings.begin(), f.sightings.end(),
                                           [](const Sighting& x) { return x.decoded; });
-  const bool preview =
-      (read_something && previews_read_ < 3) || (f.decode_failed && previews_failed_ < 3);
+  const bool preview = config_.output.report && ((read_something && previews_read_ < 3) ||
+                                                 (f.decode_failed && previews_failed_ < 3));
   // The frame's DN planes again (it converted without them), for these frames only.
   const auto dn = keep || preview ? capture::frame_to_dn(f.frame)
                                   : Result<imaging::Image, std::string>::success({});

@@ -1,7 +1,5 @@
 #include "session/session.hpp"
 
-#include <malloc.h>
-
 #include <optional>
 #include <thread>
 #include <utility>
@@ -10,6 +8,7 @@
 #include "imaging/capture_descriptor.hpp"
 #include "imaging/motion_frame.hpp"
 #include "session/capture_stage.hpp"
+#include "session/frame_memory.hpp"
 #include "session/light_probe.hpp"
 #include "session/line_devices.hpp"
 #include "session/live_view.hpp"
@@ -26,11 +25,6 @@
 #include "session/worker_pool.hpp"
 
 namespace flutterscan::session {
-
-void keep_freed_frame_memory() {
-  mallopt(M_MMAP_THRESHOLD, 32 << 20);  // glibc's largest
-  mallopt(M_TRIM_THRESHOLD, 512 << 20);
-}
 
 SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
                            const SessionHooks& hooks) {
@@ -81,6 +75,7 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   imaging::Direction direction = imaging::Direction::kPlusX;
   imaging::parse_direction(config.optics.direction, direction);
   plan_row_ffts(format, direction);
+  warm_frame_memory(frames_in_flight_bytes(format, config.processing));
 
   // The outputs: the session folder, result lines (TCP, serial).
   SessionFolder folder;

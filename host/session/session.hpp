@@ -57,13 +57,6 @@ struct SessionOutcome {
   bool bad_input = false;  ///< the error is the user's configuration (exit 2)
 };
 
-/// \brief Keeps freed memory in the process (glibc: blocks up to 32 MB from the
-/// heap, no trimming below 512 MB) instead of returning it to the kernel. A
-/// session allocates and frees several 8 MB planes per frame; returned memory
-/// comes back as page faults, about 5 ms of a worker's time per 1080p frame.
-/// run_session() calls it; a benchmark of the same work calls it too.
-void keep_freed_frame_memory();
-
 /// \brief Runs a session until the camera ends, a limit is reached or `stop` is set.
 SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
                            const SessionHooks& hooks);

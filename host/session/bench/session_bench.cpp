@@ -43,6 +43,7 @@
 #include "reader/reader_options.hpp"
 #include "session/bench/live_view_runs.hpp"
 #include "session/bench/soak_run.hpp"
+#include "session/frame_memory.hpp"
 #include "session/read_record.hpp"
 #include "session/session.hpp"
 
@@ -284,8 +285,7 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
                 << choice.describe() << ", residual ratio " << ratio << ", saturated " << saturated
                 << ", " << deblurred.value().flat_rows << " of " << height << " rows flat, "
                 << readout.codes.size() << " code(s) read in " << reading.windows.value_or(0)
-                << " window(s)"
-                << (readout.decoder_fault.empty() ? "" : ", decoder fault") << "\n";
+                << " window(s)" << (readout.decoder_fault.empty() ? "" : ", decoder fault") << "\n";
   }
   for (auto& [stage, v] : samples) out[stage] = median(v);
   if (record_bytes == 0) out.erase("read_record");  // no code read: nothing to time

@@ -42,6 +42,32 @@ FrameOutcome dropped(std::uint64_t index) {
   return o;
 }
 
+// The report's previews (the first frames with a read, and failures) are made
+// only when there is a report: each costs tens of ms of the results thread in
+// the session's first second, when the workers need the cores.
+TEST(ResultsStage, PreviewsAreMadeOnlyForAReport) {
+  for (const bool report : {true, false}) {
+    SCOPED_TRACE(report);
+    testing::ScratchFolder scratch("results_previews");
+    SessionFolder folder;
+    ASSERT_EQ(folder.open(scratch.path().string(), 100), "");
+    ResultsServer server;
+    SessionConfig config;
+    config.output.keep_first_frames = 0;
+    config.output.keep_failed_frames = false;
+    config.output.report = report;
+    Pipeline pipeline(4);
+    ResultsStage stage(config, 640, 0, pipeline, folder, server);
+    for (std::uint64_t i = 0; i < 2; ++i) {
+      FrameOutcome o = processed(i, 100.0 * static_cast<double>(i), 260, "ABC");
+      o.frame = testing::frame_of(static_cast<int>(i));
+      o.latent = imaging::Plane(4, 2, 0.5f);
+      stage.take(std::move(o));
+    }
+    EXPECT_EQ(stage.results().previews.size(), report ? 2u : 0u);
+  }
+}
+
 TEST(ResultsStage, OutcomesAreHandledInCaptureOrderAndObjectsPublishedOnce) {
   testing::ScratchFolder scratch("results_order");
   SessionFolder folder;
