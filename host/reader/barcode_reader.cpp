@@ -118,6 +118,13 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
     const int x1 = std::clamp(w.x + w.width, x0, latent.width),
               y1 = std::clamp(w.y + w.height, y0, latent.height);
     if (x1 - x0 < 1 || y1 - y0 < 1) continue;
+    // A window around a code an earlier window read is there for what that one
+    // missed: read again, the same label cost a whole decode (a code region on
+    // its label's paper); read only when the earlier windows read nothing in it.
+    if (std::any_of(out.codes.begin(), out.codes.end(), [&](const DecodedCode& c) {
+          return c.centre_x >= x0 && c.centre_x < x1 && c.centre_y >= y0 && c.centre_y < y1;
+        }))
+      continue;
     // The linear view first; a window it reads nothing in, again sRGB-encoded.
     for (const LuminanceView luminance : {LuminanceView::kLinear, LuminanceView::kSrgb}) {
       to_luminance(latent, x0, y0, x1, y1, luminance, lum);

@@ -156,25 +156,10 @@ std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent) {
 std::vector<LabelRegion> regions_to_read(std::span<const LabelRegion> paper,
                                          std::span<const LabelRegion> code) {
   std::vector<LabelRegion> out(paper.begin(), paper.end());
-  const auto runs = static_cast<std::ptrdiff_t>(out.size());
   for (const LabelRegion& c : code) {
-    const auto host = std::find_if(out.begin(), out.begin() + runs,
-                                   [&](const LabelRegion& p) { return p.overlaps(c); });
-    if (host == out.begin() + runs) {
-      out.push_back(c);
-      continue;
-    }
-    // Read with the paper it overlaps, in one window holding both (the busy cells of
-    // a code on a label reach past its paper by the blur's ringing: read apart, the
-    // label was decoded twice).
-    LabelRegion& p = *host;
-    p.begin = std::min(p.begin, c.begin);
-    p.end = std::max(p.end, c.end);
-    if (p.rows_measured()) {
-      p.across_begin = std::min(p.across_begin, c.across_begin);
-      p.across_end = std::max(p.across_end, c.across_end);
-    }
-    p.cut = p.cut || c.cut;
+    const bool inside = std::any_of(paper.begin(), paper.end(),
+                                    [&](const LabelRegion& p) { return p.contains(c); });
+    if (!inside) out.push_back(c);
   }
   return out;
 }

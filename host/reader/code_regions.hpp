@@ -29,9 +29,8 @@ namespace flutterscan::reader {
 /// touches the first or last column.
 std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent);
 
-/// \brief Where to read: the paper runs, each grown to hold the code regions
-/// that overlap it (a run whose rows were not measured spans every row), and
-/// the code regions that overlap none.
+/// \brief Where to read: the paper runs, and the code regions that do not lie
+/// inside one of them (a run whose rows were not measured spans every row).
 std::vector<LabelRegion> regions_to_read(std::span<const LabelRegion> paper,
                                          std::span<const LabelRegion> code);
 
