@@ -123,8 +123,10 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
     // its label's paper); read only when the earlier windows read nothing in it.
     if (std::any_of(out.codes.begin(), out.codes.end(), [&](const DecodedCode& c) {
           return c.centre_x >= x0 && c.centre_x < x1 && c.centre_y >= y0 && c.centre_y < y1;
-        }))
+        })) {
+      ++out.windows_skipped;
       continue;
+    }
     // The linear view first; a window it reads nothing in, again sRGB-encoded.
     for (const LuminanceView luminance : {LuminanceView::kLinear, LuminanceView::kSrgb}) {
       to_luminance(latent, x0, y0, x1, y1, luminance, lum);

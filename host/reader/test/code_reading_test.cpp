@@ -74,5 +74,20 @@ TEST(CodeReading, LabelWindowsFollowTheMotionAndKeepTheFramesPositions) {
   EXPECT_LT(labels.readout.codes[0].centre_x, 450);  // the camera's column, not the motion frame's
 }
 
+// A second window over a code the first one read is not decoded again; one
+// beside it, over a code not read yet, is.
+TEST(CodeReading, AWindowHoldingACodeReadAlreadyIsSkipped) {
+  imaging::Plane belt = belt_with_code(60, true);
+  const imaging::Plane other = belt_with_code(540, true);
+  for (int y = 0; y < belt.height; ++y)
+    for (int x = 500; x < belt.width; ++x) belt.at(x, y) = other.at(x, y);
+  const DecodeWindow first{0, 0, 450, 200}, around_first{20, 10, 400, 190},
+      second{480, 0, 420, 200};
+  const std::vector<DecodeWindow> windows{first, around_first, second};
+  const BarcodeReadout readout = read_barcodes(belt, kDefaultSymbologies, true, windows);
+  EXPECT_EQ(code_texts(readout), (std::vector<std::string>{"FS-READ", "FS-READ"}));
+  EXPECT_EQ(readout.windows_skipped, 1u);
+}
+
 }  // namespace
 }  // namespace flutterscan::reader
