@@ -14,6 +14,7 @@
 #include <ZXing/Result.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <stdexcept>
@@ -112,17 +113,22 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
       .setTryHarder(true)
       .setTryRotate(try_rotate);
   const DecodeWindow whole{0, 0, latent.width, latent.height};
+  std::vector<std::array<int, 4>> reading;  // windows that read a code: x0, y0, x1, y1
   for (const DecodeWindow& w :
        windows.empty() ? std::span<const DecodeWindow>(&whole, 1) : windows) {
     const int x0 = std::clamp(w.x, 0, latent.width), y0 = std::clamp(w.y, 0, latent.height);
     const int x1 = std::clamp(w.x + w.width, x0, latent.width),
               y1 = std::clamp(w.y + w.height, y0, latent.height);
     if (x1 - x0 < 1 || y1 - y0 < 1) continue;
-    // A window around a code an earlier window read is there for what that one
+    // A window mostly inside one that read a code is there for what that one
     // missed: read again, the same label cost a whole decode (a code region on
-    // its label's paper); read only when the earlier windows read nothing in it.
-    if (std::any_of(out.codes.begin(), out.codes.end(), [&](const DecodedCode& c) {
-          return c.centre_x >= x0 && c.centre_x < x1 && c.centre_y >= y0 && c.centre_y < y1;
+    // its label's paper reaches a little past the paper's window). One that
+    // reaches well beyond (another label, a whole carton) is read.
+    const long long area = static_cast<long long>(x1 - x0) * (y1 - y0);
+    if (std::any_of(reading.begin(), reading.end(), [&](const std::array<int, 4>& r) {
+          const long long across = std::max(0, std::min(x1, r[2]) - std::max(x0, r[0]));
+          const long long h = std::max(0, std::min(y1, r[3]) - std::max(y0, r[1]));
+          return 4 * across * h >= 3 * area;
         })) {
       ++out.windows_skipped;
       continue;
@@ -146,7 +152,10 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
         code.luminance = luminance;
         if (!already_read(out.codes, code)) out.codes.push_back(std::move(code));
       }
-      if (any) break;
+      if (any) {
+        reading.push_back({x0, y0, x1, y1});
+        break;
+      }
     }
   }
   return out;

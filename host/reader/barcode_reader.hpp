@@ -61,7 +61,7 @@ std::string check_symbologies(const std::string& symbologies);
 /// \brief What one decode found.
 struct BarcodeReadout {
   std::vector<DecodedCode> codes;
-  /// Windows not decoded because a code an earlier window read lies in them.
+  /// Windows not decoded because three quarters of them lie in an earlier window that read a code.
   std::size_t windows_skipped = 0;
   /// Non-empty when the decoder failed an internal assertion on this image:
   /// its text. The codes read are then none (the frame is flagged, the session goes on).

@@ -17,11 +17,10 @@ namespace {
 
 /// A 900 x 200 belt (0.35) with one Code 128 "FS-READ" at column `start`: on
 /// white label paper (0.9), or printed straight on the belt when `on_paper` is false.
-imaging::Plane belt_with_code(int start, bool on_paper) {
+imaging::Plane belt_with_code(int start, bool on_paper, const wchar_t* text = L"FS-READ") {
   imaging::Plane belt(900, 200, 0.35f);
-  const ZXing::BitMatrix bars = ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code128)
-                                    .setMargin(10)
-                                    .encode(L"FS-READ", 300, 120);
+  const ZXing::BitMatrix bars =
+      ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code128).setMargin(10).encode(text, 300, 120);
   const float ground = on_paper ? 0.9f : 0.35f;
   for (int y = 0; y < 160; ++y)
     for (int x = 0; x < 320; ++x) {
@@ -74,19 +73,28 @@ TEST(CodeReading, LabelWindowsFollowTheMotionAndKeepTheFramesPositions) {
   EXPECT_LT(labels.readout.codes[0].centre_x, 450);  // the camera's column, not the motion frame's
 }
 
-// A second window over a code the first one read is not decoded again; one
-// beside it, over a code not read yet, is.
-TEST(CodeReading, AWindowHoldingACodeReadAlreadyIsSkipped) {
+// A second window mostly inside one that read a code is not decoded again; one
+// beside it, or one reaching well beyond it (both codes), is.
+TEST(CodeReading, AWindowMostlyInsideOneThatReadACodeIsSkipped) {
   imaging::Plane belt = belt_with_code(60, true);
-  const imaging::Plane other = belt_with_code(540, true);
+  // (Another text: two equal Code 128 symbols in one window fail an assertion in
+  // Debian's ZXing 1.4, Result::operator==, and the window reads nothing.)
+  const imaging::Plane other = belt_with_code(540, true, L"FS-NEXT");
   for (int y = 0; y < belt.height; ++y)
     for (int x = 500; x < belt.width; ++x) belt.at(x, y) = other.at(x, y);
   const DecodeWindow first{0, 0, 450, 200}, around_first{20, 10, 400, 190},
       second{480, 0, 420, 200};
   const std::vector<DecodeWindow> windows{first, around_first, second};
   const BarcodeReadout readout = read_barcodes(belt, kDefaultSymbologies, true, windows);
-  EXPECT_EQ(code_texts(readout), (std::vector<std::string>{"FS-READ", "FS-READ"}));
+  EXPECT_EQ(code_texts(readout), (std::vector<std::string>{"FS-READ", "FS-NEXT"}));
   EXPECT_EQ(readout.windows_skipped, 1u);
+  // The first label read, then a window over both: half of it new, so read (the second label).
+  const DecodeWindow both{0, 0, 900, 200};
+  const std::vector<DecodeWindow> wider{first, both};
+  const BarcodeReadout again = read_barcodes(belt, kDefaultSymbologies, true, wider);
+  EXPECT_EQ(again.windows_skipped, 0u);
+  EXPECT_EQ(code_texts(again), (std::vector<std::string>{"FS-READ", "FS-NEXT"}))
+      << again.decoder_fault;
 }
 
 }  // namespace
