@@ -110,7 +110,8 @@ class JointWiener {
 
 /// \brief Standard errors of a noise-only stretch's mean square above its
 /// expected value that a stretch may reach and still count as flat (four: a
-/// 1920-px row of noise alone is judged busy about once in a thousand rows) ...
+/// stretch of noise alone passes it about once in 4000, so about one 1920-px
+/// RGB row of noise in a hundred is deconvolved anyway) ...
 inline constexpr double kFlatRowSigmas = 4;
 /// \brief ... in stretches this long. The coded blur keeps print's variance
 /// but spreads it over the code's lit slots (about 1/17 of it per sample at 52
