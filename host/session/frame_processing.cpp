@@ -105,15 +105,6 @@ struct Deblurred {
   }
 };
 
-imaging::DeblurOptions deblur_options(const ProcessingConfig& processing) {
-  imaging::DeblurOptions options;
-  options.method = processing.method;
-  options.threads = processing.threads_per_worker;
-  options.plan_effort = imaging::PlanEffort::kMeasuredIfKnown;  // measured before streaming
-  options.skip_flat_rows = true;                                // the belt between labels
-  return options;
-}
-
 /// Raw Bayer frames: the grey global model on their raw planes (split in the
 /// mosaic's own geometry), no flat field.
 Result<Deblurred, StepFailure> deblur_bayer_frame(const Converted& in,
@@ -403,6 +394,15 @@ void second_pass(Deblurred& image, Decoded& decoded, const FrameJob& job,
 }
 
 }  // namespace
+
+imaging::DeblurOptions deblur_options(const ProcessingConfig& processing) {
+  imaging::DeblurOptions options;
+  options.method = processing.method;
+  options.threads = processing.threads_per_worker;
+  options.plan_effort = imaging::PlanEffort::kMeasuredIfKnown;  // measured before streaming
+  options.skip_flat_rows = true;                                // the belt between labels
+  return options;
+}
 
 FrameOutcome process_frame(FrameJob& job, const SessionConfig& config, WorkerShared& shared,
                            const imaging::FlatField* flat) {

@@ -10,6 +10,7 @@
 
 #include <atomic>
 
+#include "imaging/deblur.hpp"
 #include "imaging/flat_field.hpp"
 #include "session/pipeline.hpp"
 #include "session/second_pass.hpp"
@@ -30,6 +31,10 @@ struct WorkerShared {
   /// Where codes were read lately on the belt: no second pass for an object read already.
   BeltReads belt_reads;
 };
+
+/// \brief The first pass's deblur options under `processing`: its method and
+/// threads, FFT plans measured before streaming (plan_row_ffts), flat rows skipped.
+imaging::DeblurOptions deblur_options(const ProcessingConfig& processing);
 
 /// \brief Processes `job` (its frame moved into the outcome) under `config`,
 /// corrected by `flat` when not null, with what the workers share. A frame

@@ -44,8 +44,10 @@
 #include "session/bench/live_view_runs.hpp"
 #include "session/bench/soak_run.hpp"
 #include "session/frame_memory.hpp"
+#include "session/frame_processing.hpp"
 #include "session/read_record.hpp"
 #include "session/session.hpp"
+#include "session/worker_pool.hpp"
 
 namespace {
 
@@ -224,11 +226,11 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
     camera->next_frame(frame, std::chrono::milliseconds(1000), error);
   auto model = imaging::from_descriptor(nlohmann::json::parse(frame.descriptor_json));
   if (!model.ok()) return out;
-  imaging::DeblurOptions options;
-  options.threads = 1;
-  imaging::measure_row_ffts(width, 258);  // as the session does before it streams
-  options.plan_effort = imaging::PlanEffort::kMeasuredIfKnown;
-  options.skip_flat_rows = true;  // as the session
+  // The session's first pass, on one thread as the bench's workers, its plans measured first.
+  session::ProcessingConfig one_thread = defaults.processing;
+  one_thread.threads_per_worker = 1;
+  const imaging::DeblurOptions options = session::deblur_options(one_thread);
+  session::plan_row_ffts(frame.format, model.value().direction);
   std::map<std::string, std::vector<double>> samples;
   std::size_t record_bytes = 0;
   for (int r = 0; r < repeats; ++r) {
