@@ -311,12 +311,24 @@ class SimCamera final : public CameraSource {
       jobs[s].timestamp_ns = camera_ns(begin_us + s * step_us);
       jobs[s].travel_at_slot0 = first.travel_at_slot0 + static_cast<double>(s) * step_px;
     }
+    // The samples go to one block, each frame's as soon as it is rendered: a
+    // block this large is mapped apart from the heap, so the ring neither
+    // takes the frame memory the session warmed before start() nor leaves it
+    // so much free heap on the way that the allocator returns it to the system.
+    const std::size_t frame_bytes = format().row_bytes * static_cast<std::size_t>(o_.height);
+    ring_samples_.assign(count * frame_bytes, 0);
     std::vector<Rendered> rendered(jobs.size());
     std::atomic<std::size_t> next{0};
     std::vector<std::thread> threads;
     for (int t = 0; t < std::max(1, o_.render_threads); ++t)
       threads.emplace_back([&] {
-        for (std::size_t i = next++; i < jobs.size(); i = next++) rendered[i] = render_new(jobs[i]);
+        for (std::size_t i = next++; i < jobs.size(); i = next++) {
+          rendered[i] = render_new(jobs[i]);
+          std::vector<std::uint8_t>& data = rendered[i].frame.data;
+          std::copy_n(data.begin(), std::min(data.size(), frame_bytes),
+                      ring_samples_.begin() + static_cast<std::ptrdiff_t>(i * frame_bytes));
+          std::vector<std::uint8_t>().swap(data);
+        }
       });
     for (auto& t : threads) t.join();
     ring_.clear();
@@ -356,8 +368,11 @@ class SimCamera final : public CameraSource {
     if (!ring_.empty()) {
       Rendered out;
       out.frame = frame_of(job);
-      const Frame& stored = ring_[job.sequence % ring_.size()];
-      out.frame.data = stored.data;
+      const std::size_t slot = job.sequence % ring_.size();
+      const Frame& stored = ring_[slot];
+      const std::size_t frame_bytes = ring_samples_.size() / ring_.size();
+      const auto from = ring_samples_.begin() + static_cast<std::ptrdiff_t>(slot * frame_bytes);
+      out.frame.data.assign(from, from + static_cast<std::ptrdiff_t>(frame_bytes));
       out.frame.truth = stored.truth;
       out.frame.truth_in_view = stored.truth_in_view;
       out.frame.truth_labels = stored.truth_labels;
@@ -544,7 +559,8 @@ class SimCamera final : public CameraSource {
   std::mutex tiles_mutex_;
   std::map<std::uint64_t, std::shared_ptr<const LabelTile>> tiles_;
   std::deque<std::future<Rendered>> in_flight_;
-  std::vector<Frame> ring_;
+  std::vector<Frame> ring_;                 ///< ring mode: each frame but its samples
+  std::vector<std::uint8_t> ring_samples_;  ///< ring mode: the frames' samples, one after another
 };
 
 template <typename T>
