@@ -191,11 +191,8 @@ std::vector<LabelRegion> find_paper_runs(const imaging::Plane& latent, double pa
       start = -1;
     }
   }
-  for (auto& run : runs) {
-    run.cut = run.begin == 0 || run.end == latent.width;
-    if (run.end - run.begin >= min_width || run.cut) regions.push_back(run);
-  }
-  for (LabelRegion& r : regions) {
+  for (LabelRegion& r : runs) {
+    r.cut = r.begin == 0 || r.end == latent.width;
     const int row_need = std::max(1, static_cast<int>(min_fraction * (r.end - r.begin)));
     for (int y = 0; y < latent.height; ++y) {
       const float* row = latent.row(y).data();
@@ -206,6 +203,41 @@ std::vector<LabelRegion> find_paper_runs(const imaging::Plane& latent, double pa
       r.across_end = y + 1;
     }
   }
+  // A linear code's bars and narrow spaces can make a gap wider than max_gap
+  // (in dim light the spaces fall below the threshold in the noise): the label
+  // falls into runs none of which holds the whole symbol. The paper above and
+  // below the bars is still there: neighbouring runs are one label when every
+  // column between them has paper in at least min_fraction of the rows the two
+  // span (a belt between two labels has next to none).
+  auto bars_between = [&](const LabelRegion& a, const LabelRegion& b) {
+    if (!a.rows_measured() || !b.rows_measured() || a.across_begin >= b.across_end ||
+        b.across_begin >= a.across_end)
+      return false;
+    const int top = std::min(a.across_begin, b.across_begin);
+    const int bottom = std::max(a.across_end, b.across_end);
+    const int gap_need = std::max(2, static_cast<int>(min_fraction * (bottom - top)));
+    for (int x = a.end; x < b.begin; ++x) {
+      int paper = 0;
+      for (int y = top; y < bottom && paper < gap_need; ++y)
+        paper += latent.at(x, y) > paper_threshold;
+      if (paper < gap_need) return false;
+    }
+    return true;
+  };
+  std::vector<LabelRegion> joined;
+  for (const LabelRegion& run : runs) {
+    if (joined.empty() || !bars_between(joined.back(), run)) {
+      joined.push_back(run);
+      continue;
+    }
+    LabelRegion& last = joined.back();
+    last.end = run.end;
+    last.cut = last.cut || run.cut;
+    last.across_begin = std::min(last.across_begin, run.across_begin);
+    last.across_end = std::max(last.across_end, run.across_end);
+  }
+  for (const LabelRegion& r : joined)
+    if (r.end - r.begin >= min_width || r.cut) regions.push_back(r);
   return regions;
 }
 

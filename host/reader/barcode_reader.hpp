@@ -122,7 +122,10 @@ struct LabelRegion {
 /// `max_gap` columns (the bars of a linear code) do not split a run. Across
 /// the motion each run spans the rows from the first to the last where at
 /// least `min_fraction` of the run's columns are paper (the motion frame's
-/// rows are the camera's across coordinate, whatever the direction).
+/// rows are the camera's across coordinate, whatever the direction). Runs
+/// in rows they share are one run when every column of the gap between them
+/// has paper in `min_fraction` of their rows (at least 2 pixels): the margins
+/// above and below a code's bars, which a belt between labels does not have.
 std::vector<LabelRegion> find_paper_runs(const imaging::Plane& latent,
                                          double paper_threshold = 0.62, double min_fraction = 0.05,
                                          int min_width = 48, int max_gap = 16);

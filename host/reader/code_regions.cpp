@@ -153,39 +153,6 @@ std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent) {
   return regions;
 }
 
-std::vector<LabelRegion> join_runs_split_by_codes(std::span<const LabelRegion> paper,
-                                                  std::span<const LabelRegion> code) {
-  std::vector<LabelRegion> runs(paper.begin(), paper.end());
-  std::sort(runs.begin(), runs.end(),
-            [](const LabelRegion& a, const LabelRegion& b) { return a.begin < b.begin; });
-  // Rows in common where both know theirs.
-  auto same_rows = [](const LabelRegion& a, const LabelRegion& b) {
-    return !a.rows_measured() || !b.rows_measured() ||
-           (a.across_begin < b.across_end && a.across_end > b.across_begin);
-  };
-  std::vector<LabelRegion> joined;
-  for (const LabelRegion& run : runs) {
-    const bool split = !joined.empty() && std::any_of(code.begin(), code.end(), [&](const auto& c) {
-      return c.begin <= joined.back().end && c.end >= run.begin && same_rows(c, joined.back()) &&
-             same_rows(c, run);
-    });
-    if (!split) {
-      joined.push_back(run);
-      continue;
-    }
-    LabelRegion& last = joined.back();
-    if (last.rows_measured() && run.rows_measured()) {
-      last.across_begin = std::min(last.across_begin, run.across_begin);
-      last.across_end = std::max(last.across_end, run.across_end);
-    } else {
-      last.across_begin = last.across_end = 0;  // either spans every row: so does the label
-    }
-    last.end = std::max(last.end, run.end);
-    last.cut = last.cut || run.cut;
-  }
-  return joined;
-}
-
 std::vector<LabelRegion> regions_to_read(std::span<const LabelRegion> paper,
                                          std::span<const LabelRegion> code) {
   std::vector<LabelRegion> out(paper.begin(), paper.end());

@@ -29,17 +29,6 @@ namespace flutterscan::reader {
 /// touches the first or last column.
 std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent);
 
-/// \brief `paper` (find_paper_runs) with the runs one code region splits joined:
-/// where a code's dark bars leave more columns without paper than a run's
-/// gap allows (wide bars, or narrow spaces lost in the noise of dim light), a
-/// label falls into pieces, none holding the whole symbol. Neighbouring runs
-/// are joined when one code region spans every column between them (reaching
-/// both) in rows they share; a belt gap between two labels is not busy, so two
-/// labels stay apart. The joined run spans both runs' columns and rows; it is
-/// cut when either was. Sorted by `begin`.
-std::vector<LabelRegion> join_runs_split_by_codes(std::span<const LabelRegion> paper,
-                                                  std::span<const LabelRegion> code);
-
 /// \brief Where to read: the paper runs, and the code regions that do not lie
 /// inside one of them (a run whose rows were not measured spans every row).
 std::vector<LabelRegion> regions_to_read(std::span<const LabelRegion> paper,

@@ -180,10 +180,8 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
   Decoded out;
   out.paper = reader::find_paper_runs(image.motion_latent);
   // Code regions serve only the labels area and the cascade's second pass.
-  if (processing.decode_area == reader::DecodeArea::kLabels || processing.cascade) {
+  if (processing.decode_area == reader::DecodeArea::kLabels || processing.cascade)
     out.code = reader::find_code_regions(image.motion_latent);
-    out.paper = reader::join_runs_split_by_codes(out.paper, out.code);
-  }
   reader::CodeReading reading =
       reader::read_codes(image.latent(), reader::regions_to_read(out.paper, out.code), direction,
                          reader_options(processing));

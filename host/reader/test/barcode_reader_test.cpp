@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <fstream>
+#include <random>
 #include <string>
 #include <thread>
 
@@ -144,6 +145,54 @@ TEST(BarcodeReader, PaperRunsFindLabelsAndFlagThoseCutByTheFrame) {
   const auto judged = find_label_regions(image);
   ASSERT_EQ(judged.size(), 2u);
   EXPECT_EQ(judged[1].begin, 500);
+}
+
+TEST(BarcodeReader, ALabelWhoseNarrowSpacesFallBelowPaperIsOneRunAndALabelBesideItAnother) {
+  // White labels (0.9) on a belt (0.2), 80 px apart. The first's Code 128
+  // bars reach to 5 rows from its paper's top and bottom (too few paper rows
+  // for a paper column), and its spaces of one and two modules are grey
+  // (0.55, below the paper threshold), as dim light's noise and the deblur's
+  // ringing leave them: its bars make dark gaps far wider than max_gap.
+  imaging::Plane scene(1100, 240, 0.2f);
+  const ZXing::BitMatrix bars = ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code128)
+                                    .setMargin(0)
+                                    .encode(L"FS-00020", 0, 1);
+  constexpr int kModule = 3, kLeft = 160, kTop = 45, kBottom = 195;
+  const int right = kLeft + bars.width() * kModule;
+  const int paper_end = right + 60, second = paper_end + 80;
+  ASSERT_LT(second + 200, scene.width);
+  for (int y = 40; y < 200; ++y) {
+    for (int x = 100; x < paper_end; ++x) scene.at(x, y) = 0.9f;
+    for (int x = second; x < second + 200; ++x) scene.at(x, y) = 0.9f;
+  }
+  int widest_gap = 0, gap = 0;
+  for (int m = 0; m < bars.width(); ++m) {
+    int space = 0;  // the space's width in modules
+    for (int k = m; k < bars.width() && !bars.get(k, 0); ++k) ++space;
+    for (int k = m - 1; k >= 0 && !bars.get(k, 0); --k) ++space;
+    const bool bar = bars.get(m, 0);
+    gap = bar || space <= 2 ? gap + kModule : 0;
+    widest_gap = std::max(widest_gap, gap);
+    if (!bar && space > 2) continue;
+    for (int y = kTop; y < kBottom; ++y)
+      for (int x = kLeft + m * kModule; x < kLeft + (m + 1) * kModule; ++x)
+        scene.at(x, y) = bar ? 0.05f : 0.55f;
+  }
+  ASSERT_GT(widest_gap, 2 * 16);  // the first label's bars split a run of max_gap 16
+  std::mt19937 rng(21);
+  std::normal_distribution<float> noise(0.0f, 0.02f);
+  for (float& v : scene.pixels) v += noise(rng);
+
+  const std::vector<LabelRegion> runs = find_paper_runs(scene);
+  ASSERT_EQ(runs.size(), 2u);
+  EXPECT_LE(runs[0].begin, 100);
+  EXPECT_GE(runs[0].end, paper_end - 1);
+  EXPECT_LE(runs[0].end, paper_end + 1);
+  EXPECT_GE(runs[1].begin, second - 1);
+  const auto windows = decode_windows(runs, scene.width, scene.height, imaging::Direction::kPlusX);
+  const BarcodeReadout readout = read_barcodes(scene, "Code128", false, windows);
+  ASSERT_EQ(readout.codes.size(), 1u);
+  EXPECT_EQ(readout.codes[0].text, "FS-00020");
 }
 
 TEST(BarcodeReader, DecodingThePaperAloneReadsWhatTheWholeFrameReads) {
