@@ -141,6 +141,15 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
       out.decoder_fault =
           run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, hints); });
       if (!out.decoder_fault.empty()) {
+        // ZXing 1.4 fails an assertion comparing two equal linear symbols in one
+        // image (Result::operator==: a label that repeats its barcode): the
+        // window once more, stopping at its first symbol, reads one of them.
+        ZXing::DecodeHints first_symbol = hints;
+        first_symbol.setMaxNumberOfSymbols(1);
+        out.decoder_fault =
+            run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, first_symbol); });
+      }
+      if (!out.decoder_fault.empty()) {
         out.codes.clear();
         return out;
       }
