@@ -28,6 +28,7 @@ struct CellStats {
   double sum = 0, square = 0, along = 0, across = 0;
   float low = 1e30f, high = -1e30f;
   int samples = 0, along_steps = 0;
+  int rows = 0, rows_changing = 0;  ///< sampled rows, and those that change along the cell
 };
 
 }  // namespace
@@ -63,6 +64,8 @@ std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent) {
       c.samples += x1 - x0;
       c.along += along;
       c.along_steps += x_steps_end - x0;
+      ++c.rows;
+      c.rows_changing += along > 0 ? 1 : 0;
       c.across += across;
     }
   }
@@ -74,12 +77,24 @@ std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent) {
     spread[i] = std::sqrt(std::max(0.0, c.square / c.samples - mean * mean));
     steps[i] = c.across / c.samples + (c.along_steps > 0 ? c.along / c.along_steps : 0.0);
   }
-  // The frame's noise: its flattest cells' spread and steps, among the cells that
-  // change at all along their rows (a constant cell, from rows the deblur found
-  // flat and filled or from clipped light, says nothing about the noise).
+  // The frame's noise: its flattest cells' spread and steps, among the cells
+  // whose every sampled row changes along the cell. A constant row, one the
+  // deblur found flat and filled or clipped light, says nothing about the
+  // noise, and a cell that mixes such rows with noisy ones is flatter than the
+  // noise: the single rows among the flat ones that the flat-row test lets
+  // through (about one in a hundred) made such cells all across the frame,
+  // they were the flattest fifth, the noise came out far too low, and at 300 e-
+  // the belt beside the labels was busy from one edge of the frame to the
+  // other. (If no cell changes in every sampled row: those that change at all.)
   std::vector<double> noisy_spread, noisy_steps;
-  for (std::size_t i = 0; i < cells.size(); ++i)
-    if (cells[i].along > 0) noisy_spread.push_back(spread[i]), noisy_steps.push_back(steps[i]);
+  for (const bool every_row : {true, false}) {
+    for (std::size_t i = 0; i < cells.size(); ++i) {
+      const CellStats& c = cells[i];
+      if (every_row ? c.rows > 0 && c.rows_changing == c.rows : c.along > 0)
+        noisy_spread.push_back(spread[i]), noisy_steps.push_back(steps[i]);
+    }
+    if (!noisy_spread.empty()) break;
+  }
   auto percentile = [](std::vector<double> values) {
     if (values.empty()) return 0.0;
     const auto nth =

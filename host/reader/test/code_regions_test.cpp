@@ -101,5 +101,32 @@ TEST(CodeRegions, AtTheFramesEdgeARegionIsCutAndTheRegionsReadSkipThoseInsidePap
   EXPECT_EQ(look[1].begin, 650);
 }
 
+TEST(CodeRegions, TheBeltBesideALabelInABandOfDeblurredRowsIsNotBusy) {
+  // What the session's deblur leaves in dim light: rows it found flat filled
+  // with one value (0.3); a band of rows [100, 212) deblurred, the belt's noise
+  // in it (0.056, as joint Wiener's at 300 e-) and the dim label of
+  // carton_with_dim_label() in it; and single rows of belt deblurred among the
+  // flat ones (the flat-row test lets about one in a hundred through), whose
+  // cells change in one sampled row of four.
+  const imaging::Plane label = carton_with_dim_label();
+  imaging::Plane frame(900, 320, 0.3f);
+  std::mt19937 rng(5);
+  std::normal_distribution<float> noise(0.0f, 0.056f);
+  for (int y = 0; y < frame.height; ++y) {
+    const bool band = y >= 100 && y < 212;
+    if (!band && y % 24 != 8) continue;  // rows 8, 32, 56, 80, 224, ...: sampled ones
+    for (int x = 0; x < frame.width; ++x) {
+      const bool on_label = band && x >= 300 && x < 640 && y - 60 >= 40 && y - 60 < 200;
+      frame.at(x, y) = (on_label ? label.at(x, y - 60) : 0.3f) + noise(rng);
+    }
+  }
+  const std::vector<LabelRegion> code = find_code_regions(frame);
+  ASSERT_FALSE(code.empty());
+  for (const LabelRegion& r : code) {  // the code's columns (330..610) and a cell or two
+    EXPECT_GE(r.begin, 300 - 32) << r.begin << ".." << r.end;
+    EXPECT_LE(r.end, 640 + 32) << r.begin << ".." << r.end;
+  }
+}
+
 }  // namespace
 }  // namespace flutterscan::reader
