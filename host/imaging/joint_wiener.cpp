@@ -65,7 +65,8 @@ JointWiener::JointWiener(std::span<const ChannelPsf> channels, int width, double
           }(),
           effort) {
   const int n = fft_.length();
-  const std::size_t bins = static_cast<std::size_t>(fft_.bins());
+  const auto size = static_cast<std::size_t>(n);
+  const std::size_t bins = size / 2 + 1;
   std::vector<std::vector<std::complex<double>>> spectra;
   std::vector<double> denominator(bins, 0.0);
   for (const auto& c : channels) {
@@ -79,21 +80,29 @@ JointWiener::JointWiener(std::span<const ChannelPsf> channels, int width, double
     if (denominator[j] <= 0) denominator[j] = 1e-30;
   }
   for (std::size_t c = 0; c < channels.size(); ++c) {
-    std::vector<std::complex<float>> filter(bins);
-    for (std::size_t j = 0; j < bins; ++j)
-      filter[j] = std::complex<float>(std::conj(spectra[c][j]) / channels[c].noise_variance /
-                                      denominator[j] / static_cast<double>(n));
-    filters_.push_back(std::move(filter));
+    AlignedFloats re(size), im(size);
+    for (std::size_t j = 0; j < bins; ++j) {
+      const std::complex<double> h =
+          std::conj(spectra[c][j]) / channels[c].noise_variance / denominator[j] / double(n);
+      re[j] = static_cast<float>(h.real());
+      im[j] = static_cast<float>(h.imag());
+      if (j > 0 && j < size - j) {  // bin n - j of a real filter: the conjugate
+        re[size - j] = re[j];
+        im[size - j] = -im[j];
+      }
+    }
+    // A constant row m_c has bin 0 = n m_c and nothing else: its latent is
+    // sum_c Re(filter_c[0]) n m_c everywhere.
+    dc_gains_.push_back(re[0] * static_cast<float>(n));
+    filter_re_.push_back(std::move(re));
+    filter_im_.push_back(std::move(im));
   }
   blend_ = periodic_blend(width, n);
-  // A constant row m_c has bin 0 = n m_c and nothing else: its latent is
-  // sum_c Re(filter_c[0]) n m_c everywhere.
-  for (const auto& filter : filters_) dc_gains_.push_back(filter[0].real() * static_cast<float>(n));
 }
 
 void JointWiener::skip_flat_rows(std::vector<double> base_variance) {
   flat_base_variance_ = std::move(base_variance);
-  flat_base_variance_.resize(filters_.size(), 0.0);
+  flat_base_variance_.resize(filter_re_.size(), 0.0);
 }
 
 bool JointWiener::fill_if_flat(std::span<const std::span<float>> rows, std::span<float> out) const {
@@ -128,35 +137,70 @@ bool JointWiener::fill_if_flat(std::span<const std::span<float>> rows, std::span
 
 JointWiener::Scratch JointWiener::make_scratch() const {
   const auto n = static_cast<std::size_t>(fft_.length());
-  const auto complex_floats = static_cast<std::size_t>(2 * fft_.bins());
-  Scratch scratch{{}, {}, AlignedFloats(complex_floats), AlignedFloats(complex_floats), 0};
-  for (std::size_t c = 0; c < filters_.size(); ++c) {
-    scratch.padded.emplace_back(n);
-    scratch.rows.push_back(scratch.padded.back().span().first(static_cast<std::size_t>(width_)));
+  Scratch s{{},
+            {},
+            {},
+            {},
+            AlignedFloats(n),
+            AlignedFloats(n),
+            AlignedFloats(n),
+            AlignedFloats(n),
+            AlignedFloats(n),
+            AlignedFloats(n),
+            0};
+  const auto width = static_cast<std::size_t>(width_);
+  for (std::size_t c = 0; c < filter_re_.size(); ++c) {
+    s.first.emplace_back(n);
+    s.second.emplace_back(n);
+    s.first_rows.push_back(s.first.back().span().first(width));
+    s.second_rows.push_back(s.second.back().span().first(width));
   }
-  return scratch;
+  return s;
 }
 
-void JointWiener::deconvolve_row(int y, const RowLoader& load, std::span<float> out,
-                                 Scratch& scratch) const {
-  load(y, scratch.rows);
-  if (fill_if_flat(scratch.rows, out)) {
-    ++scratch.flat_rows;
-    return;
+void JointWiener::deconvolve_pair(Scratch& s, std::span<float> a, std::span<float> b) const {
+  const auto n = static_cast<std::size_t>(fft_.length());
+  for (std::size_t c = 0; c < filter_re_.size(); ++c) {
+    extend_row_periodically(s.first[c].span(), width_, blend_);
+    extend_row_periodically(s.second[c].span(), width_, blend_);
+    fft_.forward(s.first[c].data(), s.second[c].data(), s.spectrum_re.data(), s.spectrum_im.data());
+    if (c == 0)
+      multiply_split(filter_re_[c].data(), filter_im_[c].data(), s.spectrum_re.data(),
+                     s.spectrum_im.data(), s.sum_re.data(), s.sum_im.data(), n);
+    else
+      accumulate_split(filter_re_[c].data(), filter_im_[c].data(), s.spectrum_re.data(),
+                       s.spectrum_im.data(), s.sum_re.data(), s.sum_im.data(), n);
   }
-  filter_and_sum_channels(fft_, filters_, width_, blend_, scratch.padded, scratch.spectrum,
-                          scratch.sum.data());
-  float* result = scratch.padded[0].data();
-  fft_.inverse(scratch.sum.complex(), result);
-  std::copy(result, result + out.size(), out.begin());
+  fft_.inverse(s.sum_re.data(), s.sum_im.data(), s.out_re.data(), s.out_im.data());
+  std::copy(s.out_re.data(), s.out_re.data() + a.size(), a.begin());
+  if (!b.empty()) std::copy(s.out_im.data(), s.out_im.data() + b.size(), b.begin());
 }
 
 void JointWiener::deconvolve(const RowLoader& load, int height, Plane& out, RowPool& pool) {
   while (static_cast<int>(workers_.size()) < pool.threads()) workers_.push_back(make_scratch());
   for (Scratch& scratch : workers_) scratch.flat_rows = 0;
   pool.run(height, [&](int first, int last, int worker) {
-    Scratch& scratch = workers_[static_cast<std::size_t>(worker)];
-    for (int y = first; y < last; ++y) deconvolve_row(y, load, out.row(y), scratch);
+    Scratch& s = workers_[static_cast<std::size_t>(worker)];
+    // Rows that are not flat go in pairs; `waiting` holds the first of a pair.
+    int waiting = -1;
+    for (int y = first; y < last; ++y) {
+      const auto rows = waiting < 0 ? std::span(s.first_rows) : std::span(s.second_rows);
+      load(y, rows);
+      if (fill_if_flat(rows, out.row(y))) {
+        ++s.flat_rows;
+        continue;
+      }
+      if (waiting < 0) {
+        waiting = y;
+        continue;
+      }
+      deconvolve_pair(s, out.row(waiting), out.row(y));
+      waiting = -1;
+    }
+    if (waiting >= 0) {
+      for (AlignedFloats& row : s.second) std::fill(row.data(), row.data() + row.size(), 0.0f);
+      deconvolve_pair(s, out.row(waiting), {});
+    }
   });
   flat_rows_ = 0;
   for (const Scratch& scratch : workers_) flat_rows_ += scratch.flat_rows;

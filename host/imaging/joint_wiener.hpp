@@ -12,6 +12,12 @@
 // blur tail that entered the frame from the left. Output column n is the
 // latent at column n (registered at the start of slot 0).
 //
+// Rows in pairs: the filter's impulse response is real, so two rows are
+// transformed at once as the real and imaginary parts of one complex row
+// (RowPairFft), filtered by the full-length spectrum, and come back as the
+// real and imaginary parts of one inverse: four complex transforms for two rows
+// where real-input ones took eight.
+//
 // Flat rows (optional, skip_flat_rows()): a row whose every channel varies
 // about its mean no more than its noise would is not transformed; its latent
 // is the constant the filter makes of a constant row (the DC gains times the
@@ -59,23 +65,11 @@ class JointWiener {
               PlanEffort effort = PlanEffort::kEstimate);
 
   int width() const { return width_; }
-  int channel_count() const { return static_cast<int>(filters_.size()); }
+  int channel_count() const { return static_cast<int>(filter_re_.size()); }
   int padded_length() const { return fft_.length(); }
 
-  /// \brief Deconvolves one row. `rows[c]` is channel c's observed row (electrons,
-  /// width() samples); the latent row (reflectance) goes to `out`. `scratch` must
-  /// come from make_scratch() and not be shared between threads.
-  struct Scratch {
-    std::vector<AlignedFloats> padded;   ///< one per channel
-    std::vector<std::span<float>> rows;  ///< the first width() samples of each
-    AlignedFloats spectrum;
-    AlignedFloats sum;
-    int flat_rows = 0;  ///< rows this scratch found flat (skip_flat_rows())
-  };
-  Scratch make_scratch() const;
   /// \brief Writes row `y` of every channel (electrons, width() samples) into `rows[c]`.
   using RowLoader = std::function<void(int y, std::span<const std::span<float>> rows)>;
-  void deconvolve_row(int y, const RowLoader& load, std::span<float> out, Scratch& scratch) const;
 
   /// \brief Deconvolves `height` rows fetched by `load` into `out` (width() x height,
   /// allocated by the caller) on `pool`. Buffers are made on the first call for a
@@ -96,9 +90,24 @@ class JointWiener {
   int flat_rows() const { return flat_rows_; }
 
  private:
+  /// One thread's buffers: the pair's padded rows per channel (the real and the
+  /// imaginary part of the complex rows transformed), the spectrum, its filtered
+  /// sum and the inverse.
+  struct Scratch {
+    std::vector<AlignedFloats> first, second;
+    std::vector<std::span<float>> first_rows, second_rows;  ///< their first width() samples
+    AlignedFloats spectrum_re, spectrum_im, sum_re, sum_im, out_re, out_im;
+    int flat_rows = 0;  ///< rows this scratch found flat (skip_flat_rows())
+  };
+  Scratch make_scratch() const;
+  /// The rows loaded in scratch.first and .second, deconvolved into `a` and `b`
+  /// (`b` empty: the second is discarded).
+  void deconvolve_pair(Scratch& scratch, std::span<float> a, std::span<float> b) const;
+
   int width_;
-  RowFft fft_;
-  std::vector<std::vector<std::complex<float>>> filters_;  ///< conj(G_c) / v_c / D / N
+  RowPairFft fft_;
+  /// conj(G_c) / v_c / D / N on all N bins (Hermitian), per channel, split.
+  std::vector<AlignedFloats> filter_re_, filter_im_;
   std::vector<float> blend_;
   std::vector<Scratch> workers_;
   std::vector<double> flat_base_variance_;  ///< empty: every row transformed

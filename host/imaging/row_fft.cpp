@@ -119,7 +119,10 @@ void measure_row_ffts(int width, int longest_psf) {
   int measured = 0;
   for (int taps = 1; taps <= longest_psf; ++taps) {
     const int n = row_fft_length(width + taps);
-    if (n != measured) const RowFft plans(n, PlanEffort::kMeasure);
+    if (n != measured) {
+      const RowFft plans(n, PlanEffort::kMeasure);
+      const RowPairFft pair(n, PlanEffort::kMeasure);
+    }
     measured = n;
   }
 }
@@ -136,6 +139,41 @@ void RowFft::forward(const float* in, std::complex<float>* out) const {
 
 void RowFft::inverse(std::complex<float>* in, float* out) const {
   fftwf_execute_dft_c2r(inverse_, reinterpret_cast<fftwf_complex*>(in), out);
+}
+
+RowPairFft::RowPairFft(int n, PlanEffort effort) : n_(n) {
+  const auto size = static_cast<std::size_t>(n);
+  AlignedFloats in_re(size), in_im(size), out_re(size), out_im(size);
+  const fftwf_iodim dim{n, 1, 1};
+  const std::lock_guard lock(planner_mutex());
+  // FFTW_MEASURE overwrites the buffers while planning: they are scratch here.
+  auto make = [&](unsigned flags) {
+    return fftwf_plan_guru_split_dft(1, &dim, 0, nullptr, in_re.data(), in_im.data(), out_re.data(),
+                                     out_im.data(), flags);
+  };
+  if (effort == PlanEffort::kMeasuredIfKnown) {
+    plan_ = make(FFTW_MEASURE | FFTW_WISDOM_ONLY);  // null unless measured before
+    if (plan_ != nullptr) return;
+  }
+  plan_ = make(effort == PlanEffort::kMeasure ? FFTW_MEASURE : FFTW_ESTIMATE);
+}
+
+RowPairFft::~RowPairFft() {
+  const std::lock_guard lock(planner_mutex());
+  fftwf_destroy_plan(plan_);
+}
+
+void RowPairFft::forward(const float* in_re, const float* in_im, float* out_re,
+                         float* out_im) const {
+  fftwf_execute_split_dft(plan_, const_cast<float*>(in_re), const_cast<float*>(in_im), out_re,
+                          out_im);
+}
+
+void RowPairFft::inverse(const float* in_re, const float* in_im, float* out_re,
+                         float* out_im) const {
+  // conj(DFT(conj(x))) is the unnormalised inverse: swapping the parts conjugates (times i).
+  fftwf_execute_split_dft(plan_, const_cast<float*>(in_im), const_cast<float*>(in_re), out_im,
+                          out_re);
 }
 
 }  // namespace flutterscan::imaging
