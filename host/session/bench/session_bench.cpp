@@ -6,6 +6,7 @@
 //
 //   session_bench [--frames N] [--width W --height H] [--csv FILE] [--stages-only]
 //                 [--stage-repeats N]   (the stage table's runs, default 9; more for `perf`)
+//                 [--stage-electrons E] (the stage frame's light, e-; default the sim's 3000)
 //                 [--cascade]           (only the cascade against tv on every frame, dim light)
 //                 [--live-view]         (only the live view's cost: live_view_runs.hpp)
 //                 [--soak MINUTES]      (only memory over a long 60 fps session: soak_run.hpp)
@@ -207,7 +208,7 @@ double thread_cpu_ms() {
 
 /// What one worker spends on one frame, stage by stage (medians over `repeats`
 /// runs on one sim frame, thread CPU time, one thread as the bench's workers).
-std::map<std::string, double> stage_costs(int width, int height, int repeats) {
+std::map<std::string, double> stage_costs(int width, int height, int repeats, double light_e) {
   std::map<std::string, double> out;
   auto controller = std::make_shared<device::VirtualController>();
   session::SessionConfig defaults;
@@ -220,7 +221,9 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats) {
       !client.value()->select_code(0).ok() || !client.value()->set_timing(timing).ok() ||
       !client.value()->arm().ok())
     return out;
-  auto camera = capture::make_sim_camera(*controller, one_thread_conveyor(width, height));
+  capture::SimConveyorOptions conveyor = one_thread_conveyor(width, height);
+  if (light_e > 0) conveyor.electrons = light_e;
+  auto camera = capture::make_sim_camera(*controller, conveyor);
   capture::Frame frame;
   std::string error;
   if (!camera->start().empty()) return out;
@@ -358,6 +361,7 @@ int main(int argc, char** argv) {
   std::string csv;
   bool stages_only = false;
   int stage_repeats = 9;
+  double stage_electrons = 0;
   bool cascade_only = false;
   bool live_view = false;
   double soak_minutes = 0;
@@ -382,6 +386,8 @@ int main(int argc, char** argv) {
       stages_only = true;
     else if (arg == "--stage-repeats")
       stage_repeats = std::atoi(next().c_str());
+    else if (arg == "--stage-electrons")
+      stage_electrons = std::atof(next().c_str());
     else if (arg == "--cascade")
       cascade_only = true;
     else if (arg == "--live-view")
@@ -393,9 +399,10 @@ int main(int argc, char** argv) {
       return 2;
     }
   }
-  if (frames < 10 || width < 640 || height < 240 || stage_repeats < 1 || soak_minutes < 0) {
+  if (frames < 10 || width < 640 || height < 240 || stage_repeats < 1 || soak_minutes < 0 ||
+      stage_electrons < 0) {
     std::cerr << "session_bench: --frames >= 10, --width >= 640, --height >= 240, "
-                 "--stage-repeats >= 1, --soak >= 0\n";
+                 "--stage-repeats >= 1, --soak >= 0, --stage-electrons >= 0\n";
     return 2;
   }
   // Its own folder per run: two benches at once must not remove each other's session.
@@ -418,9 +425,11 @@ int main(int argc, char** argv) {
             << " ms per frame\n\n";
 
   session::keep_freed_frame_memory();  // as run_session() does
-  const auto costs = stage_costs(width, height, stage_repeats);
+  const auto costs = stage_costs(width, height, stage_repeats, stage_electrons);
   double total = 0;
-  std::cout << "one worker, one frame, stage by stage (thread CPU time, median of " << stage_repeats
+  std::cout << "one worker, one frame";
+  if (stage_electrons > 0) std::cout << " at " << stage_electrons << " e-";
+  std::cout << ", stage by stage (thread CPU time, median of " << stage_repeats
             << "):\n\n"
                "| stage | ms |\n|---|---|\n";
   for (const char* stage :
