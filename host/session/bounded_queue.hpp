@@ -44,6 +44,12 @@ class BoundedQueue {
     return true;
   }
 
+  /// \brief The items waiting now.
+  std::size_t size() const {
+    std::lock_guard lock(mutex_);
+    return items_.size();
+  }
+
   /// \brief No more items: pop() returns false once the queue is empty.
   void close() {
     std::lock_guard lock(mutex_);
@@ -53,7 +59,7 @@ class BoundedQueue {
 
  private:
   std::size_t capacity_;
-  std::mutex mutex_;
+  mutable std::mutex mutex_;
   std::condition_variable ready_;
   std::deque<T> items_;
   bool closed_ = false;

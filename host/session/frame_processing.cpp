@@ -124,8 +124,7 @@ Result<Deblurred, StepFailure> deblur_bayer_frame(const Converted& in,
 /// and the guards (model_fit.hpp) on the frame turned once into the motion
 /// frame, which the result keeps (for the second pass).
 Result<Deblurred, StepFailure> deblur(Converted& in, const FrameJob& job,
-                                      const SessionConfig& config,
-                                      std::atomic<double>& last_blur_px,
+                                      const SessionConfig& config, WorkerShared& shared,
                                       const imaging::FlatField* flat) {
   using Out = Result<Deblurred, StepFailure>;
   const imaging::DeblurOptions options = deblur_options(config.processing);
@@ -146,11 +145,16 @@ Result<Deblurred, StepFailure> deblur(Converted& in, const FrameJob& job,
   fit.slot_time_us = job.event.slot_time_us;
   fit.blur_check_every = config.processing.blur_check_every;
   fit.blur_tolerance = config.processing.blur_tolerance_pct / 100;
-  fit.fallback_blur_px = last_blur_px.load();
+  fit.fallback_blur_px = shared.last_blur_px.load();
+  if (!config.processing.refine_when_behind &&
+      behind_queue(job.waiting_behind, config.processing.queue_depth))
+    fit.reuse_motion_ratio = shared.motion_ratio.load();
   auto r = deblur_fitting_model(in.frame.saturated_share, frame.value(), in.model, options, fit,
                                 job.index);
   if (!r.ok()) return Out::failure({r.error()});
-  if (r.value().estimated_blur_px > 0) last_blur_px.store(r.value().estimated_blur_px);
+  if (r.value().estimated_blur_px > 0) shared.last_blur_px.store(r.value().estimated_blur_px);
+  if (r.value().refinement_used && in.model.blur_px > 0)
+    shared.motion_ratio.store(r.value().model.blur_px / in.model.blur_px);
   Deblurred out;
   out.motion_latent = std::move(r.value().latent);
   if (in.model.direction != imaging::Direction::kPlusX)
@@ -395,6 +399,10 @@ void second_pass(Deblurred& image, Decoded& decoded, const FrameJob& job,
 
 }  // namespace
 
+bool behind_queue(std::size_t waiting, std::size_t queue_depth) {
+  return waiting > 0 && waiting >= (queue_depth + 1) / 2;
+}
+
 imaging::DeblurOptions deblur_options(const ProcessingConfig& processing) {
   imaging::DeblurOptions options;
   options.method = processing.method;
@@ -416,7 +424,7 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config, WorkerSha
   out.log["blur_px"] = std::round(converted.value().model.blur_px * 100) / 100;
   const std::int64_t t1 = now_ns();
 
-  auto deblurred = deblur(converted.value(), job, config, shared.last_blur_px, flat);
+  auto deblurred = deblur(converted.value(), job, config, shared, flat);
   const std::int64_t t2 = now_ns();
   if (!deblurred.ok()) return stopped(std::move(out), deblurred.error(), flags);
   for (const auto& flag : deblurred.value().flags) flags.push_back(flag);

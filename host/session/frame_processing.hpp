@@ -26,11 +26,21 @@ struct WorkerShared {
   /// The last confident blur estimate: read when a frame without an encoder has
   /// no edges along the motion, updated by each new estimate.
   std::atomic<double> last_blur_px;
+  /// The latest refined frame's refined / encoder blur (0: none yet): a frame
+  /// taken while the workers are behind (behind_queue()) uses it unrefined.
+  std::atomic<double> motion_ratio{0};
   /// The cascade's CPU budget for second passes.
   SecondPassBudget second_pass;
   /// Where codes were read lately on the belt: no second pass for an object read already.
   BeltReads belt_reads;
 };
+
+/// \brief Whether a frame that left `waiting` frames in a queue of
+/// `queue_depth` finds the workers behind: half the queue or more (at least
+/// one frame) waits. Such a frame skips the motion refinement (about a quarter
+/// of a frame's first pass at 300 e-) so that the queue drains instead of
+/// overflowing.
+bool behind_queue(std::size_t waiting, std::size_t queue_depth);
 
 /// \brief The first pass's deblur options under `processing`: its method and
 /// threads, FFT plans measured before streaming (plan_row_ffts), flat rows skipped.

@@ -115,8 +115,17 @@ Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
 
   // The encoder's motion refined on the frame (after the check, which judges the encoder).
   if (config.encoder && config.blur_tolerance > 0 && frame.channel_count() >= 2 &&
-      model.code.leds() >= 2)
-    refine_encoder_motion(frame, model, config.blur_tolerance, out);
+      model.code.leds() >= 2) {
+    if (config.reuse_motion_ratio > 0) {
+      out.log["motion"] = {{"encoder_blur_px", rounded(model.blur_px, 2)},
+                           {"reused_ratio", rounded(config.reuse_motion_ratio, 5)},
+                           {"used", false}};
+      model.blur_px *= config.reuse_motion_ratio;
+      out.flags.emplace_back("motion-reused");
+    } else {
+      refine_encoder_motion(frame, model, config.blur_tolerance, out);
+    }
+  }
   times["refine_motion"] = lap_ms(lap);
 
   // 2. The model, and the deblur under it.

@@ -31,6 +31,8 @@ struct FrameJob {
   double residual_us = 0;  ///< the event's start minus the clock fit's prediction
   double travel_px = 0;    ///< belt travel since the first event, image pixels
   std::string match_note;  ///< the matcher's note (a re-derived offset), if any
+  /// Frames still waiting for a worker when one took this frame (worker_pool.cpp).
+  std::size_t waiting_behind = 0;
 };
 
 /// \brief A read checked against the simulator's truth (sim frames only): the

@@ -403,7 +403,8 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
             *t, "processing.",
             {"method", "second_pass_ms", "workers", "threads_per_worker", "queue_depth",
              "max_frames", "max_seconds", "match_tolerance_us", "object_match_px", "choose_model",
-             "blur_check_every", "blur_tolerance", "symbologies", "try_rotate", "decode_area"},
+             "blur_check_every", "blur_tolerance", "refine_when_behind", "symbologies",
+             "try_rotate", "decode_area"},
             origin);
         !p.empty())
       return ConfigResult::failure(p);
@@ -432,6 +433,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     r.get("choose_model", c.processing.choose_model);
     r.get("blur_check_every", c.processing.blur_check_every);
     r.get("blur_tolerance", c.processing.blur_tolerance_pct);
+    r.get("refine_when_behind", c.processing.refine_when_behind);
     r.get("symbologies", c.processing.symbologies);
     r.get("try_rotate", c.processing.try_rotate);
     std::string area;

@@ -93,6 +93,11 @@ struct ProcessingConfig {
   /// With an encoder: refine each frame's blur within +-this percentage of the
   /// encoder's (imaging/motion_refinement.hpp); 0 = use the encoder's blur exactly.
   double blur_tolerance_pct = 10;
+  /// With refinement on: false (default), a frame taken while half the queue
+  /// waits skips the refinement and scales the encoder's blur by the latest
+  /// refined frame's ratio (flagged "motion-reused"), so the queue drains
+  /// instead of dropping frames; true refines every frame whatever the queue.
+  bool refine_when_behind = false;
   // The reader's options (reader_options(): reader/reader_options.hpp, whose defaults these are).
   /// ZXing format names read on each fused frame, comma-separated (fewer is faster).
   std::string symbologies = reader::ReaderOptions{}.symbologies;

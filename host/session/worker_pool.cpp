@@ -26,6 +26,7 @@ WorkerPool::WorkerPool(Pipeline& pipeline, const SessionConfig& config,
     threads_.emplace_back([this, &pipeline, &config, flat] {
       FrameJob job;
       while (pipeline.jobs.pop(job)) {
+        job.waiting_behind = pipeline.jobs.size();
         FrameOutcome o = process_frame(job, config, shared_, flat);
         if (!o.processed) ++pipeline.processing_errors;
         pipeline.outcomes.push(std::move(o));

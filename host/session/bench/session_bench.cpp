@@ -140,6 +140,7 @@ int cascade_against_tv(int width, int height, int frames, const fs::path& out) {
         c.processing.cascade = false;
         c.processing.method = imaging::Method::kTotalVariation;
         c.processing.queue_depth = static_cast<std::size_t>(frames);  // offline: nothing dropped
+        c.processing.refine_when_behind = true;                       // and every frame refined
       }
       if (auto problem = session::check_config(c); !problem.empty()) {
         std::cerr << "session_bench: " << problem << "\n";

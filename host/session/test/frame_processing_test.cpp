@@ -93,6 +93,46 @@ TEST(FrameProcessing, AWholeLabelIsDeblurredAndReadAtItsGroundTruth) {
   EXPECT_FALSE(out.frame.data.empty());  // kept for the results stage to save
 }
 
+// A frame refined on time leaves its refined / encoder ratio for the workers;
+// a frame taken with half the queue waiting behind it skips the refinement and
+// uses that ratio (flagged), unless processing.refine_when_behind.
+TEST(FrameProcessing, AFrameTakenBehindUsesTheLatestRefinedRatioInsteadOfRefining) {
+  SessionConfig config = small_config();
+  ASSERT_EQ(config.processing.queue_depth, 4u);
+  EXPECT_FALSE(behind_queue(1, 4));
+  EXPECT_TRUE(behind_queue(2, 4));
+  EXPECT_TRUE(behind_queue(1, 1));
+  EXPECT_FALSE(behind_queue(0, 0));
+  const FrameJob original = job_with_a_label(config);
+  WorkerShared shared(config);
+  FrameJob on_time = original;
+  const FrameOutcome refined = process_frame(on_time, config, shared, nullptr);
+  ASSERT_TRUE(refined.processed) << refined.log.dump();
+  ASSERT_TRUE(refined.log["motion"]["used"].get<bool>()) << refined.log["motion"].dump();
+  const double ratio = refined.log["motion"]["refined_blur_px"].get<double>() /
+                       refined.log["motion"]["encoder_blur_px"].get<double>();
+  EXPECT_NEAR(shared.motion_ratio.load(), ratio, 1e-4);
+
+  shared.motion_ratio.store(1.01);  // as a line whose encoder reads 1% short
+  FrameJob behind = original;
+  behind.waiting_behind = 2;
+  const FrameOutcome reused = process_frame(behind, config, shared, nullptr);
+  ASSERT_TRUE(reused.processed) << reused.log.dump();
+  const auto flags = reused.log["flags"];
+  EXPECT_NE(std::find(flags.begin(), flags.end(), "motion-reused"), flags.end()) << flags.dump();
+  EXPECT_EQ(reused.log["motion"]["reused_ratio"].get<double>(), 1.01);
+  EXPECT_NEAR(reused.log["model"]["blur_px"].get<double>(),
+              1.01 * reused.log["motion"]["encoder_blur_px"].get<double>(), 0.01);
+  EXPECT_FALSE(reused.decode_failed) << reused.log.dump();
+
+  config.processing.refine_when_behind = true;
+  FrameJob behind_refined = original;
+  behind_refined.waiting_behind = 2;
+  const FrameOutcome kept = process_frame(behind_refined, config, shared, nullptr);
+  ASSERT_TRUE(kept.processed);
+  EXPECT_TRUE(kept.log["motion"].contains("refined_blur_px")) << kept.log["motion"].dump();
+}
+
 /// `job`'s frame as if its whole scene reflected `share[c]` of the light in
 /// channel c: every sample's signal above the black level scaled (the sim's RGB
 /// 16-bit frames).

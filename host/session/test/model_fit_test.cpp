@@ -164,6 +164,27 @@ TEST(ModelFit, RefinementCorrectsAWrongEncoderReading) {
   EXPECT_NEAR(far.value().log["model"]["blur_px"].get<double>(), 68.0, 1e-9);
 }
 
+// Behind (the session sets reuse_motion_ratio): no refinement; the encoder's
+// blur scaled by the latest refined frame's ratio, flagged.
+TEST(ModelFit, ABehindFrameTakesTheLatestRefinedRatioUnrefined) {
+  const auto truth = capture(52);
+  const auto scene = sim::render_scene(code128()).value();
+  const Frame f = record(sim::expected_electrons(scene, truth), truth);
+  ModelFitConfig config;  // refinement on by default (10%)
+  config.reuse_motion_ratio = 52.0 / 57;
+  const auto fit = deblur_fitting_model(imaging::saturated_share(f.dn, capture(57)), f.electrons,
+                                        capture(57), tv(), config, 1);
+  ASSERT_TRUE(fit.ok());
+  const auto& log = fit.value().log;
+  EXPECT_TRUE(has(fit.value().flags, "motion-reused")) << log.dump();
+  EXPECT_FALSE(fit.value().refinement.has_value());
+  EXPECT_FALSE(log["motion"]["used"].get<bool>()) << log.dump();
+  EXPECT_FALSE(log["motion"].contains("refined_blur_px")) << log.dump();
+  EXPECT_NEAR(log["model"]["blur_px"].get<double>(), 52.0, 1e-9) << log.dump();
+  EXPECT_EQ(reader::code_texts(reader::read_barcodes(fit.value().latent)),
+            std::vector<std::string>{"FIT-0042"});
+}
+
 TEST(ModelFit, SaturationIsFlagged) {
   const auto m = capture(52, 30000);
   const auto scene = sim::render_scene(code128()).value();

@@ -17,6 +17,7 @@ TEST(BoundedQueue, PushFailsWhenFullAndPopEndsOnceClosedAndEmpty) {
   EXPECT_TRUE(queue.try_push(std::move(a)));
   EXPECT_TRUE(queue.try_push(std::move(b)));
   EXPECT_FALSE(queue.try_push(std::move(c)));
+  EXPECT_EQ(queue.size(), 2u);
   queue.close();
   int got = 0;
   ASSERT_TRUE(queue.pop(got));
