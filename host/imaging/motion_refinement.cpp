@@ -55,10 +55,10 @@ constexpr int kFirstRows = 32;
 /// (px: 2.5 times below the 0.05 px rms the refinement is held to; the error
 /// falls as 1 / sqrt(rows)), ...
 constexpr double kEnoughPrecisionPx = 0.02;
-/// ... unless the frame is clearly without edges: a significance below this,
-/// where four times the rows could at most double it and still stay short of
-/// kMinimumSignificance.
-constexpr double kClearlyFlat = kMinimumSignificance / 4;
+/// ... unless the frame cannot show edges with every row read: the significance
+/// grows at most as the square root of the rows (they are read edgiest first),
+/// so a frame whose significance, scaled by sqrt(all rows / rows read), stays
+/// short of kMinimumSignificance, or whose last batch lowered it, stops.
 
 double square(double v) {
   return v * v;
@@ -883,6 +883,7 @@ Result<MotionRefinement, std::string> refine_motion(const MotionFrame& frame,
   std::vector<double> sums(static_cast<std::size_t>(frame.channel_count()), 0.0);
   std::vector<double> variances(sums.size());
   MotionRefinement out;
+  double last_significance = 0;
   for (;;) {
     const std::size_t first = rows.size();
     for (std::size_t i = first; i < batch; ++i) {
@@ -909,7 +910,13 @@ Result<MotionRefinement, std::string> refine_motion(const MotionFrame& frame,
     const MotionSearch search(forms, variances, model, range, taps);
     out = search.run(options);
     const bool precise = out.edges && out.standard_error_px <= kEnoughPrecisionPx;
-    const bool flat = !out.edges && out.significance < kClearlyFlat;
+    const double reachable = out.significance * std::sqrt(static_cast<double>(chosen.size()) /
+                                                          static_cast<double>(rows.size()));
+    // Rows come edgiest first: once a batch lowered the significance, the rows
+    // left would lower it further.
+    const bool flat =
+        !out.edges && (reachable < kMinimumSignificance || out.significance < last_significance);
+    last_significance = out.significance;
     if (rows.size() == chosen.size() || precise || flat || options.tolerance == 0) {
       if (options.speed_change && options.tolerance > 0) search.wander(out);
       break;

@@ -21,8 +21,10 @@
 // rows) are read best first, in batches: 32 rows, then as many more as the
 // standard error they gave says bring it below 0.02 px (the error falls as
 // 1 / sqrt(rows)), up to MotionRefinementOptions::rows; each batch is added to
-// the G's and the search below runs again. A frame clearly without edges stops
-// after the first batch, and a bright label reads a quarter of the rows. A grid and golden section
+// the G's and the search below runs again. A frame that could not show edges
+// with every row read (its significance grows at most as sqrt(rows), and falls
+// once the rows added carry less edge than those before) stops there, and a
+// bright label reads a quarter of the rows. A grid and golden section
 // over blur_px within the tolerance find the constant-speed motion; when its residual stays above
 // the noise, a two-parameter motion (blur and the end / start speed ratio, constant acceleration)
 // is fitted as well and kept only if it explains the frame clearly better; when even that leaves

@@ -8,6 +8,8 @@
 
 #include <gtest/gtest.h>
 
+#include <random>
+
 #include <cmath>
 
 #include "imaging/capture_descriptor.hpp"
@@ -137,6 +139,33 @@ TEST(MotionRefinement, FramesWithoutEdgesKeepTheirMotion) {
   EXPECT_FALSE(r.value().accelerating);
   EXPECT_EQ(r.value().blur_px, 50);
   EXPECT_TRUE(std::isinf(r.value().standard_error_px));
+}
+
+// Faint print on a few rows at 300 e-: the edgiest rows come first, the rows
+// after them are belt and only dilute what the first showed, so the search
+// stops once a batch lowered the significance instead of reading every row.
+
+constexpr float kFaintContrast =
+    0.28f;  // 300 e-: significance above 10 on the bars' rows, below 20 with the belt's
+TEST(MotionRefinement, AFrameWhoseRowsAddedLowerTheSignificanceStopsReading) {
+  // Bars 2-8 px wide (fine pixels x kSimSupersample) of +-kFaintContrast on 40 rows of a mid-grey
+  // belt.
+  imaging::Plane faint(640 * kSimSupersample, 360 * kSimSupersample, 0.5f);
+  std::mt19937 random(3);
+  std::vector<float> bars(static_cast<std::size_t>(faint.width));
+  for (std::size_t x = 0; x < bars.size();) {
+    const std::size_t run = (2 + random() % 7) * kSimSupersample;
+    const float v = random() % 2 ? 0.5f + kFaintContrast : 0.5f - kFaintContrast;
+    for (std::size_t i = 0; i < run && x < bars.size(); ++i, ++x) bars[x] = v;
+  }
+  for (int y = 100 * kSimSupersample; y < 140 * kSimSupersample; ++y)
+    for (int x = 0; x < faint.width; ++x) faint.at(x, y) = bars[static_cast<std::size_t>(x)];
+  const CaptureModel m = triplet_capture(52, 300);
+  const auto r = imaging::refine_motion(recorded(faint, m, 9), m, {});
+  ASSERT_TRUE(r.ok()) << r.error();
+  EXPECT_FALSE(r.value().edges);
+  EXPECT_EQ(r.value().blur_px, 52);
+  EXPECT_LT(r.value().rows_used, imaging::MotionRefinementOptions{}.rows);
 }
 
 TEST(MotionRefinement, FindsASpeedChangeOnlyWhenThereIsOne) {
