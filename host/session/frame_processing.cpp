@@ -148,7 +148,7 @@ Result<Deblurred, StepFailure> deblur(Converted& in, const FrameJob& job,
   fit.fallback_blur_px = shared.last_blur_px.load();
   if (!config.processing.refine_when_behind &&
       behind_queue(job.waiting_behind, config.processing.queue_depth))
-    fit.reuse_motion_ratio = shared.motion_ratio.load();
+    fit.reuse_motion_ratio = shared.motion_ratio.load() > 0 ? shared.motion_ratio.load() : 1.0;
   auto r = deblur_fitting_model(in.frame.saturated_share, frame.value(), in.model, options, fit,
                                 job.index);
   if (!r.ok()) return Out::failure({r.error()});

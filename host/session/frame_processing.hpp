@@ -27,7 +27,8 @@ struct WorkerShared {
   /// no edges along the motion, updated by each new estimate.
   std::atomic<double> last_blur_px;
   /// The latest refined frame's refined / encoder blur (0: none yet): a frame
-  /// taken while the workers are behind (behind_queue()) uses it unrefined.
+  /// taken while the workers are behind (behind_queue()) uses it unrefined
+  /// (before any, 1: the encoder's blur, as a frame without edges keeps).
   std::atomic<double> motion_ratio{0};
   /// The cascade's CPU budget for second passes.
   SecondPassBudget second_pass;

@@ -47,7 +47,7 @@ struct ModelFitConfig {
   double blur_tolerance = 0.10;  ///< with an encoder: refine within +-this fraction (0: off)
   /// > 0 (with refinement on): the session is behind, so the frame is not
   /// refined; the encoder's blur is scaled by this instead (the latest refined
-  /// frame's refined / encoder blur), and the frame flagged "motion-reused".
+  /// frame's refined / encoder blur, or 1), and the frame flagged "motion-reused".
   double reuse_motion_ratio = 0;
   /// Without an encoder: the blur to use when a frame gives no confident
   /// estimate (the session passes the last confident one; 0: the nominal blur).

@@ -105,6 +105,12 @@ TEST(FrameProcessing, AFrameTakenBehindUsesTheLatestRefinedRatioInsteadOfRefinin
   EXPECT_FALSE(behind_queue(0, 0));
   const FrameJob original = job_with_a_label(config);
   WorkerShared shared(config);
+  FrameJob first_behind = original;  // before any frame was refined: the encoder's blur
+  first_behind.waiting_behind = 3;
+  const FrameOutcome unrefined = process_frame(first_behind, config, shared, nullptr);
+  ASSERT_TRUE(unrefined.processed) << unrefined.log.dump();
+  EXPECT_EQ(unrefined.log["motion"]["reused_ratio"].get<double>(), 1.0);
+  EXPECT_EQ(shared.motion_ratio.load(), 0.0);
   FrameJob on_time = original;
   const FrameOutcome refined = process_frame(on_time, config, shared, nullptr);
   ASSERT_TRUE(refined.processed) << refined.log.dump();
