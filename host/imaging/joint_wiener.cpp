@@ -82,8 +82,8 @@ JointWiener::JointWiener(std::span<const ChannelPsf> channels, int width, double
   for (std::size_t c = 0; c < channels.size(); ++c) {
     AlignedFloats re(size), im(size);
     for (std::size_t j = 0; j < bins; ++j) {
-      const std::complex<double> h =
-          std::conj(spectra[c][j]) / channels[c].noise_variance / denominator[j] / double(n);
+      const std::complex<double> h = std::conj(spectra[c][j]) / channels[c].noise_variance /
+                                     denominator[j] / static_cast<double>(n);
       re[j] = static_cast<float>(h.real());
       im[j] = static_cast<float>(h.imag());
       if (j > 0 && j < size - j) {  // bin n - j of a real filter: the conjugate

@@ -82,7 +82,7 @@ class RowFft {
 /// product with its full-length (Hermitian) spectrum, and the inverse gives the
 /// two filtered rows back as the real and imaginary parts. FFTW's split-complex
 /// codelets run such a pair in about the time of one real-input transform of
-/// length n (docs/algorithms.md, "Rows in pairs"). One plan serves both
+/// length n (docs/algorithms.md, "joint-wiener", rows in pairs). One plan serves both
 /// directions (the inverse swaps the real and imaginary arrays, as FFTW
 /// documents). Every array: n floats from AlignedFloats; inputs are not changed
 /// and may not alias the outputs.
