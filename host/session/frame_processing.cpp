@@ -147,8 +147,10 @@ Result<Deblurred, StepFailure> deblur(Converted& in, const FrameJob& job,
   fit.blur_tolerance = config.processing.blur_tolerance_pct / 100;
   fit.fallback_blur_px = shared.last_blur_px.load();
   if (!config.processing.refine_when_behind &&
-      behind_queue(job.waiting_behind, config.processing.queue_depth))
-    fit.reuse_motion_ratio = shared.motion_ratio.load() > 0 ? shared.motion_ratio.load() : 1.0;
+      behind_queue(job.waiting_behind, config.processing.queue_depth)) {
+    const double ratio = shared.motion_ratio.load();
+    fit.reuse_motion_ratio = ratio > 0 ? ratio : 1.0;
+  }
   auto r = deblur_fitting_model(in.frame.saturated_share, frame.value(), in.model, options, fit,
                                 job.index);
   if (!r.ok()) return Out::failure({r.error()});
