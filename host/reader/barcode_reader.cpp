@@ -45,13 +45,40 @@ const std::vector<std::uint8_t>& srgb_table() {
   return table;
 }
 
+/// Of the window's pixels, the share below which its black level lies: the
+/// darkest print, less the few pixels noise pushes below it.
+constexpr double kBlackShare = 0.01;
+/// Steps of reflectance 0..1 the black level is found in.
+constexpr int kBlackSteps = 1024;
+
+/// The reflectance a share kBlackShare of the window's pixels lie below.
+float black_level(const imaging::Plane& latent, int x0, int y0, int x1, int y1) {
+  std::vector<int> histogram(kBlackSteps + 1, 0);
+  for (int y = y0; y < y1; ++y) {
+    const float* row = latent.row(y).data();
+    for (int x = x0; x < x1; ++x)
+      ++histogram[static_cast<std::size_t>(std::clamp(row[x], 0.0f, 1.0f) * kBlackSteps)];
+  }
+  const auto below = static_cast<long long>(kBlackShare * static_cast<double>(x1 - x0) *
+                                            static_cast<double>(y1 - y0));
+  long long seen = 0;
+  for (int i = 0; i <= kBlackSteps; ++i) {
+    seen += histogram[static_cast<std::size_t>(i)];
+    if (seen > below) return static_cast<float>(i) / kBlackSteps;
+  }
+  return 1.0f;
+}
+
 /// Columns [x0, x1) of rows [y0, y1) of `latent` into `lum` (rows of x1 - x0
-/// bytes) as ZXing's 8-bit luminance: linear in reflectance, or sRGB-encoded.
+/// bytes) as ZXing's 8-bit luminance: linear in reflectance, or sRGB-encoded
+/// from the window's black level.
 void to_luminance(const imaging::Plane& latent, int x0, int y0, int x1, int y1, LuminanceView view,
                   std::vector<std::uint8_t>& lum) {
   const auto width = static_cast<std::size_t>(x1 - x0);
   lum.resize(width * static_cast<std::size_t>(y1 - y0));
   const std::vector<std::uint8_t>& srgb = srgb_table();
+  const float black = view == LuminanceView::kSrgb ? black_level(latent, x0, y0, x1, y1) : 0.0f;
+  const float gain = black < 1.0f ? 1.0f / (1.0f - black) : 1.0f;
   for (int y = y0; y < y1; ++y) {
     const float* row = latent.row(y).data() + x0;
     std::uint8_t* out = lum.data() + static_cast<std::size_t>(y - y0) * width;
@@ -60,7 +87,8 @@ void to_luminance(const imaging::Plane& latent, int x0, int y0, int x1, int y1, 
         out[x] = static_cast<std::uint8_t>(std::clamp(row[x], 0.0f, 1.0f) * 255.0f + 0.5f);
     else
       for (std::size_t x = 0; x < width; ++x)
-        out[x] = srgb[static_cast<std::size_t>(std::clamp(row[x], 0.0f, 1.0f) * kSrgbSteps + 0.5f)];
+        out[x] = srgb[static_cast<std::size_t>(
+            std::clamp((row[x] - black) * gain, 0.0f, 1.0f) * kSrgbSteps + 0.5f)];
   }
 }
 

@@ -22,8 +22,9 @@
 namespace flutterscan::reader {
 
 /// \brief How a latent's reflectance reaches the decoder as 8-bit luminance:
-/// linear (first), or sRGB-encoded (a window the linear view reads nothing
-/// in: dark or low-contrast print, as a camera's own encoding shows it).
+/// linear (first), or sRGB-encoded from the window's black level (a window
+/// the linear view reads nothing in: dark or low-contrast print, as a camera
+/// that sets its black level and encodes its own output shows it).
 enum class LuminanceView { kLinear, kSrgb };
 
 /// \brief One decoded barcode.
@@ -83,9 +84,9 @@ struct DecodeWindow {
 /// \brief Every barcode of the named symbologies (check_symbologies() passed)
 /// ZXing reads on `latent` (reflectance, clipped to 0..1), inside `windows`
 /// (each decoded on its own; none: the whole image), each window on the
-/// linear view and, when that reads nothing, on the sRGB-encoded one. Positions are the
-/// latent's. `try_rotate`: also look for 1-D codes turned by 90 degrees (about
-/// twice the decode time).
+/// linear view and, when that reads nothing, on the sRGB-encoded one (from the window's black
+/// level). Positions are the latent's. `try_rotate`: also look for 1-D codes turned by 90 degrees
+/// (about twice the decode time).
 BarcodeReadout read_barcodes(const imaging::Plane& latent,
                              const std::string& symbologies = kDefaultSymbologies,
                              bool try_rotate = true, std::span<const DecodeWindow> windows = {});

@@ -131,6 +131,24 @@ TEST(BarcodeReader, DarkPrintTheLinearViewCannotSeparateIsReadOnTheSrgbView) {
   EXPECT_EQ(bright.codes[0].luminance, LuminanceView::kLinear);
 }
 
+TEST(BarcodeReader, GreyInkOnGreyCardIsReadFromItsBlackLevel) {
+  // Ink that is not black on card that is not white: reflectance 0.10 and 0.16
+  // are 26 and 41 of 255 in linear light and 89 and 112 sRGB-encoded, both
+  // under the 24 levels ZXing's local binarizer takes for print; encoded from
+  // the window's black level (0.10) they are 0 and 73.
+  const ZXing::BitMatrix bars = ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code128)
+                                    .setMargin(10)
+                                    .encode(L"GREY-02", 300, 120);
+  imaging::Plane card(340, 160, 0.16f);
+  for (int y = 0; y < bars.height(); ++y)
+    for (int x = 0; x < bars.width(); ++x)
+      if (bars.get(x, y)) card.at(20 + x, 20 + y) = 0.10f;
+  const BarcodeReadout readout = read_barcodes(card);
+  ASSERT_EQ(readout.codes.size(), 1u);
+  EXPECT_EQ(readout.codes[0].text, "GREY-02");
+  EXPECT_EQ(readout.codes[0].luminance, LuminanceView::kSrgb);
+}
+
 TEST(BarcodeReader, PaperRunsFindLabelsAndFlagThoseCutByTheFrame) {
   const imaging::Plane image = belt_with_labels({60, 500, 980}, 1200);
   const auto runs = find_paper_runs(image);
