@@ -16,7 +16,8 @@
 namespace flutterscan::reader {
 
 /// \brief The busy regions of `latent` (the motion frame's; reflectance):
-/// 16 x 16 px cells whose contrast (standard deviation less the frame's noise,
+/// 16 x 16 px cells (every 4th row sampled, averaged with the row after it:
+/// print is the same in both, the rows' deblurred noise is not) whose contrast (standard deviation less the frame's noise,
 /// that of the flattest fifth of its cells that change at all along their rows)
 /// is at least 0.04 and at least 1.5 times that noise, and whose mean absolute
 /// step between neighbours (less the flattest cells') makes at least 1.5
