@@ -70,14 +70,15 @@ float black_level(const imaging::Plane& latent, int x0, int y0, int x1, int y1) 
 }
 
 /// Columns [x0, x1) of rows [y0, y1) of `latent` into `lum` (rows of x1 - x0
-/// bytes) as ZXing's 8-bit luminance: linear in reflectance, or sRGB-encoded
-/// from the window's black level.
+/// bytes) as ZXing's 8-bit luminance: linear in reflectance, sRGB-encoded, or
+/// sRGB-encoded from the window's black level.
 void to_luminance(const imaging::Plane& latent, int x0, int y0, int x1, int y1, LuminanceView view,
                   std::vector<std::uint8_t>& lum) {
   const auto width = static_cast<std::size_t>(x1 - x0);
   lum.resize(width * static_cast<std::size_t>(y1 - y0));
   const std::vector<std::uint8_t>& srgb = srgb_table();
-  const float black = view == LuminanceView::kSrgb ? black_level(latent, x0, y0, x1, y1) : 0.0f;
+  const float black =
+      view == LuminanceView::kSrgbFromBlack ? black_level(latent, x0, y0, x1, y1) : 0.0f;
   const float gain = black < 1.0f ? 1.0f / (1.0f - black) : 1.0f;
   for (int y = y0; y < y1; ++y) {
     const float* row = latent.row(y).data() + x0;
@@ -161,8 +162,10 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
       ++out.windows_skipped;
       continue;
     }
-    // The linear view first; a window it reads nothing in, again sRGB-encoded.
-    for (const LuminanceView luminance : {LuminanceView::kLinear, LuminanceView::kSrgb}) {
+    // The linear view first; a window it reads nothing in, again sRGB-encoded,
+    // and again from its black level.
+    for (const LuminanceView luminance :
+         {LuminanceView::kLinear, LuminanceView::kSrgb, LuminanceView::kSrgbFromBlack}) {
       to_luminance(latent, x0, y0, x1, y1, luminance, lum);
       const ZXing::ImageView view(lum.data(), x1 - x0, y1 - y0, ZXing::ImageFormat::Lum);
       ZXing::Results results;

@@ -22,10 +22,11 @@
 namespace flutterscan::reader {
 
 /// \brief How a latent's reflectance reaches the decoder as 8-bit luminance:
-/// linear (first), or sRGB-encoded from the window's black level (a window
-/// the linear view reads nothing in: dark or low-contrast print, as a camera
-/// that sets its black level and encodes its own output shows it).
-enum class LuminanceView { kLinear, kSrgb };
+/// linear (first); sRGB-encoded (a window the linear view reads nothing in:
+/// dark or low-contrast print, as a camera's own encoding shows it); and
+/// sRGB-encoded from the window's black level (a window neither reads: ink
+/// that is not black, as a camera that sets its black level shows it).
+enum class LuminanceView { kLinear, kSrgb, kSrgbFromBlack };
 
 /// \brief One decoded barcode.
 struct DecodedCode {

@@ -146,7 +146,7 @@ TEST(BarcodeReader, GreyInkOnGreyCardIsReadFromItsBlackLevel) {
   const BarcodeReadout readout = read_barcodes(card);
   ASSERT_EQ(readout.codes.size(), 1u);
   EXPECT_EQ(readout.codes[0].text, "GREY-02");
-  EXPECT_EQ(readout.codes[0].luminance, LuminanceView::kSrgb);
+  EXPECT_EQ(readout.codes[0].luminance, LuminanceView::kSrgbFromBlack);
 }
 
 TEST(BarcodeReader, PaperRunsFindLabelsAndFlagThoseCutByTheFrame) {
