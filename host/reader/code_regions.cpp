@@ -20,6 +20,11 @@ constexpr double kNoisePercentile = 0.2;
 /// the flattest fifth's is low) stays well below it.
 constexpr double kNoiseMultiple = 1.5;
 constexpr int kMinCells = 6;
+/// Regions side by side along the rows within this many px of each other,
+/// sharing at least half the rows of the shorter, are one code: a linear
+/// code's widest bars and spaces (4 modules) leave cells that change too
+/// seldom to look busy, and the code fell into pieces none of which holds it.
+constexpr int kJoinGap = 8 * kCell;
 
 /// Rows sampled: every kRowStep-th, each averaged with the row after it.
 constexpr int kRowStep = 4;
@@ -174,6 +179,29 @@ std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent) {
   }
   std::sort(regions.begin(), regions.end(),
             [](const LabelRegion& a, const LabelRegion& b) { return a.begin < b.begin; });
+  auto one_code = [](const LabelRegion& a, const LabelRegion& b) {
+    const int shared =
+        std::min(a.across_end, b.across_end) - std::max(a.across_begin, b.across_begin);
+    const int shorter = std::min(a.across_end - a.across_begin, b.across_end - b.across_begin);
+    const int gap = std::max(a.begin, b.begin) - std::min(a.end, b.end);  // < 0: they overlap
+    return 2 * shared >= shorter && gap <= kJoinGap;
+  };
+  for (bool joined = true; joined;) {  // until no two are one code
+    joined = false;
+    for (std::size_t i = 0; i < regions.size() && !joined; ++i)
+      for (std::size_t j = i + 1; j < regions.size() && !joined; ++j) {
+        LabelRegion& a = regions[i];
+        const LabelRegion& b = regions[j];
+        if (!one_code(a, b)) continue;
+        a.begin = std::min(a.begin, b.begin);
+        a.end = std::max(a.end, b.end);
+        a.across_begin = std::min(a.across_begin, b.across_begin);
+        a.across_end = std::max(a.across_end, b.across_end);
+        a.cut = a.cut || b.cut;
+        regions.erase(regions.begin() + static_cast<std::ptrdiff_t>(j));
+        joined = true;
+      }
+  }
   return regions;
 }
 

@@ -17,17 +17,17 @@ namespace flutterscan::reader {
 
 /// \brief The busy regions of `latent` (the motion frame's; reflectance):
 /// 16 x 16 px cells (every 4th row sampled, averaged with the row after it:
-/// print is the same in both, the rows' deblurred noise is not) whose contrast (standard deviation less the frame's noise,
-/// that of the flattest fifth of its cells that change at all along their rows)
-/// is at least 0.04 and at least 1.5 times that noise, and whose mean absolute
-/// step between neighbours (less the flattest cells') makes at least 1.5
-/// changes between their darkest and brightest every 16 px (an edge makes at
-/// most one; a code's modules more:
-/// bars up to about 5 px, a matrix's modules up to about 10 px); such cells
-/// joined when they lie within one cell of each other, a region kept when it
-/// holds at least 6. Each region's columns are [begin, end) and its rows
-/// [across_begin, across_end), its busy cells' bounding box; `cut` when it
-/// touches the first or last column.
+/// print is the same in both, the rows' deblurred noise is not) whose contrast (standard deviation
+/// less the frame's noise, that of the flattest fifth of its cells that change at all along their
+/// rows) is at least 0.04 and at least 1.5 times that noise, and whose mean absolute step between
+/// neighbours (less the flattest cells') makes at least 1.5 changes between their darkest and
+/// brightest every 16 px (an edge makes at most one; a code's modules more: bars up to about 5 px,
+/// a matrix's modules up to about 10 px); such cells joined when they lie within one cell of each
+/// other, a region kept when it holds at least 6; regions side by side along the rows within 128
+/// px, sharing at least half the rows of the shorter, joined (a linear code's widest bars leave
+/// cells between its busy ones that do not look busy). Each region's columns are [begin, end) and
+/// its rows [across_begin, across_end), its busy cells' bounding box; `cut` when it touches the
+/// first or last column.
 std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent);
 
 /// \brief Where to read: the paper runs, and the code regions that do not lie

@@ -87,6 +87,29 @@ TEST(CodeRegions, LowContrastPrintOnACartonInDimLightIsFoundOverItsWholeWidth) {
   EXPECT_GE(code[0].end, 250 + bars.width() - 32);
 }
 
+/// A 1000 x 320 card (0.6) with patches of 2-px bars (0.1) at columns [x, x + 160)
+/// and rows [y, y + 100), noise 0.02.
+imaging::Plane card_with_bar_patches(const std::vector<std::pair<int, int>>& patches) {
+  imaging::Plane card(1000, 320, 0.6f);
+  for (const auto& [px, py] : patches)
+    for (int y = py; y < py + 100; ++y)
+      for (int x = px; x < px + 160; ++x)
+        if ((x - px) % 4 < 2) card.at(x, y) = 0.1f;
+  add_noise(card, 0.02, 3);
+  return card;
+}
+
+TEST(CodeRegions, PiecesSideBySideInTheSameRowsAreOneCodeAndFarOnesTwo) {
+  // 96 px apart in the same rows (a linear code's wide bars between them): one.
+  const auto near = find_code_regions(card_with_bar_patches({{96, 64}, {352, 64}}));
+  ASSERT_EQ(near.size(), 1u);
+  EXPECT_EQ(near[0].begin, 96);
+  EXPECT_EQ(near[0].end, 512);
+  // 208 px apart, or in rows they do not share: two.
+  EXPECT_EQ(find_code_regions(card_with_bar_patches({{96, 64}, {464, 64}})).size(), 2u);
+  EXPECT_EQ(find_code_regions(card_with_bar_patches({{96, 16}, {352, 192}})).size(), 2u);
+}
+
 TEST(CodeRegions, NoiseShadingAndAnObjectsEdgesAreNotCodes) {
   imaging::Plane scene(640, 320, 0.0f);
   for (int y = 0; y < scene.height; ++y)
