@@ -17,6 +17,7 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <numbers>
 #include <stdexcept>
 
 namespace flutterscan::reader {
@@ -44,6 +45,10 @@ const std::vector<std::uint8_t>& srgb_table() {
   }();
   return table;
 }
+
+/// A linear symbol whose ends lie this close to its window's edge along its
+/// reading direction is cut by it (cut_along_reading()).
+constexpr int kEdgePx = 1;
 
 /// Of the window's pixels, the share below which its black level lies: the
 /// darkest print, less the few pixels noise pushes below it.
@@ -119,6 +124,24 @@ DecodedCode decoded_code(const ZXing::Result& result, int offset_x, int offset_y
   return code;
 }
 
+/// Whether linear symbol `result`, read in a window `width` x `height` px,
+/// reaches the window's edge along its reading direction: its quiet zone, and
+/// maybe its last modules, lay outside what the decoder saw, and a symbol cut
+/// there can decode to another value that passes its check digit (the sim
+/// session at nominal noise: an EAN-13 cut by the frame's last column read
+/// 4000001979714 in one frame, its value 4000001979752 in the next two).
+bool cut_along_reading(const ZXing::Result& result, int width, int height) {
+  if (!ZXing::BarcodeFormats(ZXing::BarcodeFormat::LinearCodes).testFlag(result.format()))
+    return false;
+  const double turn = result.orientation() * std::numbers::pi / 180;
+  const bool along_x = std::abs(std::cos(turn)) >= std::abs(std::sin(turn));
+  const auto& corners = result.position();
+  return std::any_of(corners.begin(), corners.end(), [&](const ZXing::PointI& p) {
+    return along_x ? p.x <= kEdgePx || p.x >= width - 1 - kEdgePx
+                   : p.y <= kEdgePx || p.y >= height - 1 - kEdgePx;
+  });
+}
+
 /// Windows may overlap: a symbol in two of them is one symbol.
 bool already_read(const std::vector<DecodedCode>& codes, const DecodedCode& code) {
   return std::any_of(codes.begin(), codes.end(),
@@ -186,7 +209,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
       }
       bool any = false;
       for (const ZXing::Result& result : results) {
-        if (!result.isValid()) continue;
+        if (!result.isValid() || cut_along_reading(result, x1 - x0, y1 - y0)) continue;
         any = true;
         DecodedCode code = decoded_code(result, x0, y0, latent);
         code.luminance = luminance;

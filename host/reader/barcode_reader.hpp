@@ -85,9 +85,12 @@ struct DecodeWindow {
 /// \brief Every barcode of the named symbologies (check_symbologies() passed)
 /// ZXing reads on `latent` (reflectance, clipped to 0..1), inside `windows`
 /// (each decoded on its own; none: the whole image), each window on the
-/// linear view and, when that reads nothing, on the sRGB-encoded one (from the window's black
-/// level). Positions are the latent's. `try_rotate`: also look for 1-D codes turned by 90 degrees
-/// (about twice the decode time).
+/// linear view and, where that reads nothing, on the sRGB-encoded one, then on
+/// the sRGB-encoded one from the window's black level (LuminanceView). A
+/// linear symbol that reaches its window's edge along its reading direction is
+/// cut by it and not taken for a read (it can decode to another value that
+/// passes its check). Positions are the latent's. `try_rotate`: also look for
+/// 1-D codes turned by 90 degrees (about twice the decode time).
 BarcodeReadout read_barcodes(const imaging::Plane& latent,
                              const std::string& symbologies = kDefaultSymbologies,
                              bool try_rotate = true, std::span<const DecodeWindow> windows = {});

@@ -149,6 +149,32 @@ TEST(BarcodeReader, GreyInkOnGreyCardIsReadFromItsBlackLevel) {
   EXPECT_EQ(readout.codes[0].luminance, LuminanceView::kSrgbFromBlack);
 }
 
+TEST(BarcodeReader, ALinearSymbolThatEndsAtTheWindowsEdgeIsNotTakenForARead) {
+  // An EAN-13 of 3-px modules on white paper with its quiet zones: read.
+  const ZXing::BitMatrix bars = ZXing::MultiFormatWriter(ZXing::BarcodeFormat::EAN13)
+                                    .setMargin(0)
+                                    .encode(L"4006381333931", 285, 90);
+  auto label = [&](int left, int right) {
+    imaging::Plane paper(left + bars.width() + right, 130, 0.9f);
+    for (int y = 0; y < bars.height(); ++y)
+      for (int x = 0; x < bars.width(); ++x)
+        if (bars.get(x, y)) paper.at(left + x, 20 + y) = 0.05f;
+    return paper;
+  };
+  const BarcodeReadout whole = read_barcodes(label(40, 40), "EAN-13");
+  ASSERT_EQ(whole.codes.size(), 1u);
+  EXPECT_EQ(whole.codes[0].text, "4006381333931");
+  // The same symbol ending at the image's last column or starting at its
+  // first: its quiet zone is not in the image, and whatever the decoder makes
+  // of it is not a read.
+  EXPECT_TRUE(read_barcodes(label(40, 0), "EAN-13").codes.empty());
+  EXPECT_TRUE(read_barcodes(label(0, 40), "EAN-13").codes.empty());
+  // In a window of a wider image the same holds at the window's edge.
+  const imaging::Plane wide = label(40, 40);
+  const DecodeWindow cut{0, 0, 40 + bars.width(), wide.height};
+  EXPECT_TRUE(read_barcodes(wide, "EAN-13", true, {&cut, 1}).codes.empty());
+}
+
 TEST(BarcodeReader, PaperRunsFindLabelsAndFlagThoseCutByTheFrame) {
   const imaging::Plane image = belt_with_labels({60, 500, 980}, 1200);
   const auto runs = find_paper_runs(image);
