@@ -150,6 +150,18 @@ bool already_read(const std::vector<DecodedCode>& codes, const DecodedCode& code
 
 }  // namespace
 
+std::string luminance_view_name(LuminanceView view) {
+  switch (view) {
+    case LuminanceView::kLinear:
+      return "linear";
+    case LuminanceView::kSrgb:
+      return "srgb";
+    case LuminanceView::kSrgbFromBlack:
+      return "srgb-from-black";
+  }
+  return "linear";
+}
+
 bool same_symbol(const DecodedCode& a, const DecodedCode& b) {
   return a.text == b.text && a.format == b.format && std::abs(a.centre_x - b.centre_x) < 4 &&
          std::abs(a.centre_y - b.centre_y) < 4;

@@ -28,6 +28,9 @@ namespace flutterscan::reader {
 /// that is not black, as a camera that sets its black level shows it).
 enum class LuminanceView { kLinear, kSrgb, kSrgbFromBlack };
 
+/// \brief The view's name in logs: "linear", "srgb", "srgb-from-black".
+std::string luminance_view_name(LuminanceView view);
+
 /// \brief One decoded barcode.
 struct DecodedCode {
   std::string text;

@@ -306,7 +306,8 @@ nlohmann::json decoded_json(const std::vector<reader::DecodedCode>& codes,
     nlohmann::json entry = {{"text", code.text},
                             {"format", code.format},
                             {"x", std::lround(code.centre_x)},
-                            {"y", std::lround(code.centre_y)}};
+                            {"y", std::lround(code.centre_y)},
+                            {"view", reader::luminance_view_name(code.luminance)}};
     entry.update(code_record(code));
     const double along = imaging::position_along_motion(direction, code.centre_x, code.centre_y,
                                                         latent.width, latent.height);
