@@ -110,16 +110,22 @@ imaging::Plane belt_with_labels(const std::vector<int>& starts, int width, int h
   return belt;
 }
 
+/// A 340 x 160 card of reflectance `card_reflectance` with a Code 128 of
+/// `text` (300 x 120 px with its quiet zones) printed in `ink` at (20, 20).
+imaging::Plane code_on_card(const std::wstring& text, float card_reflectance, float ink) {
+  const ZXing::BitMatrix bars =
+      ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code128).setMargin(10).encode(text, 300, 120);
+  imaging::Plane card(340, 160, card_reflectance);
+  for (int y = 0; y < bars.height(); ++y)
+    for (int x = 0; x < bars.width(); ++x)
+      if (bars.get(x, y)) card.at(20 + x, 20 + y) = ink;
+  return card;
+}
+
 TEST(BarcodeReader, DarkPrintTheLinearViewCannotSeparateIsReadOnTheSrgbView) {
   // Grey print on dark card: reflectance 0.045 and 0.012 are 11 and 3 of 255
   // in linear light (too little range for ZXing's binarizer), 60 and 28 sRGB-encoded.
-  const ZXing::BitMatrix bars = ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code128)
-                                    .setMargin(10)
-                                    .encode(L"DARK-01", 300, 120);
-  imaging::Plane card(340, 160, 0.045f);
-  for (int y = 0; y < bars.height(); ++y)
-    for (int x = 0; x < bars.width(); ++x)
-      if (bars.get(x, y)) card.at(20 + x, 20 + y) = 0.012f;
+  imaging::Plane card = code_on_card(L"DARK-01", 0.045f, 0.012f);
   const BarcodeReadout readout = read_barcodes(card);
   ASSERT_EQ(readout.codes.size(), 1u);
   EXPECT_EQ(readout.codes[0].text, "DARK-01");
@@ -136,14 +142,7 @@ TEST(BarcodeReader, GreyInkOnGreyCardIsReadFromItsBlackLevel) {
   // are 26 and 41 of 255 in linear light and 89 and 112 sRGB-encoded, both
   // under the 24 levels ZXing's local binarizer takes for print; encoded from
   // the window's black level (0.10) they are 0 and 73.
-  const ZXing::BitMatrix bars = ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code128)
-                                    .setMargin(10)
-                                    .encode(L"GREY-02", 300, 120);
-  imaging::Plane card(340, 160, 0.16f);
-  for (int y = 0; y < bars.height(); ++y)
-    for (int x = 0; x < bars.width(); ++x)
-      if (bars.get(x, y)) card.at(20 + x, 20 + y) = 0.10f;
-  const BarcodeReadout readout = read_barcodes(card);
+  const BarcodeReadout readout = read_barcodes(code_on_card(L"GREY-02", 0.16f, 0.10f));
   ASSERT_EQ(readout.codes.size(), 1u);
   EXPECT_EQ(readout.codes[0].text, "GREY-02");
   EXPECT_EQ(readout.codes[0].luminance, LuminanceView::kSrgbFromBlack);
