@@ -31,6 +31,12 @@ std::string check_symbologies(const std::string& symbologies) {
   return {};
 }
 
+std::string linear_symbologies(const std::string& symbologies) {
+  const ZXing::BarcodeFormats linear = ZXing::BarcodeFormatsFromString(symbologies) &
+                                       ZXing::BarcodeFormats(ZXing::BarcodeFormat::LinearCodes);
+  return linear.empty() ? std::string() : ZXing::ToString(linear);
+}
+
 namespace {
 
 /// Reflectance 0..1 to sRGB-encoded 8-bit, in kSrgbSteps steps of linear light.

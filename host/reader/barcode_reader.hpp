@@ -28,6 +28,10 @@ namespace flutterscan::reader {
 /// that is not black, as a camera that sets its black level shows it).
 enum class LuminanceView { kLinear, kSrgb, kSrgbFromBlack };
 
+/// \brief The linear (1-D) symbologies among `symbologies` (ZXing's names, as
+/// processing.symbologies gives them); empty if it names none.
+std::string linear_symbologies(const std::string& symbologies);
+
 /// \brief The view's name in logs: "linear", "srgb", "srgb-from-black".
 std::string luminance_view_name(LuminanceView view);
 

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <utility>
 
+#include "imaging/bar_sums.hpp"
 #include "imaging/deblur.hpp"
 
 namespace flutterscan::session {
@@ -23,6 +24,12 @@ constexpr int kCropSlack = 16;
 /// more than 0.5 on real print at every light level and as much or more on
 /// the synthetic labels, 0.18 less (docs/algorithms.md, "tv").
 constexpr double kReadingWeightPerNoise = 0.3;
+/// Rows summed either side of each along a linear code's bars: 17 in all, a
+/// quarter of the noise's rms (docs/algorithms.md, "Sums along the bars").
+constexpr int kBarHalfRows = 8;
+/// Rows either side the bars' slope is judged over: more than are summed, so
+/// that a slope off by a little loses contrast enough to tell.
+constexpr int kSlopeHalfRows = 16;
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -120,13 +127,18 @@ double SecondPassBudget::credit_ms() const {
 
 nlohmann::json SecondPass::log(double credit_ms) const {
   nlohmann::json windows = nlohmann::json::array();
-  for (const WindowRetry& r : retried)
-    windows.push_back({{"x", r.window.x},
-                       {"y", r.window.y},
-                       {"width", r.window.width},
-                       {"height", r.window.height},
-                       {"ms", std::round(r.ms * 100) / 100},
-                       {"read", r.read}});
+  for (const WindowRetry& r : retried) {
+    nlohmann::json window = {{"x", r.window.x},
+                             {"y", r.window.y},
+                             {"width", r.window.width},
+                             {"height", r.window.height},
+                             {"ms", std::round(r.ms * 100) / 100},
+                             {"read", r.read}};
+    if (r.bar_sums)
+      window["bar_sums"] = {{"slope", std::round(r.bar_sums->slope * 100) / 100},
+                            {"read", r.bar_sums->read}};
+    windows.push_back(std::move(window));
+  }
   return {{"windows", std::move(windows)},
           {"skipped", skipped},
           {"read_before", read_before},
@@ -174,6 +186,9 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
   tv.method = imaging::Method::kTotalVariation;
   tv.threads = 1;
   tv.tv_weight_per_noise = kReadingWeightPerNoise;
+  imaging::DeblurOptions wiener;
+  wiener.threads = 1;
+  const std::string linear = reader::linear_symbologies(options.symbologies);
   for (const reader::LabelRegion& run : unread) {
     if (reads.any_within(run.begin - frame.travel_px, run.end - frame.travel_px, 0)) {
       ++out.read_before;
@@ -206,13 +221,8 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
     WindowRetry retry;
     retry.window =
         reader::decode_windows({&run, 1}, camera_width, camera_height, direction, kWindowMargin)[0];
-    // The crop is in the motion frame already (+x); its samples passed the frame's checks.
-    const auto cropped = imaging::MotionFrame::make(std::move(crop), imaging::Direction::kPlusX);
-    using DeblurOut = Result<imaging::DeblurResult, std::string>;
-    const DeblurOut deblurred = cropped.ok() ? imaging::deblur(cropped.value(), frame.model, tv)
-                                             : DeblurOut::failure(cropped.error());
-    if (deblurred.ok()) {
-      const imaging::Plane& patch = deblurred.value().latent;
+    // Writes `patch` (the crop's latent) into the latents over the window kept.
+    auto paste = [&](const imaging::Plane& patch) {
       for (int y = r0; y < r1; ++y)
         for (int n = keep0; n < keep1; ++n) {
           const float v = patch.at(n - c0, y - r0);
@@ -222,19 +232,65 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
             frame.camera_latent->at(x, cy) = v;
           }
         }
+    };
+    // Reads the window on the latents as pasted; the codes not read before
+    // join the readout. Returns them.
+    auto read_again = [&](const std::string& symbologies) {
       const imaging::Plane& camera =
           frame.camera_latent != nullptr ? *frame.camera_latent : frame.motion_latent;
-      reader::BarcodeReadout again = reader::read_barcodes(camera, options.symbologies,
-                                                           options.try_rotate, {&retry.window, 1});
+      reader::BarcodeReadout again =
+          reader::read_barcodes(camera, symbologies, options.try_rotate, {&retry.window, 1});
+      std::vector<std::string> texts;
       for (reader::DecodedCode& code : again.codes) {
         if (std::any_of(readout.codes.begin(), readout.codes.end(),
                         [&](const reader::DecodedCode& c) { return reader::same_symbol(c, code); }))
           continue;
-        retry.read.push_back(code.text);
+        texts.push_back(code.text);
         reads.add(imaging::position_along_motion(direction, code.centre_x, code.centre_y,
                                                  camera_width, camera_height) -
                   frame.travel_px);
         readout.codes.push_back(std::move(code));
+      }
+      retry.read.insert(retry.read.end(), texts.begin(), texts.end());
+      return texts;
+    };
+    // The crop is in the motion frame already (+x); its samples passed the frame's checks.
+    const auto cropped = imaging::MotionFrame::make(std::move(crop), imaging::Direction::kPlusX);
+    using DeblurOut = Result<imaging::DeblurResult, std::string>;
+    const DeblurOut deblurred = cropped.ok() ? imaging::deblur(cropped.value(), frame.model, tv)
+                                             : DeblurOut::failure(cropped.error());
+    if (deblurred.ok()) {
+      const imaging::Plane& patch = deblurred.value().latent;
+      paste(patch);
+      const std::size_t before = readout.codes.size();
+      read_again(options.symbologies);
+      const bool linear_read = std::any_of(
+          readout.codes.begin() + static_cast<std::ptrdiff_t>(before), readout.codes.end(),
+          [](const reader::DecodedCode& c) { return reader::is_linear_format(c.format); });
+      if (!linear_read && !linear.empty()) {
+        // No linear code: the rows summed along the bars (at 17 times the light)
+        // for one that tv's noise hid. The slope from tv's latent of the window kept.
+        imaging::Plane kept = imaging::Plane::uninitialised(keep1 - keep0, r1 - r0);
+        for (int y = r0; y < r1; ++y)
+          std::copy_n(patch.row(y - r0).begin() + (keep0 - c0), keep1 - keep0,
+                      kept.row(y - r0).begin());
+        BarSumsTry bars;
+        bars.slope = imaging::bar_slope(kept, kSlopeHalfRows);
+        auto sums = imaging::MotionFrame::make(
+            imaging::sum_along_bars(cropped.value().image(), bars.slope, kBarHalfRows),
+            imaging::Direction::kPlusX);
+        const DeblurOut profile =
+            sums.ok() ? imaging::deblur(
+                            sums.value(),
+                            imaging::model_of_row_sums(frame.model, 2 * kBarHalfRows + 1), wiener)
+                      : DeblurOut::failure(sums.error());
+        if (profile.ok()) {
+          paste(profile.value().latent);
+          bars.read = read_again(linear);
+          if (bars.read.empty())
+            paste(patch);  // the frame shows tv's latent where sums read nothing
+        }
+        retry.bar_sums = std::move(bars);
       }
     }
     retry.ms = ms_since(t0);

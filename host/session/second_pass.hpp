@@ -3,11 +3,13 @@
 // default; docs/session.md, "The cascade"). Joint Wiener deblurs the whole
 // frame; each judged label window, and each code region off the labels, where
 // it read nothing is deblurred again, alone, by tv (slower, and reads far more in dim light),
-// pasted into the fused frame and read again, while the session's CPU budget lasts. A window the
+// pasted into the fused frame and read again (and, for a linear code tv does not read, its rows
+// summed along the bars: imaging/bar_sums.hpp), while the session's CPU budget lasts. A window the
 // budget cannot pay for is counted and flagged, never dropped silently.
 
 #include <cstdint>
 #include <mutex>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -78,11 +80,19 @@ class BeltReads {
   std::size_t next_ = 0;
 };
 
+/// \brief A window's rows summed along its bars and deblurred again
+/// (imaging/bar_sums.hpp): tried where tv read no linear code.
+struct BarSumsTry {
+  double slope = 0;               ///< the bars' slope found, px along the motion per row
+  std::vector<std::string> read;  ///< the codes read on the sums
+};
+
 /// \brief One window the second pass deblurred again.
 struct WindowRetry {
-  reader::DecodeWindow window;    ///< in the frame (camera coordinates)
-  double ms = 0;                  ///< its deblur and decode, wall time
-  std::vector<std::string> read;  ///< the codes it read
+  reader::DecodeWindow window;         ///< in the frame (camera coordinates)
+  double ms = 0;                       ///< its deblurs and decodes, wall time
+  std::vector<std::string> read;       ///< the codes it read (tv's and the bar sums')
+  std::optional<BarSumsTry> bar_sums;  ///< absent: not tried
 };
 
 /// \brief What a frame's second pass did.
@@ -121,8 +131,11 @@ std::vector<reader::LabelRegion> retry_regions(std::span<const reader::LabelRegi
 
 /// \brief Deblurs each of `unread` whose object `reads` has not seen read
 /// again with tv (one thread), alone with the margin its blur needs, pastes it
-/// into the latents, and reads its decode window again with `options`; the
-/// codes found are added to `readout` and to `reads`.
+/// into the latents, and reads its decode window again with `options`; where
+/// that reads no linear code, and `options` reads linear symbologies, the
+/// window's rows summed along its bars are deblurred (joint Wiener), pasted
+/// and read for those (tv's latent is put back if they read nothing). The codes
+/// found are added to `readout` and to `reads`.
 SecondPass run_second_pass(const SecondPassFrame& frame,
                            std::span<const reader::LabelRegion> unread,
                            const reader::ReaderOptions& options, SecondPassBudget& budget,
