@@ -14,6 +14,7 @@
 #include "device/controller_client.hpp"
 #include "device/in_process_transport.hpp"
 #include "device/virtual_controller.hpp"
+#include "imaging/bar_sums.hpp"
 #include "imaging/capture_descriptor.hpp"
 
 namespace flutterscan::session {
@@ -296,6 +297,39 @@ TEST(FrameProcessing, TheCascadeReadsAWindowJointWienerMissedByDeblurringItAgain
   ASSERT_TRUE(out_turned.processed) << out_turned.log.dump();
   EXPECT_FALSE(out_turned.decode_failed) << out_turned.log.dump();
   ASSERT_EQ(out_turned.sightings.size(), out.sightings.size());
+}
+
+TEST(FrameProcessing, InDimLightTheBarSumsReadALinearCodeTvMisses) {
+  // Dim frames until one where a window's tv latent reads no linear code and
+  // the rows summed along its bars do (they are tried only where tv read none;
+  // at 640x240 the first is at 110 e-, the sim's second label frame).
+  SessionConfig config = small_config();
+  config.processing.second_pass_ms = kMaxSecondPassMs;  // offline: every window
+  for (const double electrons : {110.0, 80.0, 150.0, 200.0}) {
+    config.optics.electrons = electrons;
+    ASSERT_EQ(check_config(config), "");
+    for (int skip = 0; skip < 4; ++skip) {
+      FrameJob job = job_with_a_label(config, skip);
+      const std::vector<std::string> truth = job.frame.truth;
+      WorkerShared shared(config);
+      const FrameOutcome out = process_frame(job, config, shared, nullptr);
+      ASSERT_TRUE(out.processed) << out.log.dump();
+      if (!out.log.contains("second_pass") || !out.log["second_pass"].contains("windows")) continue;
+      for (const auto& window : out.log["second_pass"]["windows"]) {
+        if (!window.contains("bar_sums") || window["bar_sums"]["read"].empty()) continue;
+        for (const auto& value : window["bar_sums"]["read"]) {
+          EXPECT_NE(std::find(truth.begin(), truth.end(), value.get<std::string>()), truth.end())
+              << value << " is no label's value: " << window.dump();
+          EXPECT_TRUE(std::any_of(out.sightings.begin(), out.sightings.end(),
+                                  [&](const Sighting& s) { return s.decoded && s.value == value; }))
+              << out.log.dump();
+        }
+        EXPECT_LE(std::abs(window["bar_sums"]["slope"].get<double>()), imaging::kMaxBarSlope);
+        return;
+      }
+    }
+  }
+  FAIL() << "the bar sums read no label tv missed at 80 to 200 e-";
 }
 
 TEST(FrameProcessing, AColourPrintFrameDeblurredPerChannelGetsTheSecondPassToo) {
