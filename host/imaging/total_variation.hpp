@@ -85,6 +85,12 @@ namespace flutterscan::imaging {
 /// \brief The gradient prior: |gradient| (convex TV) or the count of non-zero gradients (L0).
 enum class EdgePrior { kTotalVariation, kL0Gradient };
 
+/// \brief tv's kappa where a frame is deblurred to be read (the session's tv,
+/// whole frame or window): the weight that reads most, not the default (the best
+/// PSNR). Kappa 0.25-0.35 read more than 0.5 on real print at every light level
+/// and as much or more on the synthetic labels, 0.18 less (docs/algorithms.md, "tv").
+inline constexpr double kReadingWeightPerNoise = 0.3;
+
 /// \brief Solver settings. The defaults are the TV ones; l0_settings() gives the L0 ones.
 struct TotalVariationSettings {
   EdgePrior prior = EdgePrior::kTotalVariation;

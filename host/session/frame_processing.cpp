@@ -410,8 +410,9 @@ imaging::DeblurOptions deblur_options(const ProcessingConfig& processing) {
   imaging::DeblurOptions options;
   options.method = processing.method;
   options.threads = processing.threads_per_worker;
-  options.plan_effort = imaging::PlanEffort::kMeasuredIfKnown;  // measured before streaming
-  options.skip_flat_rows = true;                                // the belt between labels
+  options.plan_effort = imaging::PlanEffort::kMeasuredIfKnown;    // measured before streaming
+  options.skip_flat_rows = true;                                  // the belt between labels
+  options.tv_weight_per_noise = imaging::kReadingWeightPerNoise;  // tv: deblurred to be read
   return options;
 }
 

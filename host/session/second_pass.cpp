@@ -7,6 +7,7 @@
 
 #include "imaging/bar_sums.hpp"
 #include "imaging/deblur.hpp"
+#include "imaging/total_variation.hpp"
 
 namespace flutterscan::session {
 namespace {
@@ -19,11 +20,6 @@ constexpr int kWindowMargin = 24;
 /// samples (docs/algorithms.md, borders), and the periodic extension rings a
 /// little further.
 constexpr int kCropSlack = 16;
-/// tv's prior weight per unit of noise (kappa) in the second pass: the weight
-/// that reads most, not tv's default (the best PSNR). Kappa 0.25-0.35 read
-/// more than 0.5 on real print at every light level and as much or more on
-/// the synthetic labels, 0.18 less (docs/algorithms.md, "tv").
-constexpr double kReadingWeightPerNoise = 0.3;
 /// Rows summed either side of each along a linear code's bars: 17 in all, a
 /// quarter of the noise's rms (docs/algorithms.md, "Sums along the bars").
 constexpr int kBarHalfRows = 8;
@@ -185,7 +181,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
   imaging::DeblurOptions tv;
   tv.method = imaging::Method::kTotalVariation;
   tv.threads = 1;
-  tv.tv_weight_per_noise = kReadingWeightPerNoise;
+  tv.tv_weight_per_noise = imaging::kReadingWeightPerNoise;
   imaging::DeblurOptions wiener;
   wiener.threads = 1;
   const std::string linear = reader::linear_symbologies(options.symbologies);
