@@ -695,6 +695,29 @@ TEST_F(ImagingCliTest, APhotoSceneIsPlacedOnTheBeltRecordedAndReadBack) {
   EXPECT_EQ(objects[0]["decoded"], json::array({"FS-0042"})) << read;
 }
 
+TEST_F(ImagingCliTest, TheCascadeReadsADimLabelJointWienerMisses) {
+  // 150 e-: joint Wiener's latent reads nothing; the cascade deblurs the label's
+  // window again and reads it.
+  ASSERT_EQ(run({"simulate", "--scene", "code128:FS-0042", "--code", "found-joint", "--blur", "52",
+                 "--electrons", "150", "--crosstalk", kCrosstalk, "--seed", "3", "-o", frame()})
+                .exit_code,
+            0);
+  const std::string plain_output = (dir_ / "plain.png").string();
+  const RunResult plain = run(
+      {"deblur", frame(), "--descriptor", descriptor(), "--decode", "--json", "-o", plain_output});
+  ASSERT_EQ(plain.exit_code, 0) << plain;
+  EXPECT_TRUE(json_lines(plain.out)[0]["decoded"].empty()) << plain;
+  const RunResult cascade = run({"deblur", frame(), "--descriptor", descriptor(), "--method",
+                                 "cascade", "--decode", "--json", "-o", output()});
+  ASSERT_EQ(cascade.exit_code, 0) << cascade;
+  const json report = json_lines(cascade.out)[0];
+  EXPECT_EQ(report["decoded"], json::array({"FS-0042"})) << cascade;
+  ASSERT_EQ(report["second_pass"]["windows"].size(), 1u) << cascade;
+  EXPECT_EQ(report["second_pass"]["windows"][0]["read"], json::array({"FS-0042"}));
+  // The window's second latent is in the picture written (joint Wiener's elsewhere).
+  EXPECT_NE(read_file(output()), read_file(plain_output));
+}
+
 TEST_F(ImagingCliTest, SimulateRefusesABadPhotoOrTurn) {
   simulate_label();
   const std::string photo = (dir_ / "frame.truth.png").string();
