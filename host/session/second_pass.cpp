@@ -51,6 +51,27 @@ bool inside(const reader::DecodeWindow& w, double x, double y) {
   return x >= w.x && x < w.x + w.width && y >= w.y && y < w.y + w.height;
 }
 
+/// The window's rows summed along its bars and deblurred by joint Wiener (one
+/// thread): `crop` the window's samples, `tv_latent` tv's latent of them, whose
+/// columns [keep_from, keep_to) (the window kept) give the bars' `slope`.
+Result<imaging::DeblurResult, std::string> deblur_bar_sums(const imaging::MotionFrame& crop,
+                                                           const imaging::Plane& tv_latent,
+                                                           int keep_from, int keep_to,
+                                                           const imaging::CaptureModel& model,
+                                                           double& slope) {
+  imaging::Plane kept = imaging::Plane::uninitialised(keep_to - keep_from, tv_latent.height);
+  for (int y = 0; y < tv_latent.height; ++y)
+    std::copy_n(tv_latent.row(y).begin() + keep_from, keep_to - keep_from, kept.row(y).begin());
+  slope = imaging::bar_slope(kept, kSlopeHalfRows);
+  auto sums = imaging::MotionFrame::make(imaging::sum_along_bars(crop.image(), slope, kBarHalfRows),
+                                         imaging::Direction::kPlusX);
+  if (!sums.ok()) return Result<imaging::DeblurResult, std::string>::failure(sums.error());
+  imaging::DeblurOptions wiener;
+  wiener.threads = 1;
+  return imaging::deblur(sums.value(), imaging::model_of_row_sums(model, 2 * kBarHalfRows + 1),
+                         wiener);
+}
+
 }  // namespace
 
 void BeltReads::add(double belt_px) {
@@ -182,8 +203,6 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
   tv.method = imaging::Method::kTotalVariation;
   tv.threads = 1;
   tv.tv_weight_per_noise = imaging::kReadingWeightPerNoise;
-  imaging::DeblurOptions wiener;
-  wiener.threads = 1;
   const std::string linear = reader::linear_symbologies(options.symbologies);
   for (const reader::LabelRegion& run : unread) {
     if (reads.any_within(run.begin - frame.travel_px, run.end - frame.travel_px, 0)) {
@@ -265,21 +284,10 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
           [](const reader::DecodedCode& c) { return reader::is_linear_format(c.format); });
       if (!linear_read && !linear.empty()) {
         // No linear code: the rows summed along the bars (at 17 times the light)
-        // for one that tv's noise hid. The slope from tv's latent of the window kept.
-        imaging::Plane kept = imaging::Plane::uninitialised(keep1 - keep0, r1 - r0);
-        for (int y = r0; y < r1; ++y)
-          std::copy_n(patch.row(y - r0).begin() + (keep0 - c0), keep1 - keep0,
-                      kept.row(y - r0).begin());
+        // for one that tv's noise hid.
         BarSumsTry bars;
-        bars.slope = imaging::bar_slope(kept, kSlopeHalfRows);
-        auto sums = imaging::MotionFrame::make(
-            imaging::sum_along_bars(cropped.value().image(), bars.slope, kBarHalfRows),
-            imaging::Direction::kPlusX);
-        const DeblurOut profile =
-            sums.ok() ? imaging::deblur(
-                            sums.value(),
-                            imaging::model_of_row_sums(frame.model, 2 * kBarHalfRows + 1), wiener)
-                      : DeblurOut::failure(sums.error());
+        const DeblurOut profile = deblur_bar_sums(cropped.value(), patch, keep0 - c0, keep1 - c0,
+                                                  frame.model, bars.slope);
         if (profile.ok()) {
           paste(profile.value().latent);
           bars.read = read_again(linear);
