@@ -302,5 +302,15 @@ TEST(BarcodeReader, SymbologyListsAreCheckedByName) {
   EXPECT_NE(check_symbologies(""), "");
 }
 
+TEST(BarcodeReader, TheLinearSymbologiesOfAListAreAListOfTheirOwn) {
+  const std::string linear = linear_symbologies("Code128,EAN-13,QRCode,DataMatrix");
+  EXPECT_EQ(check_symbologies(linear), "") << linear;  // a list the reader takes
+  EXPECT_NE(linear.find("Code128"), std::string::npos) << linear;
+  EXPECT_NE(linear.find("EAN-13"), std::string::npos) << linear;
+  EXPECT_EQ(linear.find("QR"), std::string::npos) << linear;
+  EXPECT_EQ(linear.find("DataMatrix"), std::string::npos) << linear;
+  EXPECT_EQ(linear_symbologies("QRCode, DataMatrix"), "");
+}
+
 }  // namespace
 }  // namespace flutterscan::reader
