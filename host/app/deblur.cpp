@@ -29,7 +29,6 @@
 #include "reader/code_regions.hpp"
 #include "reader/reader_options.hpp"
 #include "session/second_pass.hpp"
-#include "session/session_config.hpp"
 #include "sim/scene.hpp"
 
 namespace flutterscan::app {
@@ -301,25 +300,9 @@ void run(const DeblurFlags& f) {
   double cascade_ms = 0;
   if (cascade) {
     start = std::chrono::steady_clock::now();
-    const auto paper = reader::find_paper_runs(motion_latent);
-    const auto code = reader::find_code_regions(motion_latent);
-    const std::vector<reader::LabelRegion> windows =
-        reader_options.area == reader::DecodeArea::kLabels ? reader::regions_to_read(paper, code)
-                                                           : std::vector<reader::LabelRegion>{};
-    reader::BarcodeReadout readout =
-        reader::read_codes(deblurred.latent, windows, model.direction, reader_options).readout;
-    const int width = deblurred.latent.width, height = deblurred.latent.height;
-    const auto unread =
-        session::retry_regions(session::unread_runs(paper, readout, model.direction, width, height),
-                               session::unread_runs(code, readout, model.direction, width, height));
-    session::SecondPassBudget budget(session::kMaxSecondPassMs, 1);
-    budget.add_frame(0, 0, 0);
-    session::BeltReads reads;
-    const session::SecondPass pass =
-        session::run_second_pass({motion_frame.value(), model, motion_latent, &deblurred.latent},
-                                 unread, reader_options, budget, reads, readout);
-    second_pass = pass.log(budget.credit_ms());
-    cascade_readout = std::move(readout);
+    cascade_readout =
+        session::read_with_cascade({motion_frame.value(), model, motion_latent, &deblurred.latent},
+                                   reader_options, second_pass);
     cascade_ms = elapsed_ms(start);
   }
 

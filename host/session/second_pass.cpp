@@ -8,6 +8,9 @@
 #include "imaging/bar_sums.hpp"
 #include "imaging/deblur.hpp"
 #include "imaging/total_variation.hpp"
+#include "reader/code_reading.hpp"
+#include "reader/code_regions.hpp"
+#include "session/session_config.hpp"
 
 namespace flutterscan::session {
 namespace {
@@ -302,6 +305,28 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
     out.retried.push_back(std::move(retry));
   }
   return out;
+}
+
+reader::BarcodeReadout read_with_cascade(const SecondPassFrame& frame,
+                                         const reader::ReaderOptions& options,
+                                         nlohmann::json& log) {
+  const imaging::Plane& camera =
+      frame.camera_latent != nullptr ? *frame.camera_latent : frame.motion_latent;
+  const imaging::Direction direction = frame.electrons.direction();
+  const auto paper = reader::find_paper_runs(frame.motion_latent);
+  const auto code = reader::find_code_regions(frame.motion_latent);
+  const std::vector<reader::LabelRegion> windows = options.area == reader::DecodeArea::kLabels
+                                                       ? reader::regions_to_read(paper, code)
+                                                       : std::vector<reader::LabelRegion>{};
+  reader::BarcodeReadout readout = reader::read_codes(camera, windows, direction, options).readout;
+  const auto unread =
+      retry_regions(unread_runs(paper, readout, direction, camera.width, camera.height),
+                    unread_runs(code, readout, direction, camera.width, camera.height));
+  SecondPassBudget budget(kMaxSecondPassMs, 1);
+  budget.add_frame(0, 0, 0);
+  BeltReads reads;
+  log = run_second_pass(frame, unread, options, budget, reads, readout).log(budget.credit_ms());
+  return readout;
 }
 
 }  // namespace flutterscan::session

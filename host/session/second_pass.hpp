@@ -141,4 +141,13 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
                            const reader::ReaderOptions& options, SecondPassBudget& budget,
                            BeltReads& reads, reader::BarcodeReadout& readout);
 
+/// \brief The cascade on one frame outside a line (`flutterscan deblur --method
+/// cascade`): `frame`'s latents (joint Wiener's) read with `options` (the
+/// whole frame, or the paper runs and code regions found on the motion latent,
+/// as options.area says), then every paper run and code region that read
+/// nothing deblurred again and read (run_second_pass, no budget: every window).
+/// The codes of both; the second pass's log line in `log`.
+reader::BarcodeReadout read_with_cascade(const SecondPassFrame& frame,
+                                         const reader::ReaderOptions& options, nlohmann::json& log);
+
 }  // namespace flutterscan::session

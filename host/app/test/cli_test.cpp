@@ -716,6 +716,16 @@ TEST_F(ImagingCliTest, TheCascadeReadsADimLabelJointWienerMisses) {
   EXPECT_EQ(report["second_pass"]["windows"][0]["read"], json::array({"FS-0042"}));
   // The window's second latent is in the picture written (joint Wiener's elsewhere).
   EXPECT_NE(read_file(output()), read_file(plain_output));
+  // A raw Bayer mosaic has no RGB frame for the windows: refused by name, nothing written.
+  ASSERT_EQ(run({"simulate", "--scene", "code128:FS-0042", "--code", "found-joint", "--blur", "52",
+                 "--bayer", "-o", (dir_ / "bayer.png").string()})
+                .exit_code,
+            0);
+  const std::string bayer_output = (dir_ / "bayer-sharp.png").string();
+  expect_usage_error({"deblur", (dir_ / "bayer.png").string(), "--descriptor",
+                      (dir_ / "bayer.json").string(), "--method", "cascade", "-o", bayer_output},
+                     {"cascade", "Bayer"});
+  EXPECT_FALSE(fs::exists(bayer_output));
 }
 
 TEST_F(ImagingCliTest, SimulateRefusesABadPhotoOrTurn) {
