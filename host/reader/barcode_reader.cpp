@@ -19,6 +19,7 @@
 #include <cstdint>
 #include <numbers>
 #include <stdexcept>
+#include <utility>
 
 namespace flutterscan::reader {
 
@@ -237,6 +238,57 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
         reading.push_back({x0, y0, x1, y1});
         break;
       }
+    }
+  }
+  return out;
+}
+
+BarcodeReadout read_barcodes_turned(const imaging::Plane& latent, const DecodeWindow& window,
+                                    double turn_rad, const std::string& symbologies,
+                                    bool try_rotate) {
+  const int x0 = std::clamp(window.x, 0, latent.width), y0 = std::clamp(window.y, 0, latent.height);
+  const int x1 = std::clamp(window.x + window.width, x0, latent.width);
+  const int y1 = std::clamp(window.y + window.height, y0, latent.height);
+  if (x1 - x0 < 1 || y1 - y0 < 1) return {};
+  const double c = std::cos(turn_rad), s = std::sin(turn_rad);
+  const double w = x1 - x0, h = y1 - y0;
+  // The turned plane holds the whole window: its bounding box once turned.
+  const int tw = static_cast<int>(std::ceil(w * std::abs(c) + h * std::abs(s)));
+  const int th = static_cast<int>(std::ceil(w * std::abs(s) + h * std::abs(c)));
+  const double cx = x0 + w / 2, cy = y0 + h / 2, tcx = tw / 2.0, tcy = th / 2.0;
+  // Turned (u, v) -> latent: (u, v) about the centre, (0, 1) along the leaning line.
+  auto to_latent = [&](double u, double v) {
+    const double du = u - tcx, dv = v - tcy;
+    return std::pair{cx + du * c + dv * s, cy - du * s + dv * c};
+  };
+  imaging::Plane turned = imaging::Plane::uninitialised(tw, th);
+  for (int v = 0; v < th; ++v)
+    for (int u = 0; u < tw; ++u) {
+      const auto [x, y] = to_latent(u + 0.5, v + 0.5);
+      const double fx = std::clamp(x - 0.5, 0.0, latent.width - 1.0);
+      const double fy = std::clamp(y - 0.5, 0.0, latent.height - 1.0);
+      const int ix = std::min(static_cast<int>(fx), std::max(0, latent.width - 2));
+      const int iy = std::min(static_cast<int>(fy), std::max(0, latent.height - 2));
+      const int jx = std::min(ix + 1, latent.width - 1), jy = std::min(iy + 1, latent.height - 1);
+      const auto ax = static_cast<float>(fx - ix), ay = static_cast<float>(fy - iy);
+      turned.at(u, v) = (1 - ay) * ((1 - ax) * latent.at(ix, iy) + ax * latent.at(jx, iy)) +
+                        ay * ((1 - ax) * latent.at(ix, jy) + ax * latent.at(jx, jy));
+    }
+  // A pixel's position (its index) in the turned plane -> the latent's.
+  auto back = [&](double& x, double& y) {
+    const auto [lx, ly] = to_latent(x + 0.5, y + 0.5);
+    x = lx - 0.5;
+    y = ly - 0.5;
+  };
+  BarcodeReadout out = read_barcodes(turned, symbologies, try_rotate);
+  for (DecodedCode& code : out.codes) {
+    back(code.centre_x, code.centre_y);
+    code.min_x = INFINITY;
+    code.max_x = -INFINITY;
+    for (CodePoint& corner : code.quality.corners) {
+      back(corner.x, corner.y);
+      code.min_x = std::min(code.min_x, corner.x);
+      code.max_x = std::max(code.max_x, corner.x);
     }
   }
   return out;

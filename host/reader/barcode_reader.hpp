@@ -102,6 +102,16 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent,
                              const std::string& symbologies = kDefaultSymbologies,
                              bool try_rotate = true, std::span<const DecodeWindow> windows = {});
 
+/// \brief The codes in `window` of `latent` read with the window turned upright
+/// by `turn_rad`: resampled (bilinear, the latent's edge beyond it) so that a
+/// line at `turn_rad` from the vertical (positive: its lower end toward larger
+/// x) stands vertical. A linear code whose bars lean so that no row crosses the
+/// whole symbol (a short code turned 10 degrees) is read so. Positions (centre,
+/// extent, corners) are mapped back to the latent's.
+BarcodeReadout read_barcodes_turned(const imaging::Plane& latent, const DecodeWindow& window,
+                                    double turn_rad, const std::string& symbologies,
+                                    bool try_rotate);
+
 /// \brief A run of columns [begin, end) where the image is mostly label paper,
 /// and the rows [across_begin, across_end) that hold its paper.
 struct LabelRegion {

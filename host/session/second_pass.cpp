@@ -30,6 +30,27 @@ constexpr int kBarHalfRows = 8;
 /// that a slope off by a little loses contrast enough to tell.
 constexpr int kSlopeHalfRows = 16;
 
+/// A bar slope from which a window is also read turned upright: 0.05 px per
+/// row, 3 degrees (a 40 px tall code 300 px long then drifts 15 px across the rows).
+constexpr double kMinTurnSlope = 0.05;
+
+/// The lean from the vertical, in the camera's orientation, of bars whose
+/// slope in the motion frame is `slope` (px along the motion per line; the
+/// convention of reader::read_barcodes_turned: positive, lower end toward larger x).
+double camera_lean(imaging::Direction direction, double slope) {
+  switch (direction) {
+    case imaging::Direction::kPlusX:
+      return std::atan(slope);
+    case imaging::Direction::kMinusX:
+      return -std::atan(slope);
+    case imaging::Direction::kPlusY:  // lines are columns: the bars lie near the rows
+      return std::atan2(1.0, slope);
+    case imaging::Direction::kMinusY:
+      return std::atan2(-1.0, slope);
+  }
+  return std::atan(slope);
+}
+
 double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -253,11 +274,14 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
     };
     // Reads the window on the latents as pasted; the codes not read before
     // join the readout. Returns them.
-    auto read_again = [&](const std::string& symbologies) {
+    auto read_again = [&](const std::string& symbologies, double turn_rad = 0) {
       const imaging::Plane& camera =
           frame.camera_latent != nullptr ? *frame.camera_latent : frame.motion_latent;
       reader::BarcodeReadout again =
-          reader::read_barcodes(camera, symbologies, options.try_rotate, {&retry.window, 1});
+          turn_rad == 0
+              ? reader::read_barcodes(camera, symbologies, options.try_rotate, {&retry.window, 1})
+              : reader::read_barcodes_turned(camera, retry.window, turn_rad, symbologies,
+                                             options.try_rotate);
       std::vector<std::string> texts;
       for (reader::DecodedCode& code : again.codes) {
         if (std::any_of(readout.codes.begin(), readout.codes.end(),
@@ -291,12 +315,17 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
         BarSumsTry bars;
         const DeblurOut profile = deblur_bar_sums(cropped.value(), patch, keep0 - c0, keep1 - c0,
                                                   frame.model, bars.slope);
+        // Bars that lean: a short code's rows may not cross it whole; read turned upright too.
+        const double turn =
+            std::abs(bars.slope) >= kMinTurnSlope ? camera_lean(direction, bars.slope) : 0;
         if (profile.ok()) {
           paste(profile.value().latent);
           bars.read = read_again(linear);
+          if (bars.read.empty() && turn != 0) bars.read = read_again(linear, turn);
           if (bars.read.empty())
             paste(patch);  // the frame shows tv's latent where sums read nothing
         }
+        if (bars.read.empty() && turn != 0) read_again(linear, turn);  // tv's latent, turned
         retry.bar_sums = std::move(bars);
       }
     }

@@ -7,7 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <fstream>
+#include <numbers>
 #include <random>
 #include <string>
 #include <thread>
@@ -120,6 +122,38 @@ imaging::Plane code_on_card(const std::wstring& text, float card_reflectance, fl
     for (int x = 0; x < bars.width(); ++x)
       if (bars.get(x, y)) card.at(20 + x, 20 + y) = ink;
   return card;
+}
+
+TEST(BarcodeReader, AShortCodeLeaningTwelveDegreesIsReadTurnedUpright) {
+  // A Code 128 40 px tall and 300 px long, its bars leaning 12 degrees (lower
+  // ends toward larger x): its ends lie 64 px apart across the rows, so no row
+  // crosses it whole.
+  const double lean = 12 * std::numbers::pi / 180;
+  const ZXing::BitMatrix bars = ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code128)
+                                    .setMargin(10)
+                                    .encode(L"TURN-12", 300, 40);
+  imaging::Plane card(500, 260, 0.85f);
+  const double cx = 250, cy = 130;
+  for (int y = 0; y < card.height; ++y)
+    for (int x = 0; x < card.width; ++x) {
+      const double qx = x + 0.5 - cx, qy = y + 0.5 - cy;  // along the code, then along its bars
+      const double bx = qx * std::cos(lean) - qy * std::sin(lean) + bars.width() / 2.0;
+      const double by = qx * std::sin(lean) + qy * std::cos(lean) + bars.height() / 2.0;
+      if (bx >= 0 && by >= 0 && bx < bars.width() && by < bars.height() &&
+          bars.get(static_cast<int>(bx), static_cast<int>(by)))
+        card.at(x, y) = 0.05f;
+    }
+  const DecodeWindow whole{0, 0, card.width, card.height};
+  EXPECT_TRUE(read_barcodes(card, kDefaultSymbologies, true, {&whole, 1}).codes.empty());
+  EXPECT_TRUE(read_barcodes_turned(card, whole, -lean, kDefaultSymbologies, true).codes.empty());
+  const BarcodeReadout turned = read_barcodes_turned(card, whole, lean, kDefaultSymbologies, true);
+  ASSERT_EQ(turned.codes.size(), 1u);
+  EXPECT_EQ(turned.codes[0].text, "TURN-12");
+  // Where it lies, in the card's coordinates.
+  EXPECT_NEAR(turned.codes[0].centre_x, cx - 0.5, 4);
+  EXPECT_NEAR(turned.codes[0].centre_y, cy - 0.5, 4);
+  EXPECT_LT(turned.codes[0].min_x, cx - 100);
+  EXPECT_GT(turned.codes[0].max_x, cx + 100);
 }
 
 TEST(BarcodeReader, DarkPrintTheLinearViewCannotSeparateIsReadOnTheSrgbView) {
