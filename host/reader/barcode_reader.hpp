@@ -103,7 +103,8 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent,
                              bool try_rotate = true, std::span<const DecodeWindow> windows = {});
 
 /// \brief The codes in `window` of `latent` read with the window turned upright
-/// by `turn_rad`: resampled (bilinear, the latent's edge beyond it) so that a
+/// by `turn_rad`: resampled (bilinear; the latent around the window fills the
+/// turned plane's corners, its edge beyond the latent) so that a
 /// line at `turn_rad` from the vertical (positive: its lower end toward larger
 /// x) stands vertical. A linear code whose bars lean so that no row crosses the
 /// whole symbol (a short code turned 10 degrees) is read so. Positions (centre,
