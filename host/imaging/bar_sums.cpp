@@ -20,9 +20,9 @@ void add_shifted(std::span<const float> row, double shift, std::span<float> sum)
   const int inner0 = std::clamp(-whole, 0, width);
   const int inner1 = std::clamp(width - 1 - whole, inner0, width);
   for (int x = 0; x < inner0; ++x) sum[x] += g * sample(x + whole) + f * sample(x + whole + 1);
-  const float* from = row.data() + whole;
+  const float* from = row.data();
   float* to = sum.data();
-  for (int x = inner0; x < inner1; ++x) to[x] += g * from[x] + f * from[x + 1];
+  for (int x = inner0; x < inner1; ++x) to[x] += g * from[x + whole] + f * from[x + whole + 1];
   for (int x = inner1; x < width; ++x) sum[x] += g * sample(x + whole) + f * sample(x + whole + 1);
 }
 
