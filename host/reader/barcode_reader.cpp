@@ -12,6 +12,7 @@
 #include <ZXing/ImageView.h>
 #include <ZXing/ReadBarcode.h>
 #include <ZXing/Result.h>
+#include <opencv2/imgproc.hpp>
 
 #include <algorithm>
 #include <array>
@@ -256,30 +257,21 @@ BarcodeReadout read_barcodes_turned(const imaging::Plane& latent, const DecodeWi
   const int tw = static_cast<int>(std::ceil(w * std::abs(c) + h * std::abs(s)));
   const int th = static_cast<int>(std::ceil(w * std::abs(s) + h * std::abs(c)));
   const double cx = x0 + w / 2, cy = y0 + h / 2, tcx = tw / 2.0, tcy = th / 2.0;
-  // Turned (u, v) -> latent: (u, v) about the centre, (0, 1) along the leaning line.
-  auto to_latent = [&](double u, double v) {
-    const double du = u - tcx, dv = v - tcy;
-    return std::pair{cx + du * c + dv * s, cy - du * s + dv * c};
-  };
-  imaging::Plane turned = imaging::Plane::uninitialised(tw, th);
-  for (int v = 0; v < th; ++v)
-    for (int u = 0; u < tw; ++u) {
-      const auto [x, y] = to_latent(u + 0.5, v + 0.5);
-      const double fx = std::clamp(x - 0.5, 0.0, latent.width - 1.0);
-      const double fy = std::clamp(y - 0.5, 0.0, latent.height - 1.0);
-      const int ix = std::min(static_cast<int>(fx), std::max(0, latent.width - 2));
-      const int iy = std::min(static_cast<int>(fy), std::max(0, latent.height - 2));
-      const int jx = std::min(ix + 1, latent.width - 1), jy = std::min(iy + 1, latent.height - 1);
-      const auto ax = static_cast<float>(fx - ix), ay = static_cast<float>(fy - iy);
-      turned.at(u, v) = (1 - ay) * ((1 - ax) * latent.at(ix, iy) + ax * latent.at(jx, iy)) +
-                        ay * ((1 - ax) * latent.at(ix, jy) + ax * latent.at(jx, jy));
-    }
-  // A pixel's position (its index) in the turned plane -> the latent's.
+  // A pixel's position (its index) in the turned plane -> the latent's: about
+  // the centres, (0, 1) in the turned plane along the leaning line.
   auto back = [&](double& x, double& y) {
-    const auto [lx, ly] = to_latent(x + 0.5, y + 0.5);
-    x = lx - 0.5;
-    y = ly - 0.5;
+    const double du = x + 0.5 - tcx, dv = y + 0.5 - tcy;
+    x = cx + du * c + dv * s - 0.5;
+    y = cy - du * s + dv * c - 0.5;
   };
+  double x00 = 0, y00 = 0;
+  back(x00, y00);
+  const cv::Matx23d to_latent(c, s, x00, -s, c, y00);
+  imaging::Plane turned = imaging::Plane::uninitialised(tw, th);
+  const cv::Mat from(latent.height, latent.width, CV_32F, const_cast<float*>(latent.pixels.data()));
+  cv::Mat to(th, tw, CV_32F, turned.pixels.data());
+  cv::warpAffine(from, to, to_latent, to.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
+                 cv::BORDER_REPLICATE);
   BarcodeReadout out = read_barcodes(turned, symbologies, try_rotate);
   for (DecodedCode& code : out.codes) {
     back(code.centre_x, code.centre_y);
