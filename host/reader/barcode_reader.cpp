@@ -82,27 +82,59 @@ float black_level(const imaging::Plane& latent, int x0, int y0, int x1, int y1) 
   return 1.0f;
 }
 
+/// The paper view's reach: the paper beside a pixel is the brightest pixel
+/// within kPaperReachPx / 2 of it along its row (wider than a linear code's
+/// widest bar, 4 modules, up to modules of about 7 px), averaged over a
+/// kPaperReachPx square (a bar's middle, where the reach sees only ink, takes
+/// the paper around it).
+constexpr int kPaperReachPx = 31;
+/// The least span from black to paper the paper view stretches: a flat dark
+/// area is not made print.
+constexpr float kLeastPaperSpan = 0.02f;
+
+/// The paper beside each pixel of columns [x0, x1) of rows [y0, y1) (see kPaperReachPx).
+cv::Mat paper_level(const imaging::Plane& latent, int x0, int y0, int x1, int y1) {
+  const cv::Mat whole(latent.height, latent.width, CV_32F,
+                      const_cast<float*>(latent.pixels.data()));
+  cv::Mat window = whole(cv::Range(y0, y1), cv::Range(x0, x1)), brightest, paper;
+  cv::dilate(window, brightest, cv::getStructuringElement(cv::MORPH_RECT, {kPaperReachPx, 1}),
+             {-1, -1}, 1, cv::BORDER_REPLICATE);
+  cv::blur(brightest, paper, {kPaperReachPx, kPaperReachPx}, {-1, -1}, cv::BORDER_REPLICATE);
+  return paper;
+}
+
 /// Columns [x0, x1) of rows [y0, y1) of `latent` into `lum` (rows of x1 - x0
-/// bytes) as ZXing's 8-bit luminance: linear in reflectance, sRGB-encoded, or
-/// sRGB-encoded from the window's black level.
+/// bytes) as ZXing's 8-bit luminance: linear in reflectance, sRGB-encoded,
+/// sRGB-encoded from the window's black level, or from it to the paper.
 void to_luminance(const imaging::Plane& latent, int x0, int y0, int x1, int y1, LuminanceView view,
                   std::vector<std::uint8_t>& lum) {
   const auto width = static_cast<std::size_t>(x1 - x0);
   lum.resize(width * static_cast<std::size_t>(y1 - y0));
   const std::vector<std::uint8_t>& srgb = srgb_table();
-  const float black =
-      view == LuminanceView::kSrgbFromBlack ? black_level(latent, x0, y0, x1, y1) : 0.0f;
+  const bool from_black =
+      view == LuminanceView::kSrgbFromBlack || view == LuminanceView::kSrgbToPaper;
+  const float black = from_black ? black_level(latent, x0, y0, x1, y1) : 0.0f;
   const float gain = black < 1.0f ? 1.0f / (1.0f - black) : 1.0f;
+  const cv::Mat paper =
+      view == LuminanceView::kSrgbToPaper ? paper_level(latent, x0, y0, x1, y1) : cv::Mat();
   for (int y = y0; y < y1; ++y) {
     const float* row = latent.row(y).data() + x0;
     std::uint8_t* out = lum.data() + static_cast<std::size_t>(y - y0) * width;
-    if (view == LuminanceView::kLinear)
+    if (view == LuminanceView::kLinear) {
       for (std::size_t x = 0; x < width; ++x)
         out[x] = static_cast<std::uint8_t>(std::clamp(row[x], 0.0f, 1.0f) * 255.0f + 0.5f);
-    else
+    } else if (view == LuminanceView::kSrgbToPaper) {
+      const float* white = paper.ptr<float>(y - y0);
+      for (std::size_t x = 0; x < width; ++x)
+        out[x] = srgb[static_cast<std::size_t>(
+            std::clamp((row[x] - black) / std::max(white[x] - black, kLeastPaperSpan), 0.0f, 1.0f) *
+                kSrgbSteps +
+            0.5f)];
+    } else {
       for (std::size_t x = 0; x < width; ++x)
         out[x] = srgb[static_cast<std::size_t>(
             std::clamp((row[x] - black) * gain, 0.0f, 1.0f) * kSrgbSteps + 0.5f)];
+    }
   }
 }
 
@@ -166,6 +198,8 @@ std::string luminance_view_name(LuminanceView view) {
       return "srgb";
     case LuminanceView::kSrgbFromBlack:
       return "srgb-from-black";
+    case LuminanceView::kSrgbToPaper:
+      return "srgb-to-paper";
   }
   return "linear";
 }
@@ -184,6 +218,13 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
   hints.setFormats(ZXing::BarcodeFormatsFromString(symbologies))
       .setTryHarder(true)
       .setTryRotate(try_rotate);
+  // The paper view is for linear codes: ZXing thresholds their rows by each
+  // row's histogram, matrix codes by local blocks that the paper beside them
+  // does not sway.
+  const ZXing::BarcodeFormats linear =
+      hints.formats() & ZXing::BarcodeFormats(ZXing::BarcodeFormat::LinearCodes);
+  ZXing::DecodeHints linear_hints = hints;
+  linear_hints.setFormats(linear);
   const DecodeWindow whole{0, 0, latent.width, latent.height};
   std::vector<std::array<int, 4>> reading;  // windows that read a code: x0, y0, x1, y1
   for (const DecodeWindow& w :
@@ -206,19 +247,23 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
       continue;
     }
     // The linear view first; a window it reads nothing in, again sRGB-encoded,
-    // and again from its black level.
+    // again from its black level, and its linear codes again to the paper.
     for (const LuminanceView luminance :
-         {LuminanceView::kLinear, LuminanceView::kSrgb, LuminanceView::kSrgbFromBlack}) {
+         {LuminanceView::kLinear, LuminanceView::kSrgb, LuminanceView::kSrgbFromBlack,
+          LuminanceView::kSrgbToPaper}) {
+      const bool to_paper = luminance == LuminanceView::kSrgbToPaper;
+      if (to_paper && linear.empty()) break;
+      const ZXing::DecodeHints& view_hints = to_paper ? linear_hints : hints;
       to_luminance(latent, x0, y0, x1, y1, luminance, lum);
       const ZXing::ImageView view(lum.data(), x1 - x0, y1 - y0, ZXing::ImageFormat::Lum);
       ZXing::Results results;
       out.decoder_fault =
-          run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, hints); });
+          run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, view_hints); });
       if (!out.decoder_fault.empty()) {
         // ZXing 1.4 fails an assertion comparing two equal linear symbols in one
         // image (Result::operator==: a label that repeats its barcode): the
         // window once more, stopping at its first symbol, reads one of them.
-        ZXing::DecodeHints first_symbol = hints;
+        ZXing::DecodeHints first_symbol = view_hints;
         first_symbol.setMaxNumberOfSymbols(1);
         out.decoder_fault =
             run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, first_symbol); });

@@ -23,16 +23,20 @@ namespace flutterscan::reader {
 
 /// \brief How a latent's reflectance reaches the decoder as 8-bit luminance:
 /// linear (first); sRGB-encoded (a window the linear view reads nothing in:
-/// dark or low-contrast print, as a camera's own encoding shows it); and
+/// dark or low-contrast print, as a camera's own encoding shows it);
 /// sRGB-encoded from the window's black level (a window neither reads: ink
-/// that is not black, as a camera that sets its black level shows it).
-enum class LuminanceView { kLinear, kSrgb, kSrgbFromBlack };
+/// that is not black, as a camera that sets its black level shows it); and,
+/// for linear codes only, sRGB-encoded from the black level to the paper
+/// beside each pixel (a window none of those reads: a label darker than what
+/// lies beside it on its rows, which ZXing's per-row threshold for linear
+/// codes takes for the white).
+enum class LuminanceView { kLinear, kSrgb, kSrgbFromBlack, kSrgbToPaper };
 
 /// \brief The linear (1-D) symbologies among `symbologies` (ZXing's names, as
 /// processing.symbologies gives them); empty if it names none.
 std::string linear_symbologies(const std::string& symbologies);
 
-/// \brief The view's name in logs: "linear", "srgb", "srgb-from-black".
+/// \brief The view's name in logs: "linear", "srgb", "srgb-from-black", "srgb-to-paper".
 std::string luminance_view_name(LuminanceView view);
 
 /// \brief One decoded barcode.
@@ -93,7 +97,8 @@ struct DecodeWindow {
 /// ZXing reads on `latent` (reflectance, clipped to 0..1), inside `windows`
 /// (each decoded on its own; none: the whole image), each window on the
 /// linear view and, where that reads nothing, on the sRGB-encoded one, then on
-/// the sRGB-encoded one from the window's black level (LuminanceView). A
+/// the sRGB-encoded one from the window's black level, then (its linear
+/// symbologies only) from the black level to the paper (LuminanceView). A
 /// linear symbol that reaches its window's edge along its reading direction is
 /// cut by it and not taken for a read (it can decode to another value that
 /// passes its check). Positions are the latent's. `try_rotate`: also look for

@@ -182,6 +182,30 @@ TEST(BarcodeReader, GreyInkOnGreyCardIsReadFromItsBlackLevel) {
   EXPECT_EQ(readout.codes[0].luminance, LuminanceView::kSrgbFromBlack);
 }
 
+TEST(BarcodeReader, ALabelDarkerThanTheBeltBesideItIsReadToItsPaper) {
+  // Grey label stock (0.15) in a window whose rows are mostly a brighter belt
+  // (0.5): ZXing thresholds a linear code's row by the row's histogram, whose
+  // tallest peak is then the belt; the threshold falls between the paper and
+  // the belt and the paper is taken for ink in the first three views. Encoded
+  // to the paper beside each pixel, the label is black on white.
+  imaging::Plane window(1000, 160, 0.5f);
+  const imaging::Plane card = code_on_card(L"KRAFT-7", 0.15f, 0.04f);
+  for (int y = 0; y < card.height; ++y)
+    for (int x = 0; x < card.width; ++x) window.at(330 + x, y) = card.at(x, y);
+  const BarcodeReadout readout = read_barcodes(window);
+  ASSERT_EQ(readout.codes.size(), 1u);
+  EXPECT_EQ(readout.codes[0].text, "KRAFT-7");
+  EXPECT_EQ(readout.codes[0].luminance, LuminanceView::kSrgbToPaper);
+  EXPECT_EQ(luminance_view_name(readout.codes[0].luminance), "srgb-to-paper");
+  // The card alone, without the belt on its rows, is read before that view.
+  const BarcodeReadout alone = read_barcodes(card);
+  ASSERT_EQ(alone.codes.size(), 1u);
+  EXPECT_NE(alone.codes[0].luminance, LuminanceView::kSrgbToPaper);
+  // Matrix symbologies alone: the paper view is not tried (ZXing binarizes
+  // them by local blocks), so the label stays unread.
+  EXPECT_TRUE(read_barcodes(window, "QRCode,DataMatrix").codes.empty());
+}
+
 TEST(BarcodeReader, ALinearSymbolThatEndsAtTheWindowsEdgeIsNotTakenForARead) {
   // An EAN-13 of 3-px modules on white paper with its quiet zones: read.
   const ZXing::BitMatrix bars = ZXing::MultiFormatWriter(ZXing::BarcodeFormat::EAN13)
