@@ -205,8 +205,18 @@ std::string luminance_view_name(LuminanceView view) {
 }
 
 bool same_symbol(const DecodedCode& a, const DecodedCode& b) {
-  return a.text == b.text && a.format == b.format && std::abs(a.centre_x - b.centre_x) < 4 &&
-         std::abs(a.centre_y - b.centre_y) < 4;
+  // Whether `c` lies within `code`'s corners' bounding box widened by 4 px.
+  auto within = [](const DecodedCode& code, double x, double y) {
+    double y0 = code.quality.corners[0].y, y1 = y0;
+    for (const CodePoint& p : code.quality.corners) {
+      y0 = std::min(y0, p.y);
+      y1 = std::max(y1, p.y);
+    }
+    return x > code.min_x - 4 && x < code.max_x + 4 && y > y0 - 4 && y < y1 + 4;
+  };
+  const bool near = std::abs(a.centre_x - b.centre_x) < 4 && std::abs(a.centre_y - b.centre_y) < 4;
+  return a.text == b.text && a.format == b.format &&
+         (near || (within(a, b.centre_x, b.centre_y) && within(b, a.centre_x, a.centre_y)));
 }
 
 BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& symbologies,

@@ -85,7 +85,9 @@ struct BarcodeReadout {
 std::vector<std::string> code_texts(const BarcodeReadout& readout);
 
 /// \brief Whether `a` and `b` are one symbol read twice (overlapping windows,
-/// or a window read again): same text and format, centres within 4 px.
+/// or a window read again): same text and format, and centres within 4 px or
+/// each inside the other's corners (widened by 4 px): a linear code read on
+/// two latents may be found over different rows of its bars.
 bool same_symbol(const DecodedCode& a, const DecodedCode& b);
 
 /// \brief A rectangle of the latent image to decode: columns [x, x + width), rows [y, y + height).

@@ -272,6 +272,12 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
           }
         }
     };
+    // The codes read in this window before it was deblurred again (the first
+    // pass's, offline): the latent pasted must read them too, or it is not kept.
+    std::vector<reader::DecodedCode> held;
+    for (const reader::DecodedCode& c : readout.codes)
+      if (inside(retry.window, c.centre_x, c.centre_y)) held.push_back(c);
+    bool held_read = held.empty();  // all of them read again on the latent pasted last
     // Reads the window on the latents as pasted; the codes not read before
     // join the readout. Returns them.
     auto read_again = [&](const std::string& symbologies, double turn_rad = 0) {
@@ -282,6 +288,10 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
               ? reader::read_barcodes(camera, symbologies, options.try_rotate, {&retry.window, 1})
               : reader::read_barcodes_turned(camera, retry.window, turn_rad, symbologies,
                                              options.try_rotate);
+      held_read = std::all_of(held.begin(), held.end(), [&](const reader::DecodedCode& h) {
+        return std::any_of(again.codes.begin(), again.codes.end(),
+                           [&](const reader::DecodedCode& c) { return reader::same_symbol(c, h); });
+      });
       std::vector<std::string> texts;
       for (reader::DecodedCode& code : again.codes) {
         if (std::any_of(readout.codes.begin(), readout.codes.end(),
@@ -302,13 +312,29 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
     const DeblurOut deblurred = cropped.ok() ? imaging::deblur(cropped.value(), frame.model, tv)
                                              : DeblurOut::failure(cropped.error());
     if (deblurred.ok()) {
+      // The latent as it was over the window kept, in the crop's coordinates (paste()'s).
+      imaging::Plane first = imaging::Plane::uninitialised(c1 - c0, r1 - r0);
+      for (int y = r0; y < r1; ++y)
+        for (int n = keep0; n < keep1; ++n) first.at(n - c0, y - r0) = frame.motion_latent.at(n, y);
       const imaging::Plane& patch = deblurred.value().latent;
       paste(patch);
       const std::size_t before = readout.codes.size();
       read_again(options.symbologies);
-      const bool linear_read = std::any_of(
-          readout.codes.begin() + static_cast<std::ptrdiff_t>(before), readout.codes.end(),
-          [](const reader::DecodedCode& c) { return reader::is_linear_format(c.format); });
+      auto linear_format = [](const reader::DecodedCode& c) {
+        return reader::is_linear_format(c.format);
+      };
+      const bool linear_read =
+          std::any_of(held.begin(), held.end(), linear_format) ||
+          std::any_of(readout.codes.begin() + static_cast<std::ptrdiff_t>(before),
+                      readout.codes.end(), linear_format);
+      if (!held_read) {
+        // tv's latent loses a code the window read before: the window keeps its first latent.
+        paste(first);
+        retry.ms = ms_since(t0);
+        budget.settle(estimate, retry.ms, pixels);
+        out.retried.push_back(std::move(retry));
+        continue;
+      }
       if (!linear_read && !linear.empty()) {
         // No linear code: the rows summed along the bars (at 17 times the light)
         // for one that tv's noise hid.
@@ -348,13 +374,15 @@ reader::BarcodeReadout read_with_cascade(const SecondPassFrame& frame,
                                                        ? reader::regions_to_read(paper, code)
                                                        : std::vector<reader::LabelRegion>{};
   reader::BarcodeReadout readout = reader::read_codes(camera, windows, direction, options).readout;
-  const auto unread =
-      retry_regions(unread_runs(paper, readout, direction, camera.width, camera.height),
-                    unread_runs(code, readout, direction, camera.width, camera.height));
+  // Offline there is no budget: every label and code region is deblurred again,
+  // read or not, so that the picture shows tv's latent wherever print lies
+  // (joint Wiener's keeps the noise of its inverse filter, which readers other
+  // than ZXing do not read through), except where it would lose a code.
+  const auto every = retry_regions(paper, code);
   SecondPassBudget budget(kMaxSecondPassMs, 1);
   budget.add_frame(0, 0, 0);
   BeltReads reads;
-  log = run_second_pass(frame, unread, options, budget, reads, readout).log(budget.credit_ms());
+  log = run_second_pass(frame, every, options, budget, reads, readout).log(budget.credit_ms());
   return readout;
 }
 

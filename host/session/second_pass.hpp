@@ -134,8 +134,9 @@ std::vector<reader::LabelRegion> retry_regions(std::span<const reader::LabelRegi
 /// into the latents, and reads its decode window again with `options`; where
 /// that reads no linear code, and `options` reads linear symbologies, the
 /// window's rows summed along its bars are deblurred (joint Wiener), pasted
-/// and read for those (tv's latent is put back if they read nothing). The codes
-/// found are added to `readout` and to `reads`.
+/// and read for those (tv's latent is put back if they read nothing). A window
+/// whose codes of `readout` (read before it) tv's latent does not read again
+/// keeps the latent it had. The codes found are added to `readout` and to `reads`.
 SecondPass run_second_pass(const SecondPassFrame& frame,
                            std::span<const reader::LabelRegion> unread,
                            const reader::ReaderOptions& options, SecondPassBudget& budget,
@@ -144,9 +145,10 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
 /// \brief The cascade on one frame outside a line (`flutterscan deblur --method
 /// cascade`): `frame`'s latents (joint Wiener's) read with `options` (the
 /// whole frame, or the paper runs and code regions found on the motion latent,
-/// as options.area says), then every paper run and code region that read
-/// nothing deblurred again and read (run_second_pass, no budget: every window).
-/// The codes of both; the second pass's log line in `log`.
+/// as options.area says), then every paper run and code region deblurred again
+/// by tv and read (run_second_pass, no budget): the latents show tv's (or the
+/// bar sums') over every window, joint Wiener's only where tv's would lose a
+/// code it read. The codes of both; the second pass's log line in `log`.
 reader::BarcodeReadout read_with_cascade(const SecondPassFrame& frame,
                                          const reader::ReaderOptions& options, nlohmann::json& log);
 

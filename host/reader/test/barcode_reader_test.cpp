@@ -370,5 +370,31 @@ TEST(BarcodeReader, TheLinearSymbologiesOfAListAreAListOfTheirOwn) {
   EXPECT_EQ(linear_symbologies("QRCode, DataMatrix"), "");
 }
 
+TEST(BarcodeReader, OneSymbolReadOverDifferentRowsIsOneAndTwoAlikeSideBySideAreTwo) {
+  // A linear code read on two latents: ZXing found it over rows 166-278 in one
+  // and 205-278 in the other, so the centres lie 20 px apart across the bars.
+  auto code = [](double x0, double x1, double y0, double y1) {
+    DecodedCode c;
+    c.text = "005-3379497200006";
+    c.format = "Code128";
+    c.quality.corners = {{{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}}};
+    c.min_x = x0;
+    c.max_x = x1;
+    c.centre_x = (x0 + x1) / 2;
+    c.centre_y = (y0 + y1) / 2;
+    return c;
+  };
+  const DecodedCode tall = code(134, 634, 166, 278), short_rows = code(136, 631, 205, 278);
+  EXPECT_TRUE(same_symbol(tall, short_rows));
+  EXPECT_TRUE(same_symbol(short_rows, tall));
+  // The same text printed twice, side by side or one above the other: two symbols.
+  EXPECT_FALSE(same_symbol(tall, code(700, 1200, 166, 278)));
+  EXPECT_FALSE(same_symbol(tall, code(134, 634, 300, 412)));
+  // Another text at the same place: not the same symbol.
+  DecodedCode other = short_rows;
+  other.text = "005-3379497200007";
+  EXPECT_FALSE(same_symbol(tall, other));
+}
+
 }  // namespace
 }  // namespace flutterscan::reader
