@@ -205,7 +205,7 @@ std::string luminance_view_name(LuminanceView view) {
 }
 
 bool same_symbol(const DecodedCode& a, const DecodedCode& b) {
-  // Whether `c` lies within `code`'s corners' bounding box widened by 4 px.
+  // Whether (x, y) lies within `code`'s corners' bounding box widened by 4 px.
   auto within = [](const DecodedCode& code, double x, double y) {
     double y0 = code.quality.corners[0].y, y1 = y0;
     for (const CodePoint& p : code.quality.corners) {

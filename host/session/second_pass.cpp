@@ -277,7 +277,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
     std::vector<reader::DecodedCode> held;
     for (const reader::DecodedCode& c : readout.codes)
       if (inside(retry.window, c.centre_x, c.centre_y)) held.push_back(c);
-    bool held_read = held.empty();  // all of them read again on the latent pasted last
+    bool held_read = held.empty();  // all of them read again by the last read_again()
     // Reads the window on the latents as pasted; the codes not read before
     // join the readout. Returns them.
     auto read_again = [&](const std::string& symbologies, double turn_rad = 0) {
