@@ -75,6 +75,18 @@ bool inside(const reader::DecodeWindow& w, double x, double y) {
   return x >= w.x && x < w.x + w.width && y >= w.y && y < w.y + w.height;
 }
 
+/// Whether camera point (x, y) lies in the rows of linear code `code` (its
+/// corners' rows, widened by 4 px), whatever its column: the rows ZXing reads
+/// it on, with their quiet zones and the paper beside them.
+bool on_code_rows(const reader::DecodedCode& code, double y) {
+  double y0 = code.quality.corners[0].y, y1 = y0;
+  for (const reader::CodePoint& p : code.quality.corners) {
+    y0 = std::min(y0, p.y);
+    y1 = std::max(y1, p.y);
+  }
+  return y >= y0 - 4 && y <= y1 + 4;
+}
+
 /// The window's rows summed along its bars and deblurred by joint Wiener (one
 /// thread): `crop` the window's samples, `tv_latent` tv's latent of them, whose
 /// columns [keep_from, keep_to) (the window kept) give the bars' `slope`.
@@ -260,16 +272,18 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
     WindowRetry retry;
     retry.window =
         reader::decode_windows({&run, 1}, camera_width, camera_height, direction, kWindowMargin)[0];
-    // Writes `patch` (the crop's latent) into the latents over the window kept.
-    auto paste = [&](const imaging::Plane& patch) {
+    // Writes `patch` (the crop's latent) into the latents over the window kept
+    // or, given `codes`, over their rows only (on_code_rows()).
+    auto paste = [&](const imaging::Plane& patch, std::span<const reader::DecodedCode> codes = {}) {
       for (int y = r0; y < r1; ++y)
         for (int n = keep0; n < keep1; ++n) {
+          const auto [x, cy] = camera_point(direction, n, y, along);
+          if (!codes.empty() && std::none_of(codes.begin(), codes.end(),
+                                             [&](const auto& c) { return on_code_rows(c, cy); }))
+            continue;
           const float v = patch.at(n - c0, y - r0);
           frame.motion_latent.at(n, y) = v;
-          if (frame.camera_latent != nullptr) {
-            const auto [x, cy] = camera_point(direction, n, y, along);
-            frame.camera_latent->at(x, cy) = v;
-          }
+          if (frame.camera_latent != nullptr) frame.camera_latent->at(x, cy) = v;
         }
     };
     // The codes read in this window before it was deblurred again (the first
@@ -345,11 +359,17 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
         const double turn =
             std::abs(bars.slope) >= kMinTurnSlope ? camera_lean(direction, bars.slope) : 0;
         if (profile.ok()) {
+          const auto sums_from = static_cast<std::ptrdiff_t>(readout.codes.size());
           paste(profile.value().latent);
           bars.read = read_again(linear);
           if (bars.read.empty() && turn != 0) bars.read = read_again(linear, turn);
-          if (bars.read.empty())
-            paste(patch);  // the frame shows tv's latent where sums read nothing
+          // The frame shows tv's latent, and the sums' over the rows of the codes
+          // they read only: the sums smear whatever else the window holds (a
+          // matrix code above or below that tv or the first pass read, text)
+          // along the bars' slope.
+          paste(patch);
+          if (!bars.read.empty())
+            paste(profile.value().latent, {readout.codes.begin() + sums_from, readout.codes.end()});
         }
         if (bars.read.empty() && turn != 0) read_again(linear, turn);  // tv's latent, turned
         retry.bar_sums = std::move(bars);
