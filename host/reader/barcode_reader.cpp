@@ -33,9 +33,17 @@ std::string check_symbologies(const std::string& symbologies) {
   return {};
 }
 
+namespace {
+
+/// The linear (1-D) formats among `formats`.
+ZXing::BarcodeFormats linear_formats(ZXing::BarcodeFormats formats) {
+  return formats & ZXing::BarcodeFormats(ZXing::BarcodeFormat::LinearCodes);
+}
+
+}  // namespace
+
 std::string linear_symbologies(const std::string& symbologies) {
-  const ZXing::BarcodeFormats linear = ZXing::BarcodeFormatsFromString(symbologies) &
-                                       ZXing::BarcodeFormats(ZXing::BarcodeFormat::LinearCodes);
+  const ZXing::BarcodeFormats linear = linear_formats(ZXing::BarcodeFormatsFromString(symbologies));
   return linear.empty() ? std::string() : ZXing::ToString(linear);
 }
 
@@ -204,14 +212,19 @@ std::string luminance_view_name(LuminanceView view) {
   return "linear";
 }
 
+std::pair<double, double> corner_rows(const DecodedCode& code) {
+  double y0 = code.quality.corners[0].y, y1 = y0;
+  for (const CodePoint& p : code.quality.corners) {
+    y0 = std::min(y0, p.y);
+    y1 = std::max(y1, p.y);
+  }
+  return {y0, y1};
+}
+
 bool same_symbol(const DecodedCode& a, const DecodedCode& b) {
   // Whether (x, y) lies within `code`'s corners' bounding box widened by 4 px.
   auto within = [](const DecodedCode& code, double x, double y) {
-    double y0 = code.quality.corners[0].y, y1 = y0;
-    for (const CodePoint& p : code.quality.corners) {
-      y0 = std::min(y0, p.y);
-      y1 = std::max(y1, p.y);
-    }
+    const auto [y0, y1] = corner_rows(code);
     return x > code.min_x - 4 && x < code.max_x + 4 && y > y0 - 4 && y < y1 + 4;
   };
   const bool near = std::abs(a.centre_x - b.centre_x) < 4 && std::abs(a.centre_y - b.centre_y) < 4;
@@ -231,8 +244,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
   // The paper view is for linear codes: ZXing thresholds their rows by each
   // row's histogram, matrix codes by local blocks that the paper beside them
   // does not sway.
-  const ZXing::BarcodeFormats linear =
-      hints.formats() & ZXing::BarcodeFormats(ZXing::BarcodeFormat::LinearCodes);
+  const ZXing::BarcodeFormats linear = linear_formats(hints.formats());
   ZXing::DecodeHints linear_hints = hints;
   linear_hints.setFormats(linear);
   const DecodeWindow whole{0, 0, latent.width, latent.height};

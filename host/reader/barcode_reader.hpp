@@ -13,6 +13,7 @@
 #include <optional>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "imaging/capture_model.hpp"
@@ -83,6 +84,9 @@ struct BarcodeReadout {
 
 /// \brief The texts of `readout`'s codes, in the order they were read.
 std::vector<std::string> code_texts(const BarcodeReadout& readout);
+
+/// \brief The rows `code`'s corners span: the least and the greatest y.
+std::pair<double, double> corner_rows(const DecodedCode& code);
 
 /// \brief Whether `a` and `b` are one symbol read twice (overlapping windows,
 /// or a window read again): same text and format, and centres within 4 px or

@@ -79,11 +79,7 @@ bool inside(const reader::DecodeWindow& w, double x, double y) {
 /// corners' rows, widened by 4 px), whatever its column: the rows ZXing reads
 /// it on, with their quiet zones and the paper beside them.
 bool on_code_rows(const reader::DecodedCode& code, double y) {
-  double y0 = code.quality.corners[0].y, y1 = y0;
-  for (const reader::CodePoint& p : code.quality.corners) {
-    y0 = std::min(y0, p.y);
-    y1 = std::max(y1, p.y);
-  }
+  const auto [y0, y1] = reader::corner_rows(code);
   return y >= y0 - 4 && y <= y1 + 4;
 }
 
@@ -326,10 +322,15 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
     const DeblurOut deblurred = cropped.ok() ? imaging::deblur(cropped.value(), frame.model, tv)
                                              : DeblurOut::failure(cropped.error());
     if (deblurred.ok()) {
-      // The latent as it was over the window kept, in the crop's coordinates (paste()'s).
-      imaging::Plane first = imaging::Plane::uninitialised(c1 - c0, r1 - r0);
-      for (int y = r0; y < r1; ++y)
-        for (int n = keep0; n < keep1; ++n) first.at(n - c0, y - r0) = frame.motion_latent.at(n, y);
+      // Where the window read codes before: the latent as it was over the window
+      // kept, in the crop's coordinates (paste()'s), to put back if tv's loses one.
+      imaging::Plane first;
+      if (!held.empty()) {
+        first = imaging::Plane::uninitialised(c1 - c0, r1 - r0);
+        for (int y = r0; y < r1; ++y)
+          for (int n = keep0; n < keep1; ++n)
+            first.at(n - c0, y - r0) = frame.motion_latent.at(n, y);
+      }
       const imaging::Plane& patch = deblurred.value().latent;
       paste(patch);
       const std::size_t before = readout.codes.size();
@@ -342,14 +343,8 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
           std::any_of(readout.codes.begin() + static_cast<std::ptrdiff_t>(before),
                       readout.codes.end(), linear_format);
       if (!held_read) {
-        // tv's latent loses a code the window read before: the window keeps its first latent.
-        paste(first);
-        retry.ms = ms_since(t0);
-        budget.settle(estimate, retry.ms, pixels);
-        out.retried.push_back(std::move(retry));
-        continue;
-      }
-      if (!linear_read && !linear.empty()) {
+        paste(first);  // tv's latent loses a code the window read before: it keeps its first
+      } else if (!linear_read && !linear.empty()) {
         // No linear code: the rows summed along the bars (at 17 times the light)
         // for one that tv's noise hid.
         BarSumsTry bars;

@@ -508,11 +508,12 @@ bool is_png(const fs::path& path) {
 
 class ImagingCliTest : public CliTest {
  protected:
-  /// Simulates the Code 128 label FS-0042 into dir_/frame.png (+ .json, .truth.png).
-  void simulate_label() {
+  /// Simulates the Code 128 label FS-0042 into dir_/frame.png (+ .json, .truth.png)
+  /// at `electrons` per LED slot with noise seed `seed`.
+  void simulate_label(const std::string& electrons = "3000", const std::string& seed = "3") {
     const RunResult result = run({"simulate", "--scene", "code128:FS-0042", "--code", "found-joint",
-                                  "--blur", "52", "--electrons", "3000", "--crosstalk", kCrosstalk,
-                                  "--seed", "3", "-o", (dir_ / "frame.png").string()});
+                                  "--blur", "52", "--electrons", electrons, "--crosstalk",
+                                  kCrosstalk, "--seed", seed, "-o", (dir_ / "frame.png").string()});
     ASSERT_EQ(result.exit_code, 0) << result;
   }
   std::string frame() const { return (dir_ / "frame.png").string(); }
@@ -698,10 +699,7 @@ TEST_F(ImagingCliTest, APhotoSceneIsPlacedOnTheBeltRecordedAndReadBack) {
 TEST_F(ImagingCliTest, TheCascadeReadsADimLabelJointWienerMisses) {
   // 150 e-: joint Wiener's latent reads nothing; the cascade deblurs the label's
   // window again and reads it.
-  ASSERT_EQ(run({"simulate", "--scene", "code128:FS-0042", "--code", "found-joint", "--blur", "52",
-                 "--electrons", "150", "--crosstalk", kCrosstalk, "--seed", "3", "-o", frame()})
-                .exit_code,
-            0);
+  ASSERT_NO_FATAL_FAILURE(simulate_label("150"));
   const std::string plain_output = (dir_ / "plain.png").string();
   const RunResult plain = run(
       {"deblur", frame(), "--descriptor", descriptor(), "--decode", "--json", "-o", plain_output});
@@ -734,10 +732,7 @@ TEST_F(ImagingCliTest, TheCascadesPictureIsTvsOverALabelJointWienerReadsToo) {
   // picture written shows tv's latent there (closer to the scene: the whole
   // frame's PSNR gains 2.5 dB with the belt left as it was), and the code is
   // reported once.
-  ASSERT_EQ(run({"simulate", "--scene", "code128:FS-0042", "--code", "found-joint", "--blur", "52",
-                 "--electrons", "1000", "--crosstalk", kCrosstalk, "--seed", "5", "-o", frame()})
-                .exit_code,
-            0);
+  ASSERT_NO_FATAL_FAILURE(simulate_label("1000", "5"));
   const std::string truth = (dir_ / "frame.truth.png").string();
   const std::string plain_output = (dir_ / "plain.png").string();
   const RunResult plain = run({"deblur", frame(), "--descriptor", descriptor(), "--decode",
