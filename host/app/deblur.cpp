@@ -46,7 +46,7 @@ struct DeblurFlags {
   double black_level = 0;
   double gain = 1;
   double read_noise = 4;
-  std::string method = "joint-wiener";
+  std::string method;  ///< empty: cascade, or tv on a raw Bayer mosaic (the sharpest each allows)
   int iterations = 0;  ///< 0 = the method's default
   std::string edge_prior = "tv";
   std::string bayer_mode = "raw";
@@ -182,12 +182,7 @@ imaging::CaptureModel model_from_descriptor(const DeblurFlags& f, const LoadedFr
 }
 
 void run(const DeblurFlags& f) {
-  // cascade: the session's per-frame path (joint Wiener, then tv and the bar
-  // sums on every window that read nothing; docs/session.md, the cascade).
-  const bool cascade = f.method == "cascade";
-  const auto method =
-      cascade ? std::optional{imaging::Method::kJointWiener} : imaging::method_from_name(f.method);
-  if (!method)
+  if (!f.method.empty() && f.method != "cascade" && !imaging::method_from_name(f.method))
     throw UsageError("unknown method '" + f.method +
                      "': the methods are joint-wiener, wiener-avg, rl, tv or cascade");
   if (f.edge_prior != "tv" && f.edge_prior != "l0")
@@ -217,8 +212,16 @@ void run(const DeblurFlags& f) {
     if (const auto problem = imaging::capture_model_problem(model); !problem.empty())
       throw UsageError("--pixel-model " + f.pixel_model + ": " + problem);
   }
-  if (cascade && model.bayer_rggb)
+  if (f.method == "cascade" && model.bayer_rggb)
     throw UsageError("--method cascade works on RGB frames, not raw Bayer mosaics");
+  // Offline there is no line's budget: unless told otherwise, the sharpest
+  // picture the frame allows. cascade: the session's per-frame path (joint
+  // Wiener, then tv and the bar sums on each window; docs/session.md, the cascade).
+  const std::string method_name =
+      !f.method.empty() ? f.method : (model.bayer_rggb ? "tv" : "cascade");
+  const bool cascade = method_name == "cascade";
+  const auto method = cascade ? std::optional{imaging::Method::kJointWiener}
+                              : imaging::method_from_name(method_name);
   const double read_ms = elapsed_ms(start);
   if (f.blur_tolerance_pct >= 0 && !(f.blur_tolerance_pct < 100))
     throw UsageError("--blur-tolerance must be a percentage >= 0 and < 100, not " +
@@ -342,7 +345,7 @@ void run(const DeblurFlags& f) {
     nlohmann::json report = {
         {"input", f.input},
         {"output", f.output},
-        {"method", f.method},
+        {"method", method_name},
         {"pixel_model", imaging::pixel_model_name(model.pixel_model)},
         {"timings_ms",
          {{"read", read_ms}, {"refine", refine_ms}, {"deblur", deblur_ms}, {"write", write_ms}}},
@@ -360,7 +363,7 @@ void run(const DeblurFlags& f) {
     std::cout << report.dump() << "\n";
     return;
   }
-  std::cout << "wrote " << f.output << " (" << f.method << ", " << static_cast<int>(deblur_ms)
+  std::cout << "wrote " << f.output << " (" << method_name << ", " << static_cast<int>(deblur_ms)
             << " ms)\n";
   if (!motion.is_null()) {
     if (!motion["edges"].get<bool>())
@@ -422,11 +425,11 @@ void add_deblur(CLI::App& app) {
   command->add_option("--black-level", f->black_level, "DN")->capture_default_str();
   command->add_option("--gain", f->gain, "e- per DN")->capture_default_str();
   command->add_option("--read-noise", f->read_noise, "e- rms")->capture_default_str();
-  command
-      ->add_option("--method", f->method,
-                   "joint-wiener, wiener-avg, rl, tv or cascade (the session's path: joint "
-                   "Wiener, then tv and the bar sums on each window it read nothing in)")
-      ->capture_default_str();
+  command->add_option("--method", f->method,
+                      "cascade (default: the session's path, joint Wiener on the frame, then tv "
+                      "and the bar sums on every label and code region; the sharpest picture and "
+                      "the most codes read), tv (the default for raw Bayer mosaics), joint-wiener "
+                      "(the fast one a line runs on every frame), wiener-avg or rl");
   command
       ->add_option("--iterations", f->iterations,
                    "rl iterations (default " + std::to_string(imaging::kRichardsonLucyIterations) +

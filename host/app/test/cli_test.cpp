@@ -701,8 +701,8 @@ TEST_F(ImagingCliTest, TheCascadeReadsADimLabelJointWienerMisses) {
   // window again and reads it.
   ASSERT_NO_FATAL_FAILURE(simulate_label("150"));
   const std::string plain_output = (dir_ / "plain.png").string();
-  const RunResult plain = run(
-      {"deblur", frame(), "--descriptor", descriptor(), "--decode", "--json", "-o", plain_output});
+  const RunResult plain = run({"deblur", frame(), "--descriptor", descriptor(), "--method",
+                               "joint-wiener", "--decode", "--json", "-o", plain_output});
   ASSERT_EQ(plain.exit_code, 0) << plain;
   EXPECT_TRUE(json_lines(plain.out)[0]["decoded"].empty()) << plain;
   const RunResult cascade = run({"deblur", frame(), "--descriptor", descriptor(), "--method",
@@ -724,6 +724,11 @@ TEST_F(ImagingCliTest, TheCascadeReadsADimLabelJointWienerMisses) {
                       (dir_ / "bayer.json").string(), "--method", "cascade", "-o", bayer_output},
                      {"cascade", "Bayer"});
   EXPECT_FALSE(fs::exists(bayer_output));
+  // Without --method a mosaic gets the sharpest method it allows: tv.
+  const RunResult bayer = run({"deblur", (dir_ / "bayer.png").string(), "--descriptor",
+                               (dir_ / "bayer.json").string(), "--json", "-o", bayer_output});
+  ASSERT_EQ(bayer.exit_code, 0) << bayer;
+  EXPECT_EQ(json_lines(bayer.out)[0]["method"], "tv") << bayer;
 }
 
 TEST_F(ImagingCliTest, TheCascadesPictureIsTvsOverALabelJointWienerReadsToo) {
@@ -735,8 +740,9 @@ TEST_F(ImagingCliTest, TheCascadesPictureIsTvsOverALabelJointWienerReadsToo) {
   ASSERT_NO_FATAL_FAILURE(simulate_label("1000", "5"));
   const std::string truth = (dir_ / "frame.truth.png").string();
   const std::string plain_output = (dir_ / "plain.png").string();
-  const RunResult plain = run({"deblur", frame(), "--descriptor", descriptor(), "--decode",
-                               "--truth", truth, "--json", "-o", plain_output});
+  const RunResult plain =
+      run({"deblur", frame(), "--descriptor", descriptor(), "--method", "joint-wiener", "--decode",
+           "--truth", truth, "--json", "-o", plain_output});
   ASSERT_EQ(plain.exit_code, 0) << plain;
   const json plain_report = json_lines(plain.out)[0];
   ASSERT_EQ(plain_report["decoded"], json::array({"FS-0042"})) << plain;
@@ -750,6 +756,13 @@ TEST_F(ImagingCliTest, TheCascadesPictureIsTvsOverALabelJointWienerReadsToo) {
   EXPECT_GT(report["truth"]["psnr_db"].get<double>(),
             plain_report["truth"]["psnr_db"].get<double>() + 1.5)
       << plain << cascade;
+  // Offline, the cascade is what deblur does unless told otherwise: the same picture.
+  const std::string default_output = (dir_ / "default.png").string();
+  const RunResult by_default =
+      run({"deblur", frame(), "--descriptor", descriptor(), "--json", "-o", default_output});
+  ASSERT_EQ(by_default.exit_code, 0) << by_default;
+  EXPECT_EQ(json_lines(by_default.out)[0]["method"], "cascade") << by_default;
+  EXPECT_EQ(read_file(default_output), read_file(output()));
 }
 
 TEST_F(ImagingCliTest, SimulateRefusesABadPhotoOrTurn) {
