@@ -7,35 +7,6 @@
 namespace flutterscan::imaging {
 namespace {
 
-/// One iteration's penalties and thresholds.
-struct Step {
-  float rho_along, threshold_along;
-  float rho_across, threshold_across;
-  float rho_box;
-};
-
-/// Step `k` (1-based) of `settings`: constant for ADMM, growing for L0.
-Step step_of(const TotalVariationSettings& settings, int k) {
-  if (settings.prior == EdgePrior::kTotalVariation) {
-    const double rho_along = settings.weight_along / settings.threshold_along;
-    const double rho_across = settings.weight_across / settings.threshold_across;
-    return {static_cast<float>(rho_along), static_cast<float>(settings.threshold_along),
-            static_cast<float>(rho_across), static_cast<float>(settings.threshold_across),
-            static_cast<float>(settings.box_penalty)};
-  }
-  // Half-quadratic L0: hard threshold sqrt(2 mu / beta), beta from 2 mu / threshold^2 upward.
-  const double growth = std::min(std::pow(settings.l0_growth, k - 1), settings.l0_most_growth);
-  const double rho_along =
-      2 * settings.weight_along / (settings.threshold_along * settings.threshold_along) * growth;
-  const double rho_across =
-      2 * settings.weight_across / (settings.threshold_across * settings.threshold_across) * growth;
-  return {static_cast<float>(rho_along),
-          static_cast<float>(std::sqrt(2 * settings.weight_along / rho_along)),
-          static_cast<float>(rho_across),
-          static_cast<float>(std::sqrt(2 * settings.weight_across / rho_across)),
-          static_cast<float>(settings.box_penalty)};
-}
-
 /// One relaxed ADMM update of a split of d = D x (Eckstein-Bertsekas over-relaxation):
 /// with z = s + u the split's previous value, v = alpha d + (1 - alpha) z + u,
 /// z <- v - clamp(v, low, high) (soft threshold; the box's clip is clamp itself,
@@ -60,6 +31,27 @@ inline float clip_unit(float x) {
 }
 
 }  // namespace
+
+TotalVariation::Step TotalVariation::step_of(const TotalVariationSettings& settings, int k) {
+  if (settings.prior == EdgePrior::kTotalVariation) {
+    const double rho_along = settings.weight_along / settings.threshold_along;
+    const double rho_across = settings.weight_across / settings.threshold_across;
+    return {static_cast<float>(rho_along), static_cast<float>(settings.threshold_along),
+            static_cast<float>(rho_across), static_cast<float>(settings.threshold_across),
+            static_cast<float>(settings.box_penalty)};
+  }
+  // Half-quadratic L0: hard threshold sqrt(2 mu / beta), beta from 2 mu / threshold^2 upward.
+  const double growth = std::min(std::pow(settings.l0_growth, k - 1), settings.l0_most_growth);
+  const double rho_along =
+      2 * settings.weight_along / (settings.threshold_along * settings.threshold_along) * growth;
+  const double rho_across =
+      2 * settings.weight_across / (settings.threshold_across * settings.threshold_across) * growth;
+  return {static_cast<float>(rho_along),
+          static_cast<float>(std::sqrt(2 * settings.weight_along / rho_along)),
+          static_cast<float>(rho_across),
+          static_cast<float>(std::sqrt(2 * settings.weight_across / rho_across)),
+          static_cast<float>(settings.box_penalty)};
+}
 
 TotalVariationSettings l0_settings() {
   TotalVariationSettings settings;
@@ -310,15 +302,41 @@ void TotalVariation::solve_across(int first_bin, int last_bin, float rho_across)
   }
 }
 
+void TotalVariation::finish_row(int y, int first, Scratch& s, float threshold_along, bool restart,
+                                const Step* next) {
+  split_row(y, threshold_along, restart);
+  if (next == nullptr || y == first) return;
+  split_edge(y - 1, next->threshold_across, restart);
+  if (y - 1 > first) transform_row(y - 1, s, {next->rho_along, next->rho_across, next->rho_box});
+}
+
+void TotalVariation::finish_seams(std::span<const std::pair<int, int>> shares, const Step& next,
+                                  bool restart) {
+  const Penalties rho{next.rho_along, next.rho_across, next.rho_box};
+  Scratch& s = workers_.front();
+  for (const auto& [first, last] : shares)
+    if (first < last && last < height_) split_edge(last - 1, next.threshold_across, restart);
+  for (const auto& [first, last] : shares) {
+    if (first == last) continue;
+    transform_row(first, s, rho);
+    if (last - 1 > first) transform_row(last - 1, s, rho);
+  }
+}
+
 void TotalVariation::deconvolve(const RowLoader& load, int height, const Plane& warm_start,
                                 Plane& out, RowPool& pool) {
   prepare(height, pool.threads());
   const std::size_t n = stride_;
   const auto bins = static_cast<std::size_t>(fft_.bins());
   const bool own_start = warm_start.empty();
+  const int iterations = settings_.iterations;
+  // Each worker's rows in the row passes (RowPool gives every worker one share).
+  std::vector<std::pair<int, int>> shares(workers_.size(), {0, 0});
+  // The first estimate, and iteration 1's splits and right-hand sides.
   const Step first = step_of(settings_, 1);
   pool.run(height, [&](int from, int to, int worker) {
     Scratch& s = workers_[static_cast<std::size_t>(worker)];
+    shares[static_cast<std::size_t>(worker)] = {from, to};
     for (int y = from; y < to; ++y) {
       load_data(y, load, s, own_start);
       float* x = x_.data() + static_cast<std::size_t>(y) * n;
@@ -329,44 +347,51 @@ void TotalVariation::deconvolve(const RowLoader& load, int height, const Plane& 
         std::copy(row.begin(), row.end(), x);
         extend_row_periodically({x, n}, width_, blend_);
       }
-      split_row(y, first.threshold_along, true);
+      finish_row(y, from, s, first.threshold_along, true, iterations > 0 ? &first : nullptr);
     }
   });
+  if (iterations > 0) finish_seams(shares, first, true);
   constexpr int kBinsPerShare = 16;  // the sweeps' unit of work: 128 bytes of each spectrum row
-  const int shares = (static_cast<int>(bins) + kBinsPerShare - 1) / kBinsPerShare;
-  for (int k = 1; k <= settings_.iterations; ++k) {
+  const int bin_shares = (static_cast<int>(bins) + kBinsPerShare - 1) / kBinsPerShare;
+  for (int k = 1; k <= iterations; ++k) {
     const Step now = step_of(settings_, k);
     const Step next = step_of(settings_, k + 1);
     const Penalties rho{now.rho_along, now.rho_across, now.rho_box};
     if (!(rho == factored_)) factor_across(rho);
-    pool.run(height - 1, [&](int from, int to, int) {
-      for (int edge = from; edge < to; ++edge) split_edge(edge, now.threshold_across, k == 1);
-    });
-    pool.run(height, [&](int from, int to, int worker) {
-      Scratch& s = workers_[static_cast<std::size_t>(worker)];
-      for (int y = from; y < to; ++y) transform_row(y, s, rho);
-    });
-    pool.run(shares, [&](int from, int to, int) {
+    pool.run(bin_shares, [&](int from, int to, int) {
       solve_across(from * kBinsPerShare, std::min(static_cast<int>(bins), to * kBinsPerShare),
                    now.rho_across);
     });
-    pool.run(height, [&](int from, int to, int) {
+    // x's rows; unless this was the last iteration, each row's splits and the
+    // next iteration's right-hand side while the row is in cache.
+    const bool last = k == iterations;
+    pool.run(height, [&](int from, int to, int worker) {
+      Scratch& s = workers_[static_cast<std::size_t>(worker)];
       for (int y = from; y < to; ++y) {
         auto* spectrum = reinterpret_cast<std::complex<float>*>(
             spectra_.data() + static_cast<std::size_t>(y) * spectrum_stride_);
-        fft_.inverse(spectrum, x_.data() + static_cast<std::size_t>(y) * n);
-        split_row(y, next.threshold_along, false);
+        float* x = x_.data() + static_cast<std::size_t>(y) * n;
+        fft_.inverse(spectrum, x);
+        if (!last) {
+          finish_row(y, from, s, next.threshold_along, false, &next);
+          continue;
+        }
+        auto row = out.row(y);
+        for (int i = 0; i < width_; ++i)
+          row[static_cast<std::size_t>(i)] = std::clamp(x[i], 0.0f, 1.0f);
       }
     });
+    if (!last) finish_seams(shares, next, false);
   }
-  pool.run(height, [&](int from, int to, int) {
-    for (int y = from; y < to; ++y) {
-      const float* x = x_.data() + static_cast<std::size_t>(y) * n;
-      auto row = out.row(y);
-      for (int i = 0; i < width_; ++i)
-        row[static_cast<std::size_t>(i)] = std::clamp(x[i], 0.0f, 1.0f);
-    }
-  });
+  if (iterations == 0)
+    pool.run(height, [&](int from, int to, int) {
+      for (int y = from; y < to; ++y) {
+        const float* x = x_.data() + static_cast<std::size_t>(y) * n;
+        auto row = out.row(y);
+        for (int i = 0; i < width_; ++i)
+          row[static_cast<std::size_t>(i)] = std::clamp(x[i], 0.0f, 1.0f);
+      }
+    });
 }
 
 Plane TotalVariation::deconvolve(std::span<const Plane> channels, const Plane& warm_start,

@@ -73,6 +73,7 @@
 // one, so TV is the default.
 
 #include <span>
+#include <utility>
 #include <vector>
 
 #include "imaging/image.hpp"
@@ -171,11 +172,29 @@ class TotalVariation {
     float along, across, box;
     bool operator==(const Penalties&) const = default;
   };
+  /// One iteration's penalties and thresholds.
+  struct Step {
+    float rho_along, threshold_along;
+    float rho_across, threshold_across;
+    float rho_box;
+  };
+  /// Step `k` (1-based) of `settings`: constant for ADMM, growing for L0.
+  static Step step_of(const TotalVariationSettings& settings, int k);
   void prepare(int height, int threads);
   void load_data(int y, const RowLoader& load, Scratch& s, bool wiener_start);
   void split_row(int y, float threshold, bool restart);
   void split_edge(int edge, float threshold, bool restart);
   void transform_row(int y, Scratch& s, const Penalties& rho);
+  /// Row y of x is this iteration's: its along and box splits (`threshold_along`),
+  /// then, if there is a `next` iteration, the edge above it (rows y - 1 and y are
+  /// both done) and the right-hand side of the row above (it waited for that edge).
+  /// `first`: the first row of this worker's share, whose edge above and
+  /// right-hand side wait for finish_seams().
+  void finish_row(int y, int first, Scratch& s, float threshold_along, bool restart,
+                  const Step* next);
+  /// What finish_row() left at the shares' seams: the edges between shares, then
+  /// the right-hand sides of each share's first and last rows.
+  void finish_seams(std::span<const std::pair<int, int>> shares, const Step& next, bool restart);
   void factor_across(const Penalties& rho);
   void solve_across(int first_bin, int last_bin, float rho_across);
 
