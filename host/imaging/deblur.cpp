@@ -78,8 +78,10 @@ Plane deconvolve_motion_rows(std::span<const ChannelPsf> psfs, std::span<const P
           options.edge_prior == EdgePrior::kL0Gradient ? l0_settings() : TotalVariationSettings{};
       settings.iterations = options.iterations.value_or(kTotalVariationIterations);
       settings.wiener_lambda = lambda;
-      if (options.edge_prior == EdgePrior::kTotalVariation)
+      if (options.edge_prior == EdgePrior::kTotalVariation) {
         settings.weight_per_noise = options.tv_weight_per_noise;
+        settings.across_ratio = options.tv_across_ratio;
+      }
       latent = TotalVariation(psfs, width, settings).deconvolve(rows, Plane(), options.threads);
       break;
     }

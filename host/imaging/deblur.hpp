@@ -48,6 +48,9 @@ struct DeblurOptions {
   /// tv (|gradient| prior): kappa, the prior weight per unit of the estimate's noise
   /// (TotalVariationSettings::weight_per_noise).
   double tv_weight_per_noise = TotalVariationSettings{}.weight_per_noise;
+  /// tv (|gradient| prior): the weight across the motion over the weight along it
+  /// (TotalVariationSettings::across_ratio; 1: isotropic).
+  double tv_across_ratio = TotalVariationSettings{}.across_ratio;
   int threads = 2;
   /// joint-wiener and wiener-avg: FFTW planning (row_fft.hpp). A session measures
   /// before it streams and deblurs with kMeasuredIfKnown.

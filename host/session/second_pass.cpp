@@ -186,6 +186,7 @@ nlohmann::json SecondPass::log(double credit_ms) const {
     if (r.bar_sums)
       window["bar_sums"] = {{"slope", std::round(r.bar_sums->slope * 100) / 100},
                             {"read", r.bar_sums->read}};
+    if (r.isotropic) window["isotropic"] = {{"read", *r.isotropic}};
     windows.push_back(std::move(window));
   }
   return {{"windows", std::move(windows)},
@@ -235,6 +236,8 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
   tv.method = imaging::Method::kTotalVariation;
   tv.threads = 1;
   tv.tv_weight_per_noise = imaging::kReadingWeightPerNoise;
+  imaging::DeblurOptions tv_isotropic = tv;
+  tv_isotropic.tv_across_ratio = 1;
   const std::string linear = reader::linear_symbologies(options.symbologies);
   for (const reader::LabelRegion& run : unread) {
     if (reads.any_within(run.begin - frame.travel_px, run.end - frame.travel_px, 0)) {
@@ -257,6 +260,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
       continue;
     }
     const auto t0 = std::chrono::steady_clock::now();
+    double first_ms = 0, isotropic_ms = 0;  // the window's passes before the isotropic one, it
     imaging::Image crop;
     for (int c = 0; c < electrons.channel_count(); ++c) {
       crop.channels.push_back(imaging::Plane::uninitialised(c1 - c0, r1 - r0));
@@ -369,9 +373,27 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
         if (bars.read.empty() && turn != 0) read_again(linear, turn);  // tv's latent, turned
         retry.bar_sums = std::move(bars);
       }
+      // Nothing read: tv's prior has the print constant across the motion (bars
+      // upright), which a matrix code's modules and a turned label's bars are
+      // not. The window once more with the same weight across as along, if the
+      // budget holds a second tv; its latent stays where it reads.
+      if (held.empty() && retry.read.empty()) {
+        first_ms = ms_since(t0);
+        if (budget.take(estimate)) {
+          const auto t1 = std::chrono::steady_clock::now();
+          const DeblurOut isotropic = imaging::deblur(cropped.value(), frame.model, tv_isotropic);
+          if (isotropic.ok()) {
+            paste(isotropic.value().latent);
+            retry.isotropic = read_again(options.symbologies);
+            if (retry.isotropic->empty()) paste(patch);
+          }
+          isotropic_ms = ms_since(t1);
+          budget.settle(estimate, isotropic_ms, pixels);
+        }
+      }
     }
     retry.ms = ms_since(t0);
-    budget.settle(estimate, retry.ms, pixels);
+    budget.settle(estimate, isotropic_ms > 0 ? first_ms : retry.ms, pixels);
     out.retried.push_back(std::move(retry));
   }
   return out;

@@ -89,10 +89,13 @@ struct BarSumsTry {
 
 /// \brief One window the second pass deblurred again.
 struct WindowRetry {
-  reader::DecodeWindow window;         ///< in the frame (camera coordinates)
-  double ms = 0;                       ///< its deblurs and decodes, wall time
-  std::vector<std::string> read;       ///< the codes it read (tv's and the bar sums')
+  reader::DecodeWindow window;    ///< in the frame (camera coordinates)
+  double ms = 0;                  ///< its deblurs and decodes, wall time
+  std::vector<std::string> read;  ///< the codes it read (tv's, the bar sums', the isotropic tv's)
   std::optional<BarSumsTry> bar_sums;  ///< absent: not tried
+  /// The codes tv read with an isotropic prior (the window once more where
+  /// nothing else read); absent: not tried.
+  std::optional<std::vector<std::string>> isotropic;
 };
 
 /// \brief What a frame's second pass did.
