@@ -400,6 +400,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
 }
 
 reader::BarcodeReadout read_with_cascade(const SecondPassFrame& frame,
+                                         const imaging::Plane& backdrop,
                                          const reader::ReaderOptions& options,
                                          nlohmann::json& log) {
   const imaging::Plane& camera =
@@ -419,7 +420,21 @@ reader::BarcodeReadout read_with_cascade(const SecondPassFrame& frame,
   SecondPassBudget budget(kMaxSecondPassMs, 1);
   budget.add_frame(0, 0, 0);
   BeltReads reads;
-  log = run_second_pass(frame, every, options, budget, reads, readout).log(budget.credit_ms());
+  const SecondPass pass = run_second_pass(frame, every, options, budget, reads, readout);
+  log = pass.log(budget.credit_ms());
+  if (backdrop.empty()) return readout;
+  // Beyond the windows: the belt, and whatever looked like neither paper nor print.
+  const int along = frame.electrons.along();
+  for (int y = 0; y < frame.electrons.lines(); ++y)
+    for (int n = 0; n < along; ++n) {
+      const auto [x, cy] = camera_point(direction, n, y, along);
+      if (std::any_of(pass.retried.begin(), pass.retried.end(),
+                      [&](const WindowRetry& r) { return inside(r.window, x, cy); }))
+        continue;
+      const float v = backdrop.at(n, y);
+      frame.motion_latent.at(n, y) = v;
+      if (frame.camera_latent != nullptr) frame.camera_latent->at(x, cy) = v;
+    }
   return readout;
 }
 

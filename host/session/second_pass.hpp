@@ -151,8 +151,11 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
 /// as options.area says), then every paper run and code region deblurred again
 /// by tv and read (run_second_pass, no budget): the latents show tv's (or the
 /// bar sums') over every window, joint Wiener's only where tv's would lose a
-/// code it read. The codes of both; the second pass's log line in `log`.
+/// code it read, and `backdrop` (the frame's latent in the motion frame, made
+/// otherwise: tv's on the whole frame) everywhere else, unless it is empty.
+/// The codes of both passes; the second pass's log line in `log`.
 reader::BarcodeReadout read_with_cascade(const SecondPassFrame& frame,
+                                         const imaging::Plane& backdrop,
                                          const reader::ReaderOptions& options, nlohmann::json& log);
 
 }  // namespace flutterscan::session
