@@ -1,6 +1,7 @@
 #include "app/image_io.hpp"
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include <cstdio>
 #include <filesystem>
@@ -130,8 +131,22 @@ Result<LoadedFrame, std::string> decode_frame(std::span<const std::uint8_t> byte
     return Out::failure("'" + path + "' decodes to another size than its header declares");
   if (mat.depth() != CV_8U && mat.depth() != CV_16U)
     return Out::failure("'" + path + "' is not an 8- or 16-bit image");
-  if (mat.channels() == 4)
-    return Out::failure("'" + path + "' has an alpha channel: give RGB or grey");
+  if (mat.channels() == 4) {
+    // An alpha channel that hides nothing (every pixel opaque) is dropped:
+    // some tools write one whatever the picture; one that hides pixels is refused.
+    cv::Mat alpha;
+    cv::extractChannel(mat, alpha, 3);
+    const double opaque = mat.depth() == CV_8U ? 255 : 65535;
+    cv::Point where;
+    double least = 0;
+    cv::minMaxLoc(alpha, &least, nullptr, &where);
+    if (least < opaque)
+      return Out::failure("'" + path + "' has transparent pixels (alpha " +
+                          std::to_string(static_cast<int>(least)) + " at x " +
+                          std::to_string(where.x) + ", y " + std::to_string(where.y) +
+                          "): give RGB or grey");
+    cv::cvtColor(mat, mat, cv::COLOR_BGRA2BGR);
+  }
   if (mat.channels() != 1 && mat.channels() != 3)
     return Out::failure("'" + path + "' has " + std::to_string(mat.channels()) +
                         " channels: give RGB or grey");

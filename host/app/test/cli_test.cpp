@@ -18,6 +18,8 @@
 #include <fstream>
 #include <iterator>
 #include <nlohmann/json.hpp>
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
 #include <ostream>
 #include <string>
 #include <vector>
@@ -590,6 +592,36 @@ TEST_F(ImagingCliTest, DeblurFromFlagsAlsoDecodes) {
                                 "--decode", "-o", output()});
   ASSERT_EQ(result.exit_code, 0) << result;
   EXPECT_TRUE(contains(result.out, "decoded: FS-0042")) << result;
+}
+
+TEST_F(ImagingCliTest, AnOpaqueAlphaChannelIsDroppedAndATransparentPixelRefused) {
+  // Some tools write RGBA whatever the picture: an alpha that hides nothing is
+  // dropped (the same picture as the RGB frame's); one that hides a pixel is
+  // refused, naming where.
+  simulate_label();
+  ASSERT_EQ(run({"deblur", frame(), "--descriptor", descriptor(), "--method", "joint-wiener", "-o",
+                 output()})
+                .exit_code,
+            0);
+  const cv::Mat rgb = cv::imread(frame(), cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(rgb.channels(), 3);
+  cv::Mat rgba(rgb.size(), CV_MAKETYPE(rgb.depth(), 4));
+  const cv::Mat alpha(rgb.size(), rgb.depth(), cv::Scalar(65535));
+  const int pairs[] = {0, 0, 1, 1, 2, 2, 3, 3};
+  const cv::Mat sources[] = {rgb, alpha};
+  cv::mixChannels(sources, 2, &rgba, 1, pairs, 4);
+  const std::string opaque = (dir_ / "opaque.png").string();
+  ASSERT_TRUE(cv::imwrite(opaque, rgba));
+  const std::string opaque_output = (dir_ / "opaque-sharp.png").string();
+  const RunResult read = run({"deblur", opaque, "--descriptor", descriptor(), "--method",
+                              "joint-wiener", "-o", opaque_output});
+  ASSERT_EQ(read.exit_code, 0) << read;
+  EXPECT_EQ(read_file(opaque_output), read_file(output()));
+  rgba.at<cv::Vec<std::uint16_t, 4>>(7, 12)[3] = 1000;
+  const std::string holed = (dir_ / "holed.png").string();
+  ASSERT_TRUE(cv::imwrite(holed, rgba));
+  expect_usage_error({"deblur", holed, "--descriptor", descriptor(), "-o", output()},
+                     {"holed.png", "transparent", "x 12, y 7"});
 }
 
 TEST_F(ImagingCliTest, DeblurRefusesBadInputNamingIt) {
