@@ -260,7 +260,8 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
       continue;
     }
     const auto t0 = std::chrono::steady_clock::now();
-    double first_ms = 0, isotropic_ms = 0;  // the window's passes before the isotropic one, it
+    // The window's passes before the isotropic try, and that try: each settled on its own.
+    double first_ms = 0, isotropic_ms = 0;
     imaging::Image crop;
     for (int c = 0; c < electrons.channel_count(); ++c) {
       crop.channels.push_back(imaging::Plane::uninitialised(c1 - c0, r1 - r0));

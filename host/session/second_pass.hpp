@@ -138,6 +138,9 @@ std::vector<reader::LabelRegion> retry_regions(std::span<const reader::LabelRegi
 /// that reads no linear code, and `options` reads linear symbologies, the
 /// window's rows summed along its bars are deblurred (joint Wiener), pasted
 /// and read for those (tv's latent is put back if they read nothing). A window
+/// where neither read anything, and nothing was read before, is deblurred once
+/// more by tv with an isotropic prior if `budget` holds a second window, and
+/// read for every symbology (its latent kept only where it reads). A window
 /// whose codes of `readout` (read before it) tv's latent does not read again
 /// keeps the latent it had. The codes found are added to `readout` and to `reads`.
 SecondPass run_second_pass(const SecondPassFrame& frame,

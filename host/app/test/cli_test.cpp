@@ -510,8 +510,8 @@ bool is_png(const fs::path& path) {
 
 class ImagingCliTest : public CliTest {
  protected:
-  /// Simulates the Code 128 label FS-0042 into dir_/frame.png (+ .json, .truth.png)
-  /// at `electrons` per LED slot with noise seed `seed`.
+  /// Simulates `scene` (the Code 128 label FS-0042 unless told) into dir_/frame.png
+  /// (+ .json, .truth.png) at `electrons` per LED slot with noise seed `seed`.
   void simulate_label(const std::string& electrons = "3000", const std::string& seed = "3",
                       const std::string& scene = "code128:FS-0042") {
     const RunResult result = run({"simulate", "--scene", scene, "--code", "found-joint", "--blur",
