@@ -806,6 +806,61 @@ TEST_F(ImagingCliTest, TheCascadesPictureIsTvsOverALabelJointWienerReadsToo) {
   EXPECT_EQ(read_file(default_output), read_file(output()));
 }
 
+TEST_F(ImagingCliTest, TheCascadesPictureIsTvsWholeFrameBeyondItsWindowsWhenTheBeltMovesUp) {
+  // Motion along -y: the windows are in camera coordinates, tv's latent beyond
+  // them is made in the motion frame. Outside every window the cascade's
+  // picture is tv's, pixel for pixel; inside, the second pass's.
+  ASSERT_EQ(run({"simulate",
+                 "--scene",
+                 "code128:FS-0042",
+                 "--code",
+                 "found-joint",
+                 "--blur",
+                 "52",
+                 "--direction=-y",
+                 "--electrons",
+                 "1000",
+                 "--crosstalk",
+                 kCrosstalk,
+                 "--seed",
+                 "5",
+                 "--width",
+                 "420",
+                 "--height",
+                 "700",
+                 "-o",
+                 frame()})
+                .exit_code,
+            0);
+  const std::string tv_output = (dir_ / "tv.png").string();
+  ASSERT_EQ(
+      run({"deblur", frame(), "--descriptor", descriptor(), "--method", "tv", "-o", tv_output})
+          .exit_code,
+      0);
+  const RunResult cascade =
+      run({"deblur", frame(), "--descriptor", descriptor(), "--decode", "--json", "-o", output()});
+  ASSERT_EQ(cascade.exit_code, 0) << cascade;
+  const json report = json_lines(cascade.out)[0];
+  EXPECT_EQ(report["decoded"], json::array({"FS-0042"})) << cascade;
+  const json& windows = report["second_pass"]["windows"];
+  ASSERT_GE(windows.size(), 1u) << cascade;
+  const cv::Mat tv = cv::imread(tv_output, cv::IMREAD_UNCHANGED);
+  const cv::Mat picture = cv::imread(output(), cv::IMREAD_UNCHANGED);
+  ASSERT_EQ(tv.size(), picture.size());
+  int outside_differ = 0, inside_differ = 0;
+  for (int y = 0; y < picture.rows; ++y)
+    for (int x = 0; x < picture.cols; ++x) {
+      const bool inside = std::any_of(windows.begin(), windows.end(), [&](const json& w) {
+        return x >= w["x"].get<int>() && x < w["x"].get<int>() + w["width"].get<int>() &&
+               y >= w["y"].get<int>() && y < w["y"].get<int>() + w["height"].get<int>();
+      });
+      const bool differ = tv.at<std::uint16_t>(y, x) != picture.at<std::uint16_t>(y, x);
+      (inside ? inside_differ : outside_differ) += differ;
+    }
+  EXPECT_EQ(outside_differ, 0) << cascade;
+  EXPECT_GT(inside_differ, 0) << cascade;
+}
+
 TEST_F(ImagingCliTest, InDimLightTheCascadeReadsAMatrixCodeWithAnIsotropicPrior) {
   // 130 e-: tv's prior, heavier across the motion (bars upright), reads nothing
   // in the QR code's window, nor do the bar sums; the window deblurred once more
