@@ -434,8 +434,9 @@ void add_deblur(CLI::App& app) {
   command->add_option("--read-noise", f->read_noise, "e- rms")->capture_default_str();
   command->add_option("--method", f->method,
                       "cascade (default: the session's path, joint Wiener on the frame, then tv "
-                      "and the bar sums on every label and code region; the sharpest picture and "
-                      "the most codes read), tv (the default for raw Bayer mosaics), joint-wiener "
+                      "and the bar sums on every label and code region, tv's whole frame beyond "
+                      "them; the sharpest picture and the most codes read), tv (the default for "
+                      "raw Bayer mosaics), joint-wiener "
                       "(the fast one a line runs on every frame), wiener-avg or rl");
   command
       ->add_option("--iterations", f->iterations,
