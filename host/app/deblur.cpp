@@ -391,9 +391,11 @@ void run(const DeblurFlags& f) {
   if (cascade) {
     std::size_t windows_read = 0;
     for (const auto& window : second_pass["windows"]) windows_read += !window["read"].empty();
+    // Offline every label and code region is deblurred again, read or not.
     std::cout << "cascade: " << second_pass["windows"].size()
-              << " window(s) joint Wiener read nothing in deblurred again, " << windows_read
-              << " of them read (" << static_cast<int>(cascade_ms) << " ms)\n";
+              << " label or code window(s) deblurred again by tv, " << windows_read
+              << " of them read a code the first read had not; tv's whole frame beyond them ("
+              << static_cast<int>(cascade_ms) << " ms)\n";
   }
   if (!f.truth.empty())
     std::cout << "against " << f.truth << ": PSNR " << psnr_db << " dB, SSIM " << ssim_index
