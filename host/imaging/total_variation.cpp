@@ -303,11 +303,11 @@ void TotalVariation::solve_across(int first_bin, int last_bin, float rho_across)
 }
 
 void TotalVariation::finish_row(int y, int first, Scratch& s, float threshold_along, bool restart,
-                                const Step* next) {
+                                const Step& next) {
   split_row(y, threshold_along, restart);
-  if (next == nullptr || y == first) return;
-  split_edge(y - 1, next->threshold_across, restart);
-  if (y - 1 > first) transform_row(y - 1, s, {next->rho_along, next->rho_across, next->rho_box});
+  if (y == first) return;
+  split_edge(y - 1, next.threshold_across, restart);
+  if (y - 1 > first) transform_row(y - 1, s, {next.rho_along, next.rho_across, next.rho_box});
 }
 
 void TotalVariation::finish_seams(std::span<const std::pair<int, int>> shares, const Step& next,
@@ -332,6 +332,13 @@ void TotalVariation::deconvolve(const RowLoader& load, int height, const Plane& 
   const int iterations = settings_.iterations;
   // Each worker's rows in the row passes (RowPool gives every worker one share).
   std::vector<std::pair<int, int>> shares(workers_.size(), {0, 0});
+  // Row y of x, clipped to [0, 1], into `out`: the latent, once x is final.
+  auto write_out = [&](int y) {
+    const float* x = x_.data() + static_cast<std::size_t>(y) * n;
+    auto row = out.row(y);
+    for (int i = 0; i < width_; ++i)
+      row[static_cast<std::size_t>(i)] = std::clamp(x[i], 0.0f, 1.0f);
+  };
   // The first estimate, and iteration 1's splits and right-hand sides.
   const Step first = step_of(settings_, 1);
   pool.run(height, [&](int from, int to, int worker) {
@@ -347,7 +354,10 @@ void TotalVariation::deconvolve(const RowLoader& load, int height, const Plane& 
         std::copy(row.begin(), row.end(), x);
         extend_row_periodically({x, n}, width_, blend_);
       }
-      finish_row(y, from, s, first.threshold_along, true, iterations > 0 ? &first : nullptr);
+      if (iterations == 0)
+        write_out(y);
+      else
+        finish_row(y, from, s, first.threshold_along, true, first);
     }
   });
   if (iterations > 0) finish_seams(shares, first, true);
@@ -370,28 +380,15 @@ void TotalVariation::deconvolve(const RowLoader& load, int height, const Plane& 
       for (int y = from; y < to; ++y) {
         auto* spectrum = reinterpret_cast<std::complex<float>*>(
             spectra_.data() + static_cast<std::size_t>(y) * spectrum_stride_);
-        float* x = x_.data() + static_cast<std::size_t>(y) * n;
-        fft_.inverse(spectrum, x);
-        if (!last) {
-          finish_row(y, from, s, next.threshold_along, false, &next);
-          continue;
-        }
-        auto row = out.row(y);
-        for (int i = 0; i < width_; ++i)
-          row[static_cast<std::size_t>(i)] = std::clamp(x[i], 0.0f, 1.0f);
+        fft_.inverse(spectrum, x_.data() + static_cast<std::size_t>(y) * n);
+        if (last)
+          write_out(y);
+        else
+          finish_row(y, from, s, next.threshold_along, false, next);
       }
     });
     if (!last) finish_seams(shares, next, false);
   }
-  if (iterations == 0)
-    pool.run(height, [&](int from, int to, int) {
-      for (int y = from; y < to; ++y) {
-        const float* x = x_.data() + static_cast<std::size_t>(y) * n;
-        auto row = out.row(y);
-        for (int i = 0; i < width_; ++i)
-          row[static_cast<std::size_t>(i)] = std::clamp(x[i], 0.0f, 1.0f);
-      }
-    });
 }
 
 Plane TotalVariation::deconvolve(std::span<const Plane> channels, const Plane& warm_start,

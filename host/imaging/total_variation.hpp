@@ -186,12 +186,12 @@ class TotalVariation {
   void split_edge(int edge, float threshold, bool restart);
   void transform_row(int y, Scratch& s, const Penalties& rho);
   /// Row y of x is this iteration's: its along and box splits (`threshold_along`),
-  /// then, if there is a `next` iteration, the edge above it (rows y - 1 and y are
-  /// both done) and the right-hand side of the row above (it waited for that edge).
+  /// then the `next` iteration's split of the edge above it (rows y - 1 and y are
+  /// both done) and right-hand side of the row above (it waited for that edge).
   /// `first`: the first row of this worker's share, whose edge above and
   /// right-hand side wait for finish_seams().
   void finish_row(int y, int first, Scratch& s, float threshold_along, bool restart,
-                  const Step* next);
+                  const Step& next);
   /// What finish_row() left at the shares' seams: the edges between shares, then
   /// the right-hand sides of each share's first and last rows.
   void finish_seams(std::span<const std::pair<int, int>> shares, const Step& next, bool restart);

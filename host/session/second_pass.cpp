@@ -260,8 +260,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
       continue;
     }
     const auto t0 = std::chrono::steady_clock::now();
-    // The window's passes before the isotropic try, and that try: each settled on its own.
-    double first_ms = 0, isotropic_ms = 0;
+    double isotropic_ms = 0;  // the isotropic try's, settled on its own
     imaging::Image crop;
     for (int c = 0; c < electrons.channel_count(); ++c) {
       crop.channels.push_back(imaging::Plane::uninitialised(c1 - c0, r1 - r0));
@@ -378,23 +377,20 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
       // upright), which a matrix code's modules and a turned label's bars are
       // not. The window once more with the same weight across as along, if the
       // budget holds a second tv; its latent stays where it reads.
-      if (held.empty() && retry.read.empty()) {
-        first_ms = ms_since(t0);
-        if (budget.take(estimate)) {
-          const auto t1 = std::chrono::steady_clock::now();
-          const DeblurOut isotropic = imaging::deblur(cropped.value(), frame.model, tv_isotropic);
-          if (isotropic.ok()) {
-            paste(isotropic.value().latent);
-            retry.isotropic = read_again(options.symbologies);
-            if (retry.isotropic->empty()) paste(patch);
-          }
-          isotropic_ms = ms_since(t1);
-          budget.settle(estimate, isotropic_ms, pixels);
+      if (held.empty() && retry.read.empty() && budget.take(estimate)) {
+        const auto t1 = std::chrono::steady_clock::now();
+        const DeblurOut isotropic = imaging::deblur(cropped.value(), frame.model, tv_isotropic);
+        if (isotropic.ok()) {
+          paste(isotropic.value().latent);
+          retry.isotropic = read_again(options.symbologies);
+          if (retry.isotropic->empty()) paste(patch);
         }
+        isotropic_ms = ms_since(t1);
+        budget.settle(estimate, isotropic_ms, pixels);
       }
     }
     retry.ms = ms_since(t0);
-    budget.settle(estimate, isotropic_ms > 0 ? first_ms : retry.ms, pixels);
+    budget.settle(estimate, retry.ms - isotropic_ms, pixels);
     out.retried.push_back(std::move(retry));
   }
   return out;
