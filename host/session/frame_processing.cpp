@@ -216,15 +216,29 @@ std::vector<reader::LabelRegion> judged_regions(const Decoded& decoded, double b
 
 /// The code regions in view: their part beyond unsupported_columns (where the
 /// latent often looks busy), at least two cells wide there; not those cut by
-/// the downstream edge.
-std::vector<reader::LabelRegion> code_in_view(const Decoded& decoded, double blur_px, int length) {
+/// the downstream edge, nor those coming into view: a code region reaching into
+/// the unsupported columns on paper that reaches into them too is a label's code
+/// still partly upstream of the view, whole in a later frame (counted in `entering`).
+std::vector<reader::LabelRegion> code_in_view(const Decoded& decoded, double blur_px, int length,
+                                              int& entering) {
   constexpr int kMinWidth = 32;
-  std::vector<reader::LabelRegion> regions = decoded.code;
   const int upstream = unsupported_columns(blur_px);
-  for (reader::LabelRegion& r : regions) r.begin = std::max(r.begin, upstream);
-  std::erase_if(regions, [&](const reader::LabelRegion& r) {
-    return r.end >= length || r.end - r.begin < kMinWidth;
-  });
+  std::vector<reader::LabelRegion> regions;
+  entering = 0;
+  for (reader::LabelRegion r : decoded.code) {
+    const bool on_entering_label =
+        r.begin < upstream &&
+        std::any_of(decoded.paper.begin(), decoded.paper.end(), [&](const reader::LabelRegion& p) {
+          return p.begin < upstream && p.overlaps(r);
+        });
+    r.begin = std::max(r.begin, upstream);
+    if (r.end >= length || r.end - r.begin < kMinWidth) continue;
+    if (on_entering_label) {
+      ++entering;
+      continue;
+    }
+    regions.push_back(r);
+  }
   return regions;
 }
 
@@ -386,17 +400,19 @@ void second_pass(Deblurred& image, Decoded& decoded, const FrameJob& job,
                                               : "the code's phase differs row by row"}};
     return;
   }
+  int entering = 0;
   const std::vector<reader::LabelRegion> unread = retry_regions(
       unread_runs(judged_regions(decoded, image.model.blur_px), decoded.readout, direction,
                   latent.width, latent.height),
-      unread_runs(code_in_view(decoded, image.model.blur_px, image.motion_latent.width),
+      unread_runs(code_in_view(decoded, image.model.blur_px, image.motion_latent.width, entering),
                   decoded.readout, direction, latent.width, latent.height));
+  if (entering > 0) out.log["second_pass"]["entering"] = entering;
   if (unread.empty()) return;
   const SecondPassFrame frame{image.electrons, image.model, image.motion_latent,
                               image.camera_latent ? &*image.camera_latent : nullptr, job.travel_px};
   const SecondPass pass = run_second_pass(frame, unread, reader_options(processing),
                                           shared.second_pass, shared.belt_reads, decoded.readout);
-  out.log["second_pass"] = pass.log(shared.second_pass.credit_ms());
+  out.log["second_pass"].update(pass.log(shared.second_pass.credit_ms()));
   if (pass.skipped > 0) flags.push_back("second-pass-budget");
 }
 
