@@ -270,9 +270,11 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
     }
     // The linear view first; a window it reads nothing in, again sRGB-encoded,
     // again from its black level, and its linear codes again to the paper.
-    for (const LuminanceView luminance :
-         {LuminanceView::kLinear, LuminanceView::kSrgb, LuminanceView::kSrgbFromBlack,
-          LuminanceView::kSrgbToPaper}) {
+    constexpr std::array<LuminanceView, kLuminanceViews> kViews = {
+        LuminanceView::kLinear, LuminanceView::kSrgb, LuminanceView::kSrgbFromBlack,
+        LuminanceView::kSrgbToPaper};
+    for (int v = 0; v < std::min(w.views, kLuminanceViews); ++v) {
+      const LuminanceView luminance = kViews[static_cast<std::size_t>(v)];
       const bool to_paper = luminance == LuminanceView::kSrgbToPaper;
       if (to_paper && linear.empty()) break;
       const ZXing::DecodeHints& view_hints = to_paper ? linear_hints : hints;
@@ -401,14 +403,9 @@ std::vector<LabelRegion> find_paper_runs(const imaging::Plane& latent, double pa
   // below the bars is still there: neighbouring runs are one label when every
   // column between them has paper in at least min_fraction of the rows the two
   // span (a belt between two labels has next to none).
-  auto bars_between = [&](const LabelRegion& a, const LabelRegion& b) {
-    if (!a.rows_measured() || !b.rows_measured() || a.across_begin >= b.across_end ||
-        b.across_begin >= a.across_end)
-      return false;
-    const int top = std::min(a.across_begin, b.across_begin);
-    const int bottom = std::max(a.across_end, b.across_end);
+  auto paper_through = [&](int x0, int x1, int top, int bottom) {
     const int gap_need = std::max(2, static_cast<int>(min_fraction * (bottom - top)));
-    for (int x = a.end; x < b.begin; ++x) {
+    for (int x = x0; x < x1; ++x) {
       int paper = 0;
       for (int y = top; y < bottom && paper < gap_need; ++y)
         paper += latent.at(x, y) > paper_threshold;
@@ -416,6 +413,22 @@ std::vector<LabelRegion> find_paper_runs(const imaging::Plane& latent, double pa
     }
     return true;
   };
+  auto bars_between = [&](const LabelRegion& a, const LabelRegion& b) {
+    if (!a.rows_measured() || !b.rows_measured() || a.across_begin >= b.across_end ||
+        b.across_begin >= a.across_end)
+      return false;
+    return paper_through(a.end, b.begin, std::min(a.across_begin, b.across_begin),
+                         std::max(a.across_end, b.across_end));
+  };
+  // A run that ends short of the frame's edge may still go on past it: through
+  // a dark gap no wider than max_gap (bars at the edge), or through bars with
+  // paper above and below them to the edge. Such a label is cut too.
+  auto reaches_edge = [&](const LabelRegion& r) {
+    if (r.begin <= max_gap || latent.width - r.end <= max_gap) return true;
+    return r.rows_measured() && (paper_through(0, r.begin, r.across_begin, r.across_end) ||
+                                 paper_through(r.end, latent.width, r.across_begin, r.across_end));
+  };
+  for (LabelRegion& r : runs) r.cut = r.cut || reaches_edge(r);
   std::vector<LabelRegion> joined;
   for (const LabelRegion& run : runs) {
     if (joined.empty() || !bars_between(joined.back(), run)) {

@@ -32,6 +32,8 @@ namespace flutterscan::reader {
 /// lies beside it on its rows, which ZXing's per-row threshold for linear
 /// codes takes for the white).
 enum class LuminanceView { kLinear, kSrgb, kSrgbFromBlack, kSrgbToPaper };
+/// The luminance views, in the order a window is read in them.
+inline constexpr int kLuminanceViews = 4;
 
 /// \brief The linear (1-D) symbologies among `symbologies` (ZXing's names, as
 /// processing.symbologies gives them); empty if it names none.
@@ -94,14 +96,16 @@ std::pair<double, double> corner_rows(const DecodedCode& code);
 /// two latents may be found over different rows of its bars.
 bool same_symbol(const DecodedCode& a, const DecodedCode& b);
 
-/// \brief A rectangle of the latent image to decode: columns [x, x + width), rows [y, y + height).
+/// \brief A rectangle of the latent image to decode: columns [x, x + width), rows [y, y + height),
+/// read in at most its first `views` luminance views (LuminanceView's order).
 struct DecodeWindow {
   int x = 0, y = 0, width = 0, height = 0;
+  int views = kLuminanceViews;
 };
 
 /// \brief Every barcode of the named symbologies (check_symbologies() passed)
 /// ZXing reads on `latent` (reflectance, clipped to 0..1), inside `windows`
-/// (each decoded on its own; none: the whole image), each window on the
+/// (each decoded on its own, in at most its `views`; none: the whole image), each window on the
 /// linear view and, where that reads nothing, on the sRGB-encoded one, then on
 /// the sRGB-encoded one from the window's black level, then (its linear
 /// symbologies only) from the black level to the paper (LuminanceView). A
@@ -129,7 +133,9 @@ BarcodeReadout read_barcodes_turned(const imaging::Plane& latent, const DecodeWi
 struct LabelRegion {
   int begin = 0;
   int end = 0;
-  bool cut = false;  ///< touches the first or last column: the label may go on outside the frame
+  /// Touches the first or last column, or reaches it through a dark gap of at most max_gap or
+  /// through bars with paper above and below them: the label may go on outside the frame.
+  bool cut = false;
   /// Rows of the paper across the motion; both 0: not measured (every row).
   int across_begin = 0;
   int across_end = 0;

@@ -11,8 +11,9 @@ CodeReading read_codes(const imaging::Plane& latent, std::span<const LabelRegion
     out.readout = read_barcodes(latent, options.symbologies, options.try_rotate);
     return out;
   }
-  const std::vector<DecodeWindow> windows =
-      decode_windows(paper, latent.width, latent.height, direction);
+  std::vector<DecodeWindow> windows = decode_windows(paper, latent.width, latent.height, direction);
+  for (std::size_t i = 0; i < windows.size(); ++i)
+    if (paper[i].cut) windows[i].views = options.cut_window_views;
   out.windows = windows.size();
   if (!windows.empty())
     out.readout = read_barcodes(latent, options.symbologies, options.try_rotate, windows);

@@ -23,8 +23,9 @@ struct CodeReading {
 
 /// \brief The codes of `latent` (camera orientation) in `options.area`: the
 /// whole frame, or the windows around `paper` (find_paper_runs on the latent
-/// in the motion frame of `direction`); with area "labels" and no paper,
-/// nothing is read. Positions are the latent's.
+/// in the motion frame of `direction`; those cut by the frame's edge in
+/// options.cut_window_views); with area "labels" and no paper, nothing is
+/// read. Positions are the latent's.
 CodeReading read_codes(const imaging::Plane& latent, std::span<const LabelRegion> paper,
                        imaging::Direction direction, const ReaderOptions& options);
 

@@ -20,6 +20,10 @@ struct ReaderOptions {
   bool try_rotate = true;
   /// The label paper only (windows around the paper runs) or the whole frame.
   DecodeArea area = DecodeArea::kLabels;
+  /// The luminance views a window of paper or print cut by the frame's edge is
+  /// read in (area "labels"): all of them, or fewer where the label is seen
+  /// whole in another frame (the session's line: the linear view only).
+  int cut_window_views = kLuminanceViews;
 };
 
 /// \brief The default options, reading the whole frame: what the benches and

@@ -120,9 +120,11 @@ bool set_processing_method(const std::string& name, ProcessingConfig& processing
 /// \brief The method `processing` names: "cascade" or the imaging method's name.
 std::string processing_method_name(const ProcessingConfig& processing);
 
-/// \brief The reader's options of `processing`: symbologies, try_rotate and decode_area.
+/// \brief The reader's options of `processing`: symbologies, try_rotate and
+/// decode_area; a window of paper or print cut by the frame's edge in the
+/// linear view only (the line sees its label whole in another frame).
 inline reader::ReaderOptions reader_options(const ProcessingConfig& processing) {
-  return {processing.symbologies, processing.try_rotate, processing.decode_area};
+  return {processing.symbologies, processing.try_rotate, processing.decode_area, 1};
 }
 
 struct OutputConfig {

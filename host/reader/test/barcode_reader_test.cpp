@@ -164,6 +164,11 @@ TEST(BarcodeReader, DarkPrintTheLinearViewCannotSeparateIsReadOnTheSrgbView) {
   ASSERT_EQ(readout.codes.size(), 1u);
   EXPECT_EQ(readout.codes[0].text, "DARK-01");
   EXPECT_EQ(readout.codes[0].luminance, LuminanceView::kSrgb);
+  // A window read in its first view only does not get to the sRGB view.
+  DecodeWindow first_view{0, 0, card.width, card.height, 1};
+  EXPECT_TRUE(read_barcodes(card, kDefaultSymbologies, true, {&first_view, 1}).codes.empty());
+  first_view.views = 2;
+  EXPECT_EQ(read_barcodes(card, kDefaultSymbologies, true, {&first_view, 1}).codes.size(), 1u);
   // Print the linear view reads is read there, once.
   for (float& v : card.pixels) v = v > 0.03f ? 0.9f : 0.05f;
   const BarcodeReadout bright = read_barcodes(card);
@@ -246,6 +251,31 @@ TEST(BarcodeReader, PaperRunsFindLabelsAndFlagThoseCutByTheFrame) {
   const auto judged = find_label_regions(image);
   ASSERT_EQ(judged.size(), 2u);
   EXPECT_EQ(judged[1].begin, 500);
+}
+
+// A label leaving the frame with its bars at the edge: its paper columns end
+// short of the last column (above and below the bars, fewer than 5% of the
+// frame's rows are paper), but the label goes on past it.
+TEST(BarcodeReader, ALabelWhoseBarsReachTheFramesEdgeIsCut) {
+  for (const int bars_wide : {12, 40}) {  // within max_gap of the edge, and wider
+    imaging::Plane scene(900, 600, 0.2f);
+    for (int y = 40; y < 160; ++y)
+      for (int x = 600; x < 900; ++x) scene.at(x, y) = 0.9f;
+    for (int y = 50; y < 150; ++y)  // bars from its paper's top and bottom margin to the edge
+      for (int x = 900 - bars_wide; x < 900; ++x) scene.at(x, y) = (x / 3) % 2 ? 0.05f : 0.3f;
+    const auto runs = find_paper_runs(scene);
+    ASSERT_EQ(runs.size(), 1u) << bars_wide;
+    EXPECT_EQ(runs[0].end, 900 - bars_wide);
+    EXPECT_TRUE(runs[0].cut) << bars_wide;
+    EXPECT_TRUE(find_label_regions(scene).empty()) << bars_wide;
+  }
+  // A label that ends before the edge, the belt beside it: whole.
+  imaging::Plane whole(900, 600, 0.2f);
+  for (int y = 40; y < 160; ++y)
+    for (int x = 600; x < 860; ++x) whole.at(x, y) = 0.9f;
+  const auto runs = find_paper_runs(whole);
+  ASSERT_EQ(runs.size(), 1u);
+  EXPECT_FALSE(runs[0].cut);
 }
 
 TEST(BarcodeReader, ALabelWhoseNarrowSpacesFallBelowPaperIsOneRunAndALabelBesideItAnother) {

@@ -43,6 +43,28 @@ TEST(CodeReading, TheDefaultsAreTheSessionsAndTheWholeFrameDiffersOnlyInArea) {
   EXPECT_EQ(whole.area, DecodeArea::kFrame);
 }
 
+// A label cut by the frame's edge is read in options.cut_window_views: the
+// session's line, which sees it whole in another frame, in the linear view only.
+TEST(CodeReading, AWindowCutByTheFramesEdgeIsReadInTheViewsTheOptionsGiveIt) {
+  imaging::Plane belt = belt_with_code(300, true);
+  for (float& v : belt.pixels) v *= 0.05f;  // dark print on dark card: the sRGB view reads it
+  LabelRegion region{280, 640, false, 10, 190};
+  ReaderOptions options;
+  EXPECT_EQ(options.cut_window_views, kLuminanceViews);
+  const std::vector<std::string> read{"FS-READ"};
+  EXPECT_EQ(code_texts(read_codes(belt, {&region, 1}, imaging::Direction::kPlusX, options).readout),
+            read);
+  options.cut_window_views = 1;  // whole: all the views still
+  EXPECT_EQ(code_texts(read_codes(belt, {&region, 1}, imaging::Direction::kPlusX, options).readout),
+            read);
+  region.cut = true;
+  EXPECT_TRUE(
+      read_codes(belt, {&region, 1}, imaging::Direction::kPlusX, options).readout.codes.empty());
+  options.cut_window_views = kLuminanceViews;
+  EXPECT_EQ(code_texts(read_codes(belt, {&region, 1}, imaging::Direction::kPlusX, options).readout),
+            read);
+}
+
 TEST(CodeReading, OnlyTheWholeFrameReadsACodeWithoutPaper) {
   const imaging::Plane belt = belt_with_code(300, false);
   const auto paper = find_paper_runs(belt);
