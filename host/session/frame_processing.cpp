@@ -390,9 +390,7 @@ void second_pass(Deblurred& image, Decoded& decoded, const FrameJob& job,
   const imaging::Plane& latent = image.latent();
   const imaging::Direction direction = image.model.direction;
   for (const reader::DecodedCode& code : decoded.readout.codes)
-    shared.belt_reads.add(imaging::position_along_motion(direction, code.centre_x, code.centre_y,
-                                                         latent.width, latent.height) -
-                          job.travel_px);
+    shared.belt_reads.add(belt_box(code, direction, latent.width, latent.height, job.travel_px));
   shared.second_pass.add_frame(job.index, job.frame.timestamp_ns, first_pass_ms);
   if (!image.grey_global && !image.per_channel) {
     out.log["second_pass"] = {{"not_run", image.electrons.channel_count() == 0

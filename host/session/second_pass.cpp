@@ -106,19 +106,42 @@ Result<imaging::DeblurResult, std::string> deblur_bar_sums(const imaging::Motion
 
 }  // namespace
 
-void BeltReads::add(double belt_px) {
+BeltBox belt_box(const reader::DecodedCode& code, imaging::Direction direction, int width,
+                 int height, double travel_px) {
+  const bool along_x = imaging::moves_along_x(direction);
+  BeltBox box;
+  bool first = true;
+  for (const reader::CodePoint& p : code.quality.corners) {
+    const double along = imaging::position_along_motion(direction, p.x, p.y, width, height);
+    const double across = along_x ? p.y : p.x;
+    box.begin = first ? along : std::min(box.begin, along);
+    box.end = first ? along : std::max(box.end, along);
+    box.across_begin = first ? across : std::min(box.across_begin, across);
+    box.across_end = first ? across : std::max(box.across_end, across);
+    first = false;
+  }
+  box.begin -= travel_px;
+  box.end -= travel_px;
+  return box;
+}
+
+void BeltReads::add(const BeltBox& code) {
   const std::lock_guard lock(mutex_);
   if (reads_.size() < kKept)
-    reads_.push_back(belt_px);
+    reads_.push_back(code);
   else
-    reads_[next_] = belt_px;
+    reads_[next_] = code;
   next_ = (next_ + 1) % kKept;
 }
 
-bool BeltReads::any_within(double begin_px, double end_px, double slack_px) const {
+bool BeltReads::any_over(const BeltBox& region) const {
   const std::lock_guard lock(mutex_);
-  return std::any_of(reads_.begin(), reads_.end(),
-                     [&](double u) { return u >= begin_px - slack_px && u <= end_px + slack_px; });
+  const bool lines_given = region.across_end > region.across_begin;
+  return std::any_of(reads_.begin(), reads_.end(), [&](const BeltBox& code) {
+    return code.begin <= region.end && code.end >= region.begin &&
+           (!lines_given ||
+            (code.across_begin <= region.across_end && code.across_end >= region.across_begin));
+  });
 }
 
 SecondPassBudget::SecondPassBudget(double per_frame_ms, int workers)
@@ -240,7 +263,9 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
   tv_isotropic.tv_across_ratio = 1;
   const std::string linear = reader::linear_symbologies(options.symbologies);
   for (const reader::LabelRegion& run : unread) {
-    if (reads.any_within(run.begin - frame.travel_px, run.end - frame.travel_px, 0)) {
+    if (reads.any_over({run.begin - frame.travel_px, run.end - frame.travel_px,
+                        static_cast<double>(run.across_begin),
+                        static_cast<double>(run.across_end)})) {
       ++out.read_before;
       continue;
     }
@@ -312,9 +337,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
                         [&](const reader::DecodedCode& c) { return reader::same_symbol(c, code); }))
           continue;
         texts.push_back(code.text);
-        reads.add(imaging::position_along_motion(direction, code.centre_x, code.centre_y,
-                                                 camera_width, camera_height) -
-                  frame.travel_px);
+        reads.add(belt_box(code, direction, camera_width, camera_height, frame.travel_px));
         readout.codes.push_back(std::move(code));
       }
       retry.read.insert(retry.read.end(), texts.begin(), texts.end());

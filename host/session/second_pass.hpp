@@ -63,20 +63,34 @@ class SecondPassBudget {
   double ms_per_megapixel_ = 80;  ///< tv-40 on one thread, updated by every window
 };
 
-/// \brief Where on the belt codes were read lately (belt px: position along
-/// the motion less the belt's travel), shared by the workers: a window whose
-/// object was read in another frame needs no second pass, so the budget goes
-/// to the objects not read yet. Bounded: the last kKept reads.
+/// \brief Where something lies on the belt: [begin, end) along the motion in
+/// belt px (position along the motion less the belt's travel) and [across_begin,
+/// across_end) across it (the motion frame's lines; both 0: every line).
+struct BeltBox {
+  double begin = 0, end = 0;
+  double across_begin = 0, across_end = 0;
+};
+
+/// \brief The box `code` (read on a latent `width` x `height` in the camera's
+/// orientation) covers on the belt at `travel_px`: its corners' extent.
+BeltBox belt_box(const reader::DecodedCode& code, imaging::Direction direction, int width,
+                 int height, double travel_px);
+
+/// \brief Where on the belt codes were read lately, shared by the workers: a
+/// window whose object was read in another frame needs no second pass, so the
+/// budget goes to the objects not read yet. Bounded: the last kKept reads.
 class BeltReads {
  public:
   static constexpr std::size_t kKept = 256;
-  void add(double belt_px);
-  /// \brief Whether a read lies within [begin_px - slack_px, end_px + slack_px].
-  bool any_within(double begin_px, double end_px, double slack_px) const;
+  void add(const BeltBox& code);
+  /// \brief Whether a code read covers part of `region` (along the motion, and
+  /// across it where the region's lines are given): a code leaving the view
+  /// whose centre has left already still counts.
+  bool any_over(const BeltBox& region) const;
 
  private:
   mutable std::mutex mutex_;
-  std::vector<double> reads_;  ///< a ring of kKept
+  std::vector<BeltBox> reads_;  ///< a ring of kKept
   std::size_t next_ = 0;
 };
 

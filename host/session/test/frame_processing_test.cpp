@@ -9,6 +9,7 @@
 #include <array>
 #include <chrono>
 #include <functional>
+#include <iostream>
 #include <optional>
 #include <set>
 
@@ -33,7 +34,7 @@ SessionConfig small_config() {
 
 /// The first `count` frames of a sim belt 640x240 (labels 100 px apart), each
 /// with the event that lit it (the encoder's counts from the frame's own
-/// descriptor), at the light of config.optics.electrons: those `keep` takes
+/// descriptor) and the belt's travel, at the light of config.optics.electrons: those `keep` takes
 /// (given the frame and its number from 0), at most `max_kept`.
 std::vector<FrameJob> belt_frames(const SessionConfig& config, int count,
                                   const std::function<bool(const capture::Frame&, int)>& keep,
@@ -64,6 +65,7 @@ std::vector<FrameJob> belt_frames(const SessionConfig& config, int count,
     const auto model = imaging::from_descriptor(nlohmann::json::parse(job.frame.descriptor_json));
     EXPECT_TRUE(model.ok());
     job.index = static_cast<std::uint64_t>(i);
+    job.travel_px = i * belt.speed_px_per_s * belt.frame_period_us * 1e-6;
     job.event.frame_counter = static_cast<std::uint32_t>(i + 1);
     job.event.slot_count = static_cast<std::uint16_t>(config.controller.parsed_code.length());
     job.event.slot_time_us = config.controller.slot_time_us;
@@ -392,26 +394,35 @@ TEST(FrameProcessing, AWindowTheBudgetCannotPayForIsFlaggedAndStaysANoRead) {
 // A label coming into view upstream: its code region reaches into the columns
 // the latent has no support in (within a blur of the upstream edge), on paper
 // that reaches into them too. The second pass leaves it for a later frame,
-// logged as entering, and every label reads once whole in view.
-TEST(SecondPass, ACodeComingIntoViewOnItsLabelIsLeftForALaterFrame) {
+// logged as entering, as it leaves a code going out of view downstream, and
+// every label reads once whole in view.
+TEST(SecondPass, CodesComingIntoOrGoingOutOfViewAreLeftForAnotherFrame) {
   SessionConfig config = small_config();
   config.processing.cascade = true;
   config.processing.second_pass_ms = kMaxSecondPassMs;  // offline: every window it takes
   ASSERT_EQ(check_config(config), "");
   std::vector<FrameJob> jobs = belt_frames(
       config, 24, [](const capture::Frame&, int) { return true; }, 24);
-  int entering = 0;
+  int entering = 0, retried = 0;
   std::set<std::string> whole, read;
+  WorkerShared shared(config);
   for (FrameJob& job : jobs) {
     whole.insert(job.frame.truth.begin(), job.frame.truth.end());
-    WorkerShared shared(config);  // each frame on its own: the belt's travel is not known here
     const FrameOutcome out = process_frame(job, config, shared, nullptr);
     ASSERT_TRUE(out.processed) << out.log.dump();
     entering += out.log.value("/second_pass/entering"_json_pointer, 0);
+    // Nor is a code leaving the view downstream (whole in an earlier frame) deblurred again.
+    if (out.log.contains("second_pass") && out.log["second_pass"].contains("windows"))
+      for (const auto& w : out.log["second_pass"]["windows"]) {
+        ++retried;
+        EXPECT_LT(w["x"].get<int>() + w["width"].get<int>(), job.frame.format.width) << w.dump();
+      }
     for (const Sighting& s : out.sightings)
       if (s.decoded) read.insert(s.value);
   }
   EXPECT_GE(entering, 1) << "no label came into view in " << jobs.size() << " frames";
+  std::cout << entering << " code region(s) left as they came into view, " << retried
+            << " window(s) deblurred again\n";
   ASSERT_FALSE(whole.empty());
   for (const std::string& value : whole) EXPECT_EQ(read.count(value), 1u) << value;
 }
@@ -432,6 +443,31 @@ TEST(SecondPass, RetriesEveryUnreadLabelAndTheCodeRegionsOffThem) {
   EXPECT_EQ(retry_regions(measured_paper, code_below).size(), 2u);
   EXPECT_EQ(retry_regions({}, code).size(), 2u);
   EXPECT_TRUE(retry_regions({}, {}).empty());
+}
+
+// A code read covers a box on the belt: a window over part of it (a label
+// leaving the view, its code's centre gone past the edge) was read already; a
+// window beside it along the motion, or above or below it, was not.
+TEST(BeltReads, ACodeReadCoversItsWholeBoxOnTheBelt) {
+  reader::DecodedCode code;
+  code.quality.corners = {{{600, 100}, {800, 100}, {800, 160}, {600, 160}}};
+  const BeltBox box = belt_box(code, imaging::Direction::kPlusX, 1000, 400, 250);
+  EXPECT_DOUBLE_EQ(box.begin, 600 - 250);
+  EXPECT_DOUBLE_EQ(box.end, 800 - 250);
+  EXPECT_DOUBLE_EQ(box.across_begin, 100);
+  EXPECT_DOUBLE_EQ(box.across_end, 160);
+  // Moving -y the rows run along the motion, from the bottom; the columns across it.
+  const BeltBox turned = belt_box(code, imaging::Direction::kMinusY, 1000, 400, 0);
+  EXPECT_DOUBLE_EQ(turned.begin, 399 - 160);
+  EXPECT_DOUBLE_EQ(turned.end, 399 - 100);
+  EXPECT_DOUBLE_EQ(turned.across_begin, 600);
+  BeltReads reads;
+  EXPECT_FALSE(reads.any_over({0, 1000, 0, 0}));
+  reads.add(box);
+  EXPECT_TRUE(reads.any_over({500, 620, 90, 170}));    // the code's downstream end, centre beyond
+  EXPECT_TRUE(reads.any_over({500, 620, 0, 0}));       // lines not given: every line
+  EXPECT_FALSE(reads.any_over({560, 700, 90, 170}));   // beyond it along the motion
+  EXPECT_FALSE(reads.any_over({400, 500, 200, 260}));  // below it
 }
 
 TEST(SecondPassBudget, CreditFollowsTheFramePeriodTheWorkersAndTheFirstPass) {
