@@ -23,7 +23,8 @@ ResultsStage::ResultsStage(const SessionConfig& config, int belt_length_px, std:
       folder_(folder),
       server_(server),
       mqtt_(mqtt),
-      tracker_(belt_length_px, config.processing.object_match_px) {}
+      tracker_(belt_length_px, config.processing.object_match_px),
+      saver_(folder) {}
 
 void ResultsStage::run(const std::function<void(const Progress&)>& progress) {
   std::int64_t last_progress = 0;
@@ -50,6 +51,8 @@ void ResultsStage::take(FrameOutcome outcome) {
 
 void ResultsStage::finish() {
   publish(tracker_.finish_all());
+  if (auto error = saver_.finish(); !error.empty() && results_.save_error.empty())
+    results_.save_error = error;
 }
 
 void ResultsStage::handle(FrameOutcome& f) {
@@ -106,12 +109,13 @@ void ResultsStage::handle_processed(FrameOutcome& f) {
   if (keep && !dn.ok()) {
     if (results_.save_error.empty()) results_.save_error = dn.error();
   } else if (keep) {
-    if (auto p = folder_.save_frame(f.sequence, dn.value(), f.descriptor, &f.latent); !p.empty()) {
-      if (results_.save_error.empty()) results_.save_error = p;
-    } else {
+    if (saver_.offer(f.sequence, dn.value(), f.descriptor, f.latent)) {
       ++results_.frames_saved;
       f.log["files_saved"] = true;
       kept_frame = SessionFolder::frame_file(f.sequence);
+    } else {
+      ++results_.frames_not_saved;
+      f.log["files_saved"] = false;  // the writer was busy: the frame goes on unsaved
     }
   }
   // The record's wall-clock time: now, less the time since the frame arrived.

@@ -15,6 +15,7 @@
 #include <string>
 #include <vector>
 
+#include "session/frame_saver.hpp"
 #include "session/object_tracker.hpp"
 #include "session/pipeline.hpp"
 #include "session/rate_timeline.hpp"
@@ -81,6 +82,9 @@ struct SessionResults {
   std::set<std::string> truth_seen;     ///< sim: labels whole in some frame
   std::set<std::string> truth_in_view;  ///< sim: labels at least partly in some frame
   std::uint64_t frames_saved = 0;
+  /// Frames to keep whose files were not written: the writer was still busy with
+  /// earlier ones (FrameSaver; the pipeline never waits for the disk).
+  std::uint64_t frames_not_saved = 0;
   std::string save_error;  ///< the first frame file that could not be saved
   std::map<std::string, std::uint64_t> models_chosen;   ///< by model
   std::map<std::string, std::uint64_t> frames_flagged;  ///< by flag
@@ -146,6 +150,7 @@ class ResultsStage {
   int previews_failed_ = 0;
   SessionResults results_;
   LiveView* live_view_ = nullptr;
+  FrameSaver saver_;  ///< last: its writer stops before the rest goes
 };
 
 }  // namespace flutterscan::session

@@ -103,6 +103,7 @@ nlohmann::json session_summary(const SessionConfig& config, const SessionCounts&
   s["clock_fit_points"] = counts.clocks.points;
   s["stopped_by"] = counts.stopped_by;
   s["frames_saved"] = results.frames_saved;
+  s["frames_not_saved"] = results.frames_not_saved;
   s["models_chosen"] = results.models_chosen;
   // By flag: saturated, misfit, blur-disagrees, no-read, ...
   s["frames_flagged"] = results.frames_flagged;

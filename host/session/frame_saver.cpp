@@ -1,0 +1,51 @@
+#include "session/frame_saver.hpp"
+
+#include <utility>
+
+namespace flutterscan::session {
+
+FrameSaver::FrameSaver(SessionFolder& folder, std::size_t queued)
+    : folder_(folder), queued_(queued), writer_([this] { write_queued(); }) {}
+
+FrameSaver::~FrameSaver() {
+  finish();
+}
+
+bool FrameSaver::offer(std::uint64_t sequence, imaging::Image dn, nlohmann::json descriptor,
+                       imaging::Plane fused) {
+  {
+    const std::lock_guard lock(mutex_);
+    if (stopping_ || frames_.size() >= queued_) return false;
+    frames_.push_back({sequence, std::move(dn), std::move(descriptor), std::move(fused)});
+  }
+  wake_.notify_one();
+  return true;
+}
+
+std::string FrameSaver::finish() {
+  {
+    const std::lock_guard lock(mutex_);
+    stopping_ = true;
+  }
+  wake_.notify_one();
+  if (writer_.joinable()) writer_.join();
+  const std::lock_guard lock(mutex_);
+  return error_;
+}
+
+void FrameSaver::write_queued() {
+  std::unique_lock lock(mutex_);
+  while (true) {
+    wake_.wait(lock, [&] { return stopping_ || !frames_.empty(); });
+    if (frames_.empty()) return;  // stopping, nothing left
+    Frame frame = std::move(frames_.front());
+    frames_.pop_front();
+    lock.unlock();
+    const std::string error = folder_.save_frame(frame.sequence, frame.dn, frame.descriptor,
+                                                 frame.fused.empty() ? nullptr : &frame.fused);
+    lock.lock();
+    if (!error.empty() && error_.empty()) error_ = error;
+  }
+}
+
+}  // namespace flutterscan::session
