@@ -1,5 +1,9 @@
 #include "session/frame_saver.hpp"
 
+#include <sys/resource.h>
+#include <sys/syscall.h>
+#include <unistd.h>
+
 #include <utility>
 
 namespace flutterscan::session {
@@ -9,6 +13,11 @@ FrameSaver::FrameSaver(SessionFolder& folder, std::size_t queued)
 
 FrameSaver::~FrameSaver() {
   finish();
+}
+
+bool FrameSaver::has_room() {
+  const std::lock_guard lock(mutex_);
+  return !stopping_ && frames_.size() < queued_;
 }
 
 bool FrameSaver::offer(std::uint64_t sequence, imaging::Image dn, nlohmann::json descriptor,
@@ -34,6 +43,9 @@ std::string FrameSaver::finish() {
 }
 
 void FrameSaver::write_queued() {
+  // Below the workers: on a loaded line the CPU goes to the frames, and a frame
+  // the writer has no time for is not saved (offer() refuses it), not waited for.
+  setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), kWriterNice);
   std::unique_lock lock(mutex_);
   while (true) {
     wake_.wait(lock, [&] { return stopping_ || !frames_.empty(); });

@@ -22,12 +22,17 @@ namespace flutterscan::session {
 
 class FrameSaver {
  public:
+  /// The writer thread's nice value: below the workers (0).
+  static constexpr int kWriterNice = 10;
   /// \brief Saves into `folder`, holding at most `queued` frames waiting.
   explicit FrameSaver(SessionFolder& folder, std::size_t queued = 2);
   ~FrameSaver();
   FrameSaver(const FrameSaver&) = delete;
   FrameSaver& operator=(const FrameSaver&) = delete;
 
+  /// \brief Whether offer() would take a frame now (only the writer takes frames
+  /// off the queue, so for the one thread that offers, room stays room).
+  bool has_room();
   /// \brief Queues frame `sequence`'s files (SessionFolder::save_frame); false,
   /// and nothing queued, when `queued` frames wait already or finish() was called.
   bool offer(std::uint64_t sequence, imaging::Image dn, nlohmann::json descriptor,

@@ -94,8 +94,14 @@ void ResultsStage::handle_processed(FrameOutcome& f) {
       ++results_.reads_by_grade[std::string(1, s.code.quality.grade)];
       low_grade = low_grade || s.code.quality.grade_value < kLowGradeValue;
     }
-  const bool keep = static_cast<int>(results_.frames_saved) < config_.output.keep_first_frames ||
-                    ((f.decode_failed || low_grade) && config_.output.keep_failed_frames);
+  const bool first = first_frames_kept_ < config_.output.keep_first_frames;
+  bool keep = first || ((f.decode_failed || low_grade) && config_.output.keep_failed_frames);
+  if (keep && first) ++first_frames_kept_;
+  if (keep && !saver_.has_room()) {  // the writer is behind: the frame goes on unsaved
+    keep = false;
+    ++results_.frames_not_saved;
+    f.log["files_saved"] = false;
+  }
   // The report shows the first frames with a read label, and failures (made only
   // for a report: each costs tens of ms of this thread in the session's first second).
   const bool read_something = std::any_of(f.sightings.begin(), f.sightings.end(),
@@ -113,9 +119,6 @@ void ResultsStage::handle_processed(FrameOutcome& f) {
       ++results_.frames_saved;
       f.log["files_saved"] = true;
       kept_frame = SessionFolder::frame_file(f.sequence);
-    } else {
-      ++results_.frames_not_saved;
-      f.log["files_saved"] = false;  // the writer was busy: the frame goes on unsaved
     }
   }
   // The record's wall-clock time: now, less the time since the frame arrived.

@@ -146,6 +146,7 @@ class ResultsStage {
   ObjectTracker tracker_;
   std::map<std::uint64_t, FrameOutcome> waiting_;  ///< by index, until the earlier ones came
   std::uint64_t next_ = 0;
+  int first_frames_kept_ = 0;  ///< of output.keep_first_frames, those offered to the writer
   int previews_read_ = 0;
   int previews_failed_ = 0;
   SessionResults results_;

@@ -450,18 +450,28 @@ int main(int argc, char** argv) {
   if (live_view) return live_view_table(width, height, frames, out);
 
   std::vector<Run> runs;
+  // The last two keep frame files as a line does by default (the first 10, and
+  // every NO-READ or D/F read); the others keep none (bench_config()).
   const struct {
     const char* name;
     bool paced;
     int period_us;
-  } cases[] = {{"as fast as possible", false, 16667},
-               {"30 fps input", true, 33333},
-               {"60 fps input", true, 16667}};
+    bool keep_frames;
+  } cases[] = {{"as fast as possible", false, 16667, false},
+               {"30 fps input", true, 33333, false},
+               {"60 fps input", true, 16667, false},
+               {"30 fps input, frames kept", true, 33333, true},
+               {"60 fps input, frames kept", true, 16667, true}};
   for (const auto& c : cases) {
     fs::remove_all(out);
     std::atomic<bool> stop{false};
-    const auto outcome = session::run_session(
-        bench_config(width, height, frames, c.paced, c.period_us, out), stop, {});
+    session::SessionConfig config = bench_config(width, height, frames, c.paced, c.period_us, out);
+    if (c.keep_frames) {
+      const session::OutputConfig line_default;
+      config.output.keep_first_frames = line_default.keep_first_frames;
+      config.output.keep_failed_frames = line_default.keep_failed_frames;
+    }
+    const auto outcome = session::run_session(config, stop, {});
     if (!outcome.error.empty()) {
       std::cerr << "session_bench: " << c.name << ": " << outcome.error << "\n";
       return 1;
@@ -470,8 +480,8 @@ int main(int argc, char** argv) {
         {c.name, outcome.summary, stage_medians(fs::path(outcome.folder) / "session.jsonl")});
   }
   std::cout << "| input | frames in | processed | dropped | seconds | fps out | latency p50 ms | "
-               "p99 ms |\n"
-            << "|---|---|---|---|---|---|---|---|\n";
+               "p99 ms | frames saved, not saved |\n"
+            << "|---|---|---|---|---|---|---|---|---|\n";
   std::ofstream table;
   if (!csv.empty()) {
     table.open(csv);
@@ -481,7 +491,8 @@ int main(int argc, char** argv) {
     const auto& s = r.summary;
     std::cout << "| " << r.name << " | " << s["frames_captured"] << " | " << s["frames_processed"]
               << " | " << s["frames_dropped"] << " | " << s["duration_s"] << " | " << s["fps"]
-              << " | " << s["latency_ms_p50"] << " | " << s["latency_ms_p99"] << " |\n";
+              << " | " << s["latency_ms_p50"] << " | " << s["latency_ms_p99"] << " | "
+              << s["frames_saved"] << ", " << s["frames_not_saved"] << " |\n";
     if (table.is_open())
       table << '"' << r.name << "\"," << s["frames_captured"] << "," << s["frames_processed"] << ","
             << s["frames_dropped"] << "," << s["fps"] << "," << s["latency_ms_p50"] << ","
