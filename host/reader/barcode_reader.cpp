@@ -386,7 +386,6 @@ std::vector<LabelRegion> find_paper_runs(const imaging::Plane& latent, double pa
     }
   }
   for (LabelRegion& r : runs) {
-    r.cut = r.begin == 0 || r.end == latent.width;
     const int row_need = std::max(1, static_cast<int>(min_fraction * (r.end - r.begin)));
     for (int y = 0; y < latent.height; ++y) {
       const float* row = latent.row(y).data();
@@ -420,15 +419,15 @@ std::vector<LabelRegion> find_paper_runs(const imaging::Plane& latent, double pa
     return paper_through(a.end, b.begin, std::min(a.across_begin, b.across_begin),
                          std::max(a.across_end, b.across_end));
   };
-  // A run that ends short of the frame's edge may still go on past it: through
-  // a dark gap no wider than max_gap (bars at the edge), or through bars with
-  // paper above and below them to the edge. Such a label is cut too.
+  // Cut: a run that touches the frame's edge, or ends short of it and may still
+  // go on past it: through a dark gap no wider than max_gap (bars at the edge),
+  // or through bars with paper above and below them to the edge.
   auto reaches_edge = [&](const LabelRegion& r) {
     if (r.begin <= max_gap || latent.width - r.end <= max_gap) return true;
     return r.rows_measured() && (paper_through(0, r.begin, r.across_begin, r.across_end) ||
                                  paper_through(r.end, latent.width, r.across_begin, r.across_end));
   };
-  for (LabelRegion& r : runs) r.cut = r.cut || reaches_edge(r);
+  for (LabelRegion& r : runs) r.cut = reaches_edge(r);
   std::vector<LabelRegion> joined;
   for (const LabelRegion& run : runs) {
     if (joined.empty() || !bars_between(joined.back(), run)) {

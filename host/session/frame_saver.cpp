@@ -17,6 +17,10 @@ FrameSaver::~FrameSaver() {
 
 bool FrameSaver::has_room() {
   const std::lock_guard lock(mutex_);
+  return room_locked();
+}
+
+bool FrameSaver::room_locked() const {
   return !stopping_ && frames_.size() < queued_;
 }
 
@@ -24,7 +28,7 @@ bool FrameSaver::offer(std::uint64_t sequence, imaging::Image dn, nlohmann::json
                        imaging::Plane fused) {
   {
     const std::lock_guard lock(mutex_);
-    if (stopping_ || frames_.size() >= queued_) return false;
+    if (!room_locked()) return false;
     frames_.push_back({sequence, std::move(dn), std::move(descriptor), std::move(fused)});
   }
   wake_.notify_one();

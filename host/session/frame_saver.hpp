@@ -49,6 +49,7 @@ class FrameSaver {
     imaging::Plane fused;
   };
   void write_queued();
+  bool room_locked() const;  ///< has_room(), mutex_ held
 
   SessionFolder& folder_;
   const std::size_t queued_;

@@ -96,7 +96,7 @@ void ResultsStage::handle_processed(FrameOutcome& f) {
     }
   const bool first = first_frames_kept_ < config_.output.keep_first_frames;
   bool keep = first || ((f.decode_failed || low_grade) && config_.output.keep_failed_frames);
-  if (keep && first) ++first_frames_kept_;
+  if (first) ++first_frames_kept_;
   if (keep && !saver_.has_room()) {  // the writer is behind: the frame goes on unsaved
     keep = false;
     ++results_.frames_not_saved;

@@ -109,19 +109,18 @@ Result<imaging::DeblurResult, std::string> deblur_bar_sums(const imaging::Motion
 BeltBox belt_box(const reader::DecodedCode& code, imaging::Direction direction, int width,
                  int height, double travel_px) {
   const bool along_x = imaging::moves_along_x(direction);
-  BeltBox box;
-  bool first = true;
+  auto along = [&](const reader::CodePoint& p) {
+    return imaging::position_along_motion(direction, p.x, p.y, width, height) - travel_px;
+  };
+  auto across = [&](const reader::CodePoint& p) { return along_x ? p.y : p.x; };
+  const reader::CodePoint& c0 = code.quality.corners[0];
+  BeltBox box{along(c0), along(c0), across(c0), across(c0)};
   for (const reader::CodePoint& p : code.quality.corners) {
-    const double along = imaging::position_along_motion(direction, p.x, p.y, width, height);
-    const double across = along_x ? p.y : p.x;
-    box.begin = first ? along : std::min(box.begin, along);
-    box.end = first ? along : std::max(box.end, along);
-    box.across_begin = first ? across : std::min(box.across_begin, across);
-    box.across_end = first ? across : std::max(box.across_end, across);
-    first = false;
+    box.begin = std::min(box.begin, along(p));
+    box.end = std::max(box.end, along(p));
+    box.across_begin = std::min(box.across_begin, across(p));
+    box.across_end = std::max(box.across_end, across(p));
   }
-  box.begin -= travel_px;
-  box.end -= travel_px;
   return box;
 }
 
