@@ -69,15 +69,25 @@ void deinterleave3(const Sample* __restrict in, int width, float* __restrict a, 
   }
 }
 
+/// Sample i of a row of `Sample`s (little-endian, as the formats store them) at
+/// any alignment: a frame's bytes are not an array of 16-bit values.
+template <typename Sample>
+float sample_at(const std::uint8_t* row, std::size_t i) {
+  Sample v;
+  std::memcpy(&v, row + i * sizeof(Sample), sizeof(Sample));
+  return static_cast<float>(v);
+}
+
 /// One row of interleaved samples (three per pixel, in the order of `out`) into
 /// electrons in one pass, counting samples at or above `ceiling` DN.
 template <typename Sample>
-std::size_t row3_to_electrons(const Sample* __restrict in, int width, float black, float gain,
-                              float ceiling, float* __restrict a, float* __restrict b,
+std::size_t row3_to_electrons(const std::uint8_t* __restrict row, int width, float black,
+                              float gain, float ceiling, float* __restrict a, float* __restrict b,
                               float* __restrict c) {
   std::size_t saturated = 0;
-  for (int x = 0; x < width; ++x) {
-    const float da = in[3 * x], db = in[3 * x + 1], dc = in[3 * x + 2];
+  for (std::size_t x = 0; x < static_cast<std::size_t>(width); ++x) {
+    const float da = sample_at<Sample>(row, 3 * x), db = sample_at<Sample>(row, 3 * x + 1),
+                dc = sample_at<Sample>(row, 3 * x + 2);
     saturated += (da >= ceiling ? 1 : 0) + (db >= ceiling ? 1 : 0) + (dc >= ceiling ? 1 : 0);
     a[x] = (da - black) * gain;
     b[x] = (db - black) * gain;
@@ -89,11 +99,11 @@ std::size_t row3_to_electrons(const Sample* __restrict in, int width, float blac
 /// One row of samples (one per pixel) into electrons, counting samples at or
 /// above `ceiling` DN.
 template <typename Sample>
-std::size_t row_to_electrons(const Sample* __restrict in, int width, float black, float gain,
+std::size_t row_to_electrons(const std::uint8_t* __restrict row, int width, float black, float gain,
                              float ceiling, float* __restrict out) {
   std::size_t saturated = 0;
-  for (int x = 0; x < width; ++x) {
-    const float dn = in[x];
+  for (std::size_t x = 0; x < static_cast<std::size_t>(width); ++x) {
+    const float dn = sample_at<Sample>(row, x);
     saturated += dn >= ceiling ? 1 : 0;
     out[x] = (dn - black) * gain;
   }
@@ -248,8 +258,10 @@ Result<ElectronFrame, std::string> frame_to_electrons(const Frame& frame,
   if (!one_pass) {
     auto dn = frame_to_dn(frame);
     if (!dn.ok()) return Converted::failure(dn.error());
-    return Converted::success(
-        {imaging::dn_to_electrons(dn.value(), model), imaging::saturated_share(dn.value(), model)});
+    ElectronFrame out;
+    out.electrons = imaging::dn_to_electrons(dn.value(), model);
+    out.saturated_share = imaging::saturated_share(dn.value(), model);
+    return Converted::success(std::move(out));
   }
   if (f.width <= 0 || f.height <= 0)
     return Converted::failure("frame " + std::to_string(frame.sequence) + ": empty size");
@@ -266,11 +278,10 @@ Result<ElectronFrame, std::string> frame_to_electrons(const Frame& frame,
   const auto ceiling = static_cast<float>(imaging::saturation_ceiling_dn(model));
   ElectronFrame out;
   out.electrons = planes(channels, f.width, f.height);
-  std::vector<std::uint16_t> samples16(wide ? static_cast<std::size_t>(channels) * f.width : 0);
+  out.levels = imaging::RowLevels(channels, f.height, f.width);
   std::size_t saturated = 0;
   for (int y = 0; y < f.height; ++y) {
     const std::uint8_t* row = frame.data.data() + row_bytes * static_cast<std::size_t>(y);
-    if (wide) std::memcpy(samples16.data(), row, samples16.size() * 2);  // little-endian
     if (channels == 3) {
       // The planes in the samples' order: R, G, B (BGR8: B, G, R).
       auto plane = [&](int c) {
@@ -279,14 +290,17 @@ Result<ElectronFrame, std::string> frame_to_electrons(const Frame& frame,
       float* const a = plane(first);
       float* const b = plane(1);
       float* const c = plane(2 - first);
-      saturated += wide
-                       ? row3_to_electrons(samples16.data(), f.width, black, gain, ceiling, a, b, c)
-                       : row3_to_electrons(row, f.width, black, gain, ceiling, a, b, c);
+      saturated +=
+          wide ? row3_to_electrons<std::uint16_t>(row, f.width, black, gain, ceiling, a, b, c)
+               : row3_to_electrons<std::uint8_t>(row, f.width, black, gain, ceiling, a, b, c);
     } else {
       float* to = out.electrons.channels[0].row(y).data();
-      saturated += wide ? row_to_electrons(samples16.data(), f.width, black, gain, ceiling, to)
-                        : row_to_electrons(row, f.width, black, gain, ceiling, to);
+      saturated += wide ? row_to_electrons<std::uint16_t>(row, f.width, black, gain, ceiling, to)
+                        : row_to_electrons<std::uint8_t>(row, f.width, black, gain, ceiling, to);
     }
+    for (int c = 0; c < channels; ++c)
+      out.levels.set(
+          c, y, imaging::row_level(out.electrons.channels[static_cast<std::size_t>(c)].row(y)));
   }
   out.saturated_share =
       static_cast<double>(saturated) / (static_cast<double>(channels) * f.width * f.height);

@@ -8,6 +8,7 @@
 #include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
 #include "imaging/image_checks.hpp"
+#include "imaging/row_levels.hpp"
 
 namespace flutterscan::capture {
 
@@ -25,6 +26,9 @@ struct ElectronFrame {
   /// value within imaging::kMaxPixelValue (the one-pass conversion with a finite black
   /// level and gain): imaging::MotionFrame::make need not read them again.
   imaging::PixelValues values = imaging::PixelValues::kScan;
+  /// The rows' levels (imaging/row_levels.hpp), made by the one-pass conversion while
+  /// each row is in cache (empty otherwise): imaging::MotionFrame::make adopts them.
+  imaging::RowLevels levels;
 };
 
 /// \brief frame_to_dn, imaging::saturated_share and imaging::dn_to_electrons,

@@ -117,7 +117,7 @@ double channel_noise_variance(const CaptureModel& m, double signal_electrons) {
 }
 
 double noise_level_mean(const Plane& plane) {
-  constexpr int kRowStep = 4;
+  constexpr int kRowStep = kNoiseLevelRowStep;
   double sum = 0;
   std::size_t count = 0;
   for (int y = 0; y < plane.height; y += kRowStep) {

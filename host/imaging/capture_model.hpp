@@ -90,9 +90,13 @@ double channel_white_electrons(const CaptureModel& model, int channel);
 /// shot noise, read noise and quantisation.
 double channel_noise_variance(const CaptureModel& model, double signal_electrons);
 
+/// \brief Rows apart that noise_level_mean() reads.
+inline constexpr int kNoiseLevelRowStep = 4;
+
 /// \brief A channel plane's mean electrons, the signal its noise level is taken at
 /// (channel_noise_variance): over every 4th row, which gives it to well under 1%
-/// on any frame at a quarter of the cost.
+/// on any frame at a quarter of the cost (RowLevels::mean_of_rows makes the same
+/// value from a motion frame's row levels, reading no row).
 double noise_level_mean(const Plane& plane);
 
 }  // namespace flutterscan::imaging

@@ -110,7 +110,9 @@ Result<DeblurResult, std::string> deblur(const MotionFrame& frame, const Capture
   const std::span<const Plane> rows(frame.image().channels);
   std::vector<ChannelPsf> psfs;
   for (int c = 0; c < model.channels; ++c) {
-    const double variance = channel_noise_variance(model, noise_level_mean(frame.channel(c)));
+    // noise_level_mean(frame.channel(c)), from the rows' levels.
+    const double variance =
+        channel_noise_variance(model, frame.row_levels().mean_of_rows(c, kNoiseLevelRowStep));
     result.noise_variance.push_back(variance);
     psfs.push_back({channel_psf(model, c), variance});
   }
@@ -128,7 +130,7 @@ Result<DeblurResult, std::string> deblur(const MotionFrame& frame, const Capture
     JointWiener wiener(psfs, rows[0].width, 1.0 / options.gradient_variance, options.plan_effort);
     wiener.skip_flat_rows(
         std::vector<double>(psfs.size(), channel_noise_variance(model, 0)));  // without shot noise
-    result.latent = wiener.deconvolve(rows, options.threads);
+    result.latent = wiener.deconvolve(rows, options.threads, &frame.row_levels());
     result.flat_rows = wiener.flat_rows();
   } else {
     result.latent = deconvolve_motion_rows(psfs, rows, 1.0 / options.gradient_variance,

@@ -3,8 +3,6 @@
 #include <cmath>
 #include <numbers>
 
-#include "imaging/lane_sum.hpp"
-
 namespace flutterscan::imaging {
 
 std::vector<float> periodic_blend(int width, int padded) {
@@ -105,7 +103,8 @@ void JointWiener::skip_flat_rows(std::vector<double> base_variance) {
   flat_base_variance_.resize(filter_re_.size(), 0.0);
 }
 
-bool JointWiener::fill_if_flat(std::span<const std::span<float>> rows, std::span<float> out) const {
+template <typename LevelOf>
+bool JointWiener::fill_if_flat(const LevelOf& level_of, std::span<float> out) const {
   const std::size_t n = static_cast<std::size_t>(width_);
   if (flat_base_variance_.empty() || n < 2) return false;
   // Stretches of kFlatRowStretch samples (the last takes the remainder), each
@@ -116,19 +115,11 @@ bool JointWiener::fill_if_flat(std::span<const std::span<float>> rows, std::span
   // A sample variance of m noise samples has a relative standard error of about sqrt(2 / m).
   const double allowed = 1 + kFlatRowSigmas * std::sqrt(2.0 / static_cast<double>(shortest));
   float fill = 0;
-  for (std::size_t c = 0; c < rows.size(); ++c) {
-    const float* row = rows[c].data();
-    const float mean = lane_sum(n, [&](std::size_t x) { return row[x]; }) / static_cast<float>(n);
+  for (std::size_t c = 0; c < filter_re_.size(); ++c) {
+    const RowLevel level = level_of(c);
+    const float mean = level.mean(n);
     const double noise = flat_base_variance_[c] + std::max(0.0, static_cast<double>(mean));
-    for (std::size_t k = 0; k < stretches; ++k) {
-      const std::size_t from = k * shortest, to = k + 1 == stretches ? n : from + shortest;
-      const float* part = row + from;
-      const float squares = lane_sum(to - from, [&](std::size_t x) {
-        const float d = part[x] - mean;
-        return d * d;
-      });
-      if (!(squares / static_cast<double>(to - from) <= allowed * noise)) return false;
-    }
+    if (!(level.worst_mean_square <= allowed * noise)) return false;
     fill += dc_gains_[c] * mean;
   }
   std::fill(out.begin(), out.end(), fill);
@@ -176,7 +167,9 @@ void JointWiener::deconvolve_pair(Scratch& s, std::span<float> a, std::span<floa
   if (!b.empty()) std::copy(s.out_im.data(), s.out_im.data() + b.size(), b.begin());
 }
 
-void JointWiener::deconvolve(const RowLoader& load, int height, Plane& out, RowPool& pool) {
+template <typename LoadUnlessFlat>
+void JointWiener::deconvolve_rows(const LoadUnlessFlat& load_unless_flat, int height, Plane& out,
+                                  RowPool& pool) {
   while (static_cast<int>(workers_.size()) < pool.threads()) workers_.push_back(make_scratch());
   for (Scratch& scratch : workers_) scratch.flat_rows = 0;
   pool.run(height, [&](int first, int last, int worker) {
@@ -185,8 +178,7 @@ void JointWiener::deconvolve(const RowLoader& load, int height, Plane& out, RowP
     int waiting = -1;
     for (int y = first; y < last; ++y) {
       const auto rows = waiting < 0 ? std::span(s.first_rows) : std::span(s.second_rows);
-      load(y, rows);
-      if (fill_if_flat(rows, out.row(y))) {
+      if (load_unless_flat(y, rows, out.row(y))) {
         ++s.flat_rows;
         continue;
       }
@@ -206,6 +198,15 @@ void JointWiener::deconvolve(const RowLoader& load, int height, Plane& out, RowP
   for (const Scratch& scratch : workers_) flat_rows_ += scratch.flat_rows;
 }
 
+void JointWiener::deconvolve(const RowLoader& load, int height, Plane& out, RowPool& pool) {
+  deconvolve_rows(
+      [&](int y, std::span<const std::span<float>> rows, std::span<float> out_row) {
+        load(y, rows);
+        return fill_if_flat([&](std::size_t c) { return row_level(rows[c]); }, out_row);
+      },
+      height, out, pool);
+}
+
 JointWiener::RowLoader plane_row_loader(std::span<const Plane> channels) {
   return [channels](int y, std::span<const std::span<float>> rows) {
     for (std::size_t c = 0; c < rows.size(); ++c) {
@@ -215,11 +216,27 @@ JointWiener::RowLoader plane_row_loader(std::span<const Plane> channels) {
   };
 }
 
-Plane JointWiener::deconvolve(std::span<const Plane> channels, int threads) {
+Plane JointWiener::deconvolve(std::span<const Plane> channels, int threads,
+                              const RowLevels* levels) {
   const int height = channels[0].height;
   Plane latent = Plane::uninitialised(width_, height);  // every row written below
   RowPool pool(std::max(1, std::min(threads, height)));
-  deconvolve(plane_row_loader(channels), height, latent, pool);
+  const bool known = levels != nullptr &&
+                     levels->fits(static_cast<int>(channels.size()), height, channels[0].width);
+  // A row is judged flat where it lies, from its levels when they are known;
+  // only a row to transform is copied (on a belt most rows are flat: reading
+  // them again was most of their cost).
+  deconvolve_rows(
+      [&](int y, std::span<const std::span<float>> rows, std::span<float> out_row) {
+        const auto level_of = [&](std::size_t c) {
+          return known ? levels->at(static_cast<int>(c), y) : row_level(channels[c].row(y));
+        };
+        if (fill_if_flat(level_of, out_row)) return true;
+        for (std::size_t c = 0; c < rows.size(); ++c)
+          std::copy_n(channels[c].row(y).data(), width_, rows[c].begin());
+        return false;
+      },
+      height, latent, pool);
   return latent;
 }
 

@@ -31,6 +31,7 @@
 
 #include "imaging/image.hpp"
 #include "imaging/row_fft.hpp"
+#include "imaging/row_levels.hpp"
 #include "imaging/row_pool.hpp"
 
 namespace flutterscan::imaging {
@@ -76,8 +77,10 @@ class JointWiener {
   /// pool size and reused: steady-state frames allocate nothing.
   void deconvolve(const RowLoader& load, int height, Plane& out, RowPool& pool);
 
-  /// \brief Deconvolves whole planes (rows in the motion frame) on `threads` threads.
-  Plane deconvolve(std::span<const Plane> channels, int threads);
+  /// \brief Deconvolves whole planes (rows in the motion frame) on `threads`
+  /// threads; `levels`, when they fit the planes (MotionFrame::row_levels), spare
+  /// the flat-row test reading the rows.
+  Plane deconvolve(std::span<const Plane> channels, int threads, const RowLevels* levels = nullptr);
 
   /// \brief From now on, rows that carry only noise are filled, not transformed
   /// (the header's "Flat rows"): channel c's noise variance at a row mean m e-
@@ -114,21 +117,23 @@ class JointWiener {
   std::vector<float> dc_gains_;             ///< latent of a constant row per e- of channel c
   int flat_rows_ = 0;
 
-  bool fill_if_flat(std::span<const std::span<float>> rows, std::span<float> out) const;
+  /// Fills `out` with the latent of a flat row and says so; level_of(c) is the
+  /// row's level in channel c (row_level()).
+  template <typename LevelOf>
+  bool fill_if_flat(const LevelOf& level_of, std::span<float> out) const;
+  /// Deconvolves `height` rows: load_unless_flat(y, rows, out.row(y)) fills a
+  /// flat row's output and returns true, or loads the row into `rows`.
+  template <typename LoadUnlessFlat>
+  void deconvolve_rows(const LoadUnlessFlat& load_unless_flat, int height, Plane& out,
+                       RowPool& pool);
 };
 
 /// \brief Standard errors of a noise-only stretch's mean square above its
-/// expected value that a stretch may reach and still count as flat (four: a
-/// stretch of noise alone passes it about once in 4000, so about one 1920-px
-/// RGB row of noise in a hundred is deconvolved anyway) ...
+/// expected value that a stretch (kFlatRowStretch samples, row_levels.hpp) may
+/// reach and still count as flat (four: a stretch of noise alone passes it
+/// about once in 4000, so about one 1920-px RGB row of noise in a hundred is
+/// deconvolved anyway).
 inline constexpr double kFlatRowSigmas = 4;
-/// \brief ... in stretches this long. The coded blur keeps print's variance
-/// but spreads it over the code's lit slots (about 1/17 of it per sample at 52
-/// slots): a 100-px code of 25% and 75% reflectance at 300 e- lifts its
-/// stretch's mean square about 2 noise variances above the noise, where the
-/// whole row's would move 0.1; print of +-12% there (0.5 above) is the
-/// limit, and is filled as flat.
-inline constexpr std::size_t kFlatRowStretch = 128;
 
 /// \brief A row loader reading row y of each plane of `channels` (motion frame).
 JointWiener::RowLoader plane_row_loader(std::span<const Plane> channels);

@@ -57,19 +57,25 @@ Plane from_motion_frame(const Plane& plane, Direction direction) {
 }
 
 Result<MotionFrame, std::string> MotionFrame::make(Image camera, Direction direction,
-                                                   PixelValues values) {
+                                                   PixelValues values, RowLevels levels) {
   using Out = Result<MotionFrame, std::string>;
   if (auto problem = image_problem(camera, values); !problem.empty()) return Out::failure(problem);
-  return Out::success(MotionFrame(std::move(camera), direction));
+  return Out::success(MotionFrame(std::move(camera), direction, std::move(levels)));
 }
 
-MotionFrame::MotionFrame(Image camera, Direction direction) : direction_(direction) {
+MotionFrame::MotionFrame(Image camera, Direction direction, RowLevels levels)
+    : direction_(direction) {
   if (direction == Direction::kPlusX) {
     image_ = std::move(camera);
-    return;
+  } else {
+    for (const Plane& plane : camera.channels)
+      image_.channels.push_back(to_motion_frame(plane, direction));
   }
-  for (const Plane& plane : camera.channels)
-    image_.channels.push_back(to_motion_frame(plane, direction));
+  if (direction == Direction::kPlusX &&
+      levels.fits(image_.channel_count(), image_.height(), image_.width()))
+    levels_ = std::move(levels);
+  else
+    levels_ = RowLevels::of(image_);
 }
 
 double position_along_motion(Direction direction, double x, double y, int width, int height) {

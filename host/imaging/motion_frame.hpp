@@ -13,6 +13,7 @@
 #include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
 #include "imaging/image_checks.hpp"
+#include "imaging/row_levels.hpp"
 
 namespace flutterscan::imaging {
 
@@ -42,8 +43,12 @@ class MotionFrame {
   /// \brief `camera` (planes as the camera delivered them) turned for
   /// `direction`; fails naming what is wrong with the image (image_problem,
   /// which reads every value unless `values` says they were shown in range).
+  /// `levels`: the camera planes' row levels when the caller made them (the
+  /// session's conversion does, capture/frame_pixels.hpp), adopted for +x frames
+  /// whose size they fit; otherwise they are made here, after the turn.
   static Result<MotionFrame, std::string> make(Image camera, Direction direction,
-                                               PixelValues values = PixelValues::kScan);
+                                               PixelValues values = PixelValues::kScan,
+                                               RowLevels levels = {});
 
   /// \brief The channels in the motion frame: row y, sample n = position n along the motion.
   const Image& image() const { return image_; }
@@ -54,14 +59,17 @@ class MotionFrame {
   /// \brief Lines along the motion (the motion frame's height).
   int lines() const { return image_.height(); }
   Direction direction() const { return direction_; }
+  /// \brief Every row's level in every channel (row_levels.hpp).
+  const RowLevels& row_levels() const { return levels_; }
 
   /// \brief `plane`, made in this motion frame, in the camera's orientation.
   Plane to_camera(const Plane& plane) const { return from_motion_frame(plane, direction_); }
 
  private:
-  MotionFrame(Image camera, Direction direction);
+  MotionFrame(Image camera, Direction direction, RowLevels levels);
 
   Image image_;
+  RowLevels levels_;
   Direction direction_ = Direction::kPlusX;
 };
 

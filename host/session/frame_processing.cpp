@@ -135,8 +135,10 @@ Result<Deblurred, StepFailure> deblur(Converted& in, const FrameJob& job,
   // The conversion's bound on the values holds until a flat field rescales them.
   const imaging::PixelValues values =
       flat != nullptr ? imaging::PixelValues::kScan : in.frame.values;
-  auto frame =
-      imaging::MotionFrame::make(std::move(in.frame.electrons), in.model.direction, values);
+  // The conversion's row levels hold until a flat field rescales the rows.
+  auto frame = imaging::MotionFrame::make(
+      std::move(in.frame.electrons), in.model.direction, values,
+      flat != nullptr ? imaging::RowLevels{} : std::move(in.frame.levels));
   if (!frame.ok()) return Out::failure({frame.error()});
   ModelFitConfig fit;
   fit.encoder = config.optics.encoder;

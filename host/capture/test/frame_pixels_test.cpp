@@ -69,6 +69,14 @@ TEST(FrameToElectrons, OnePassEqualsTheThreeStepsForEveryFastFormat) {
     EXPECT_GT(share, 0.05);  // the frames do have saturated samples
     EXPECT_DOUBLE_EQ(fast.value().saturated_share, share);
     ASSERT_EQ(fast.value().electrons.channel_count(), expected.channel_count());
+    // The row levels made while converting are the converted rows' (bit for bit).
+    const imaging::RowLevels levels = imaging::RowLevels::of(fast.value().electrons);
+    for (int ch = 0; ch < expected.channel_count(); ++ch)
+      for (int y = 0; y < expected.height(); ++y) {
+        ASSERT_EQ(fast.value().levels.at(ch, y).sum, levels.at(ch, y).sum) << ch << ", " << y;
+        ASSERT_EQ(fast.value().levels.at(ch, y).worst_mean_square,
+                  levels.at(ch, y).worst_mean_square);
+      }
     for (int ch = 0; ch < expected.channel_count(); ++ch)
       for (std::size_t i = 0; i < expected.channels[ch].pixels.size(); ++i)
         ASSERT_NEAR(fast.value().electrons.channels[ch].pixels[i], expected.channels[ch].pixels[i],
@@ -86,6 +94,7 @@ TEST(FrameToElectrons, NonLinearEncodingsTakeTheThreeStepPath) {
   ASSERT_TRUE(dn.ok() && fast.ok());
   const imaging::Image expected = imaging::dn_to_electrons(dn.value(), m);
   EXPECT_EQ(fast.value().electrons.channels[1].pixels, expected.channels[1].pixels);
+  EXPECT_TRUE(fast.value().levels.empty());  // MotionFrame::make makes them
 }
 
 // The one-pass conversion says when its inputs bound every value within kMaxPixelValue, so that

@@ -249,8 +249,9 @@ std::map<std::string, double> stage_costs(int width, int height, int repeats, do
     };
     auto converted = capture::frame_to_electrons(frame, model.value());
     const double saturated = converted.value().saturated_share;
-    const auto motion_frame = imaging::MotionFrame::make(
-        std::move(converted.value().electrons), model.value().direction, converted.value().values);
+    const auto motion_frame =
+        imaging::MotionFrame::make(std::move(converted.value().electrons), model.value().direction,
+                                   converted.value().values, std::move(converted.value().levels));
     lap("convert");  // with the turn into the motion frame and its check, as the session does
     const imaging::MotionFrame& electrons = motion_frame.value();
     imaging::MotionRefinementOptions refinement;  // the session's default tolerance

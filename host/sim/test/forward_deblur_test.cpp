@@ -277,6 +277,39 @@ TEST(Deblur, FlatRowsFollowTheNoiseOfTheirLevel) {
   EXPECT_EQ(shading.value().flat_rows, 0);
 }
 
+// The flat-row test judges a row from its levels (imaging/row_levels.hpp): the
+// motion frame's, made while converting, give the latent the rows themselves
+// give, bit for bit; levels that say otherwise are what the test reads.
+TEST(Deblur, FlatRowsAreJudgedFromTheRowLevelsGiven) {
+  Plane scene = bars(640, 96, 5);  // belt rows 0-11 and 84-95, bars between
+  const CaptureModel m = coded_capture(1000, 52);
+  const imaging::Image frame = simulate(scene, m, 11);
+  std::vector<imaging::ChannelPsf> psfs;
+  for (int c = 0; c < 3; ++c) psfs.push_back({imaging::channel_psf(m, c), 400.0});
+  imaging::JointWiener wiener(psfs, scene.width, 1.0 / imaging::kLabelGradientVariance);
+  wiener.skip_flat_rows(std::vector<double>(3, imaging::channel_noise_variance(m, 0)));
+  const Plane from_rows = wiener.deconvolve(frame.channels, 1);
+  const int flat = wiener.flat_rows();
+  EXPECT_EQ(flat, 24);
+  const imaging::RowLevels levels = imaging::RowLevels::of(frame);
+  const Plane from_levels = wiener.deconvolve(frame.channels, 2, &levels);
+  EXPECT_EQ(wiener.flat_rows(), flat);
+  EXPECT_EQ(from_levels.pixels, from_rows.pixels);
+  // Levels that call every row flat at 100 e-: every row is filled with their constant.
+  imaging::RowLevels flat_levels(3, scene.height, scene.width);
+  for (int c = 0; c < 3; ++c)
+    for (int y = 0; y < scene.height; ++y)
+      flat_levels.set(c, y, {100.0f * static_cast<float>(scene.width), 0.0});
+  const Plane told_flat = wiener.deconvolve(frame.channels, 1, &flat_levels);
+  EXPECT_EQ(wiener.flat_rows(), scene.height);
+  EXPECT_EQ(*std::min_element(told_flat.pixels.begin(), told_flat.pixels.end()),
+            *std::max_element(told_flat.pixels.begin(), told_flat.pixels.end()));
+  // Levels of another size are not used.
+  const imaging::RowLevels other(3, scene.height - 1, scene.width);
+  const Plane ignored = wiener.deconvolve(frame.channels, 1, &other);
+  EXPECT_EQ(ignored.pixels, from_rows.pixels);
+}
+
 TEST(Deblur, RefusesBlurLongerThanTheImageAndChannelMismatch) {
   const CaptureModel m = coded_capture(3000, 52);
   imaging::Image small;
