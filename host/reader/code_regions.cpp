@@ -60,7 +60,9 @@ std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent) {
     for (int cx = 0; cx < cols; ++cx) {
       const int x0 = cx * kCell, x1 = std::min(latent.width, x0 + kCell);
       const int x_steps_end = std::min(x1, latent.width - 1);
+      // Vectorised reductions (partial sums, so rounding differs from a serial sum).
       float sum = 0, square = 0, along = 0, across = 0, low = pair[x0], high = pair[x0];
+#pragma omp simd reduction(+ : sum, square, across) reduction(min : low) reduction(max : high)
       for (int x = x0; x < x1; ++x) {
         const float v = pair[x];
         sum += v;
@@ -69,6 +71,7 @@ std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent) {
         high = std::max(high, v);
         across += std::abs(next[x] - row[x]);
       }
+#pragma omp simd reduction(+ : along)
       for (int x = x0; x < x_steps_end; ++x) along += std::abs(pair[x + 1] - pair[x]);
       CellStats& c = line[cx];
       c.sum += sum;
