@@ -1,5 +1,7 @@
 #include "session/frame_saver.hpp"
 
+#include <pthread.h>
+#include <sched.h>
 #include <sys/resource.h>
 #include <sys/syscall.h>
 #include <unistd.h>
@@ -49,7 +51,11 @@ std::string FrameSaver::finish() {
 void FrameSaver::write_queued() {
   // Below the workers: on a loaded line the CPU goes to the frames, and a frame
   // the writer has no time for is not saved (offer() refuses it), not waited for.
-  setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), kWriterNice);
+  // SCHED_IDLE: the writer runs only on a core no other thread wants, and gives
+  // it up at once to a worker that wakes (a nice value still took its share).
+  sched_param idle{};
+  if (pthread_setschedparam(pthread_self(), SCHED_IDLE, &idle) != 0)
+    setpriority(PRIO_PROCESS, static_cast<id_t>(syscall(SYS_gettid)), kWriterNice);
   std::unique_lock lock(mutex_);
   while (true) {
     wake_.wait(lock, [&] { return stopping_ || !frames_.empty(); });

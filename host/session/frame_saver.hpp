@@ -22,7 +22,7 @@ namespace flutterscan::session {
 
 class FrameSaver {
  public:
-  /// The writer thread's nice value: below the workers (0).
+  /// The writer thread's nice value where it cannot be SCHED_IDLE: below the workers (0).
   static constexpr int kWriterNice = 10;
   /// \brief Saves into `folder`, holding at most `queued` frames waiting.
   explicit FrameSaver(SessionFolder& folder, std::size_t queued = 2);
