@@ -8,30 +8,34 @@
 
 #include <utility>
 
+#include "capture/frame_pixels.hpp"
+
 namespace flutterscan::session {
 
-FrameSaver::FrameSaver(SessionFolder& folder, std::size_t queued)
-    : folder_(folder), queued_(queued), writer_([this] { write_queued(); }) {}
+FrameSaver::FrameSaver(SessionFolder& folder, std::size_t queued_bytes)
+    : folder_(folder), queued_limit_(queued_bytes), writer_([this] { write_queued(); }) {}
 
 FrameSaver::~FrameSaver() {
   finish();
 }
 
-bool FrameSaver::has_room() {
+bool FrameSaver::has_room(std::size_t bytes) {
   const std::lock_guard lock(mutex_);
-  return room_locked();
+  return room_locked(bytes);
 }
 
-bool FrameSaver::room_locked() const {
-  return !stopping_ && frames_.size() < queued_;
+bool FrameSaver::room_locked(std::size_t bytes) const {
+  return !stopping_ && (frames_.empty() || queued_bytes_ + bytes <= queued_limit_);
 }
 
-bool FrameSaver::offer(std::uint64_t sequence, imaging::Image dn, nlohmann::json descriptor,
+bool FrameSaver::offer(std::uint64_t sequence, capture::Frame raw, nlohmann::json descriptor,
                        imaging::Plane fused) {
   {
     const std::lock_guard lock(mutex_);
-    if (!room_locked()) return false;
-    frames_.push_back({sequence, std::move(dn), std::move(descriptor), std::move(fused)});
+    const std::size_t bytes = bytes_of(raw, fused);
+    if (!room_locked(bytes)) return false;
+    queued_bytes_ += bytes;
+    frames_.push_back({sequence, std::move(raw), std::move(descriptor), std::move(fused)});
   }
   wake_.notify_one();
   return true;
@@ -62,9 +66,13 @@ void FrameSaver::write_queued() {
     if (frames_.empty()) return;  // stopping, nothing left
     Frame frame = std::move(frames_.front());
     frames_.pop_front();
+    queued_bytes_ -= bytes_of(frame.raw, frame.fused);
     lock.unlock();
-    const std::string error = folder_.save_frame(frame.sequence, frame.dn, frame.descriptor,
-                                                 frame.fused.empty() ? nullptr : &frame.fused);
+    const auto dn = capture::frame_to_dn(frame.raw);
+    const std::string error = dn.ok()
+                                  ? folder_.save_frame(frame.sequence, dn.value(), frame.descriptor,
+                                                       frame.fused.empty() ? nullptr : &frame.fused)
+                                  : dn.error();
     lock.lock();
     if (!error.empty() && error_.empty()) error_ = error;
   }

@@ -97,7 +97,8 @@ void ResultsStage::handle_processed(FrameOutcome& f) {
   const bool first = first_frames_kept_ < config_.output.keep_first_frames;
   bool keep = first || ((f.decode_failed || low_grade) && config_.output.keep_failed_frames);
   if (first) ++first_frames_kept_;
-  if (keep && !saver_.has_room()) {  // the writer is behind: the frame goes on unsaved
+  if (keep && !saver_.has_room(FrameSaver::bytes_of(f.frame, f.latent))) {
+    // The writer is this far behind: the frame goes on unsaved.
     keep = false;
     ++results_.frames_not_saved;
     f.log["files_saved"] = false;
@@ -108,18 +109,15 @@ void ResultsStage::handle_processed(FrameOutcome& f) {
                                           [](const Sighting& x) { return x.decoded; });
   const bool preview = config_.output.report && ((read_something && previews_read_ < 3) ||
                                                  (f.decode_failed && previews_failed_ < 3));
-  // The frame's DN planes again (it converted without them), for these frames only.
-  const auto dn = keep || preview ? capture::frame_to_dn(f.frame)
-                                  : Result<imaging::Image, std::string>::success({});
+  // The frame's DN planes again (it converted without them), for a preview only:
+  // a kept frame's the writer makes.
+  const auto dn =
+      preview ? capture::frame_to_dn(f.frame) : Result<imaging::Image, std::string>::success({});
   std::string kept_frame;
-  if (keep && !dn.ok()) {
-    if (results_.save_error.empty()) results_.save_error = dn.error();
-  } else if (keep) {
-    if (saver_.offer(f.sequence, dn.value(), f.descriptor, f.latent)) {
-      ++results_.frames_saved;
-      f.log["files_saved"] = true;
-      kept_frame = SessionFolder::frame_file(f.sequence);
-    }
+  if (keep && saver_.offer(f.sequence, f.frame, f.descriptor, f.latent)) {
+    ++results_.frames_saved;
+    f.log["files_saved"] = true;
+    kept_frame = SessionFolder::frame_file(f.sequence);
   }
   // The record's wall-clock time: now, less the time since the frame arrived.
   const std::int64_t utc_ms = std::chrono::duration_cast<std::chrono::milliseconds>(
