@@ -278,7 +278,9 @@ Result<ElectronFrame, std::string> frame_to_electrons(const Frame& frame,
   const auto ceiling = static_cast<float>(imaging::saturation_ceiling_dn(model));
   ElectronFrame out;
   out.electrons = planes(channels, f.width, f.height);
-  out.levels = imaging::RowLevels(channels, f.height, f.width);
+  // Row levels for a motion frame's rows: a Bayer mosaic is split into planes first.
+  const bool mosaic = p == PixelFormat::kBayerRggb8 || p == PixelFormat::kBayerRggb16;
+  if (!mosaic) out.levels = imaging::RowLevels(channels, f.height, f.width);
   std::size_t saturated = 0;
   for (int y = 0; y < f.height; ++y) {
     const std::uint8_t* row = frame.data.data() + row_bytes * static_cast<std::size_t>(y);
@@ -298,7 +300,7 @@ Result<ElectronFrame, std::string> frame_to_electrons(const Frame& frame,
       saturated += wide ? row_to_electrons<std::uint16_t>(row, f.width, black, gain, ceiling, to)
                         : row_to_electrons<std::uint8_t>(row, f.width, black, gain, ceiling, to);
     }
-    for (int c = 0; c < channels; ++c)
+    for (int c = 0; c < (mosaic ? 0 : channels); ++c)
       out.levels.set(
           c, y, imaging::row_level(out.electrons.channels[static_cast<std::size_t>(c)].row(y)));
   }

@@ -26,8 +26,9 @@ struct ElectronFrame {
   /// value within imaging::kMaxPixelValue (the one-pass conversion with a finite black
   /// level and gain): imaging::MotionFrame::make need not read them again.
   imaging::PixelValues values = imaging::PixelValues::kScan;
-  /// The rows' levels (imaging/row_levels.hpp), made by the one-pass conversion while
-  /// each row is in cache (empty otherwise): imaging::MotionFrame::make adopts them.
+  /// The rows' levels (imaging/row_levels.hpp), made by the one-pass conversion of
+  /// RGB and mono frames while each row is in cache (empty otherwise: Bayer mosaics,
+  /// the three-step path): imaging::MotionFrame::make adopts them.
   imaging::RowLevels levels;
 };
 
