@@ -24,9 +24,10 @@ inline constexpr std::size_t kFlatRowStretch = 128;
 
 /// \brief One row of one channel.
 struct RowLevel {
-  float sum = 0;  ///< the samples' sum (imaging::lane_sum)
-  double worst_mean_square =
-      0;  ///< the largest, over the stretches, mean square about the row's mean
+  /// The samples' sum (imaging::lane_sum).
+  float sum = 0;
+  /// The largest, over the row's stretches, mean square about the row's mean.
+  double worst_mean_square = 0;
   float mean(std::size_t width) const { return sum / static_cast<float>(width); }
 };
 
