@@ -46,6 +46,14 @@ std::string FrameSaver::finish() {
     const std::lock_guard lock(mutex_);
     stopping_ = true;
   }
+  // What is still queued is written at the usual priority: an idle-priority
+  // writer gets no CPU while other processes keep the cores busy, and the
+  // session's end would wait for them. (Where the system refuses it, the
+  // writer flushes at idle priority.)
+  if (writer_.joinable()) {
+    sched_param usual{};
+    pthread_setschedparam(writer_.native_handle(), SCHED_OTHER, &usual);
+  }
   wake_.notify_one();
   if (writer_.joinable()) writer_.join();
   const std::lock_guard lock(mutex_);
