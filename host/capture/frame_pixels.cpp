@@ -9,7 +9,6 @@
 #include <algorithm>
 #include <bit>
 #include <cmath>
-#include <cstring>
 #include <limits>
 #include <span>
 #include <utility>
@@ -58,24 +57,25 @@ std::string layout_problem(const Frame& frame) {
   return {};
 }
 
-/// Three interleaved samples per pixel into three float rows (vectorised).
-template <typename Sample>
-void deinterleave3(const Sample* __restrict in, int width, float* __restrict a, float* __restrict b,
-                   float* __restrict c) {
-  for (int x = 0; x < width; ++x) {
-    a[x] = in[3 * x];
-    b[x] = in[3 * x + 1];
-    c[x] = in[3 * x + 2];
-  }
-}
-
-/// Sample i of a row of `Sample`s (little-endian, as the formats store them) at
-/// any alignment: a frame's bytes are not an array of 16-bit values.
+/// Sample i of a row of `Sample`s at any alignment, little-endian as the
+/// formats store them (a frame's bytes are not an array of 16-bit values).
 template <typename Sample>
 float sample_at(const std::uint8_t* row, std::size_t i) {
-  Sample v;
-  std::memcpy(&v, row + i * sizeof(Sample), sizeof(Sample));
-  return static_cast<float>(v);
+  if constexpr (sizeof(Sample) == 1)
+    return row[i];
+  else
+    return read16(row + 2 * i);
+}
+
+/// Three interleaved samples per pixel into three float rows (vectorised).
+template <typename Sample>
+void deinterleave3(const std::uint8_t* __restrict row, int width, float* __restrict a,
+                   float* __restrict b, float* __restrict c) {
+  for (std::size_t x = 0; x < static_cast<std::size_t>(width); ++x) {
+    a[x] = sample_at<Sample>(row, 3 * x);
+    b[x] = sample_at<Sample>(row, 3 * x + 1);
+    c[x] = sample_at<Sample>(row, 3 * x + 2);
+  }
 }
 
 /// One row of interleaved samples (three per pixel, in the order of `out`) into
@@ -201,8 +201,6 @@ Result<imaging::Image, std::string> frame_to_dn(const Frame& frame) {
                       f.pixel_format == PixelFormat::kBgr8 ||
                       f.pixel_format == PixelFormat::kRgb16 || f.pixel_format == PixelFormat::kYuyv;
   imaging::Image image = planes(colour ? 3 : 1, f.width, f.height);
-  std::vector<std::uint16_t> samples16(
-      f.pixel_format == PixelFormat::kRgb16 ? 3 * static_cast<std::size_t>(f.width) : 0);
   for (int y = 0; y < f.height; ++y) {
     const std::uint8_t* row = frame.data.data() + row_bytes * static_cast<std::size_t>(y);
     switch (f.pixel_format) {
@@ -217,15 +215,15 @@ Result<imaging::Image, std::string> frame_to_dn(const Frame& frame) {
       case PixelFormat::kRgb8:
       case PixelFormat::kBgr8: {
         const bool bgr = f.pixel_format == PixelFormat::kBgr8;
-        deinterleave3(row, f.width, image.channels[bgr ? 2 : 0].row(y).data(),
-                      image.channels[1].row(y).data(), image.channels[bgr ? 0 : 2].row(y).data());
+        deinterleave3<std::uint8_t>(row, f.width, image.channels[bgr ? 2 : 0].row(y).data(),
+                                    image.channels[1].row(y).data(),
+                                    image.channels[bgr ? 0 : 2].row(y).data());
         break;
       }
       case PixelFormat::kRgb16:
-        // Little-endian samples (the formats' byte order, and this host's).
-        std::memcpy(samples16.data(), row, static_cast<std::size_t>(f.width) * 6);
-        deinterleave3(samples16.data(), f.width, image.channels[0].row(y).data(),
-                      image.channels[1].row(y).data(), image.channels[2].row(y).data());
+        deinterleave3<std::uint16_t>(row, f.width, image.channels[0].row(y).data(),
+                                     image.channels[1].row(y).data(),
+                                     image.channels[2].row(y).data());
         break;
       case PixelFormat::kYuyv:
         for (int x = 0; x < f.width; ++x) {
