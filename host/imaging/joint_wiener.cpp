@@ -39,6 +39,51 @@ void filter_and_sum_channels(const RowFft& fft,
   }
 }
 
+namespace {
+
+/// Rows a and b (`width` samples; b null: a row of zeros) into one complex row
+/// of blend.size() + width values, a + i b, each extended as
+/// extend_row_periodically() extends a row.
+void interleave_pair(const float* __restrict a, const float* __restrict b, int width,
+                     std::span<const float> blend, float* __restrict pair) {
+  const auto w = static_cast<std::size_t>(width);
+  if (b != nullptr) {
+    for (std::size_t i = 0; i < w; ++i) {
+      pair[2 * i] = a[i];
+      pair[2 * i + 1] = b[i];
+    }
+  } else {
+    for (std::size_t i = 0; i < w; ++i) {
+      pair[2 * i] = a[i];
+      pair[2 * i + 1] = 0.0f;
+    }
+  }
+  const float last_a = a[w - 1], step_a = a[0] - last_a;
+  const float last_b = b != nullptr ? b[w - 1] : 0.0f;
+  const float step_b = b != nullptr ? b[0] - last_b : 0.0f;
+  float* __restrict tail = pair + 2 * w;
+  for (std::size_t i = 0; i < blend.size(); ++i) {
+    tail[2 * i] = last_a + step_a * blend[i];
+    tail[2 * i + 1] = last_b + step_b * blend[i];
+  }
+}
+
+/// The real parts of a complex row into `a`, the imaginary ones into `b` (`b` may be empty).
+void deinterleave_pair(const float* __restrict pair, std::span<float> a, std::span<float> b) {
+  float* __restrict to_a = a.data();
+  if (b.empty()) {
+    for (std::size_t i = 0; i < a.size(); ++i) to_a[i] = pair[2 * i];
+    return;
+  }
+  float* __restrict to_b = b.data();
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    to_a[i] = pair[2 * i];
+    to_b[i] = pair[2 * i + 1];
+  }
+}
+
+}  // namespace
+
 double label_prior_power(double w) {
   // Twice the gradient power: seen through the pixels' box aperture each printed
   // edge spreads over two pixels, which about halves the latent's gradient variance.
@@ -78,29 +123,25 @@ JointWiener::JointWiener(std::span<const ChannelPsf> channels, int width, double
     if (denominator[j] <= 0) denominator[j] = 1e-30;
   }
   for (std::size_t c = 0; c < channels.size(); ++c) {
-    AlignedFloats re(size), im(size);
+    AlignedFloats filter(2 * size);
+    std::complex<float>* bins_of = filter.complex();
     for (std::size_t j = 0; j < bins; ++j) {
       const std::complex<double> h = std::conj(spectra[c][j]) / channels[c].noise_variance /
                                      denominator[j] / static_cast<double>(n);
-      re[j] = static_cast<float>(h.real());
-      im[j] = static_cast<float>(h.imag());
-      if (j > 0 && j < size - j) {  // bin n - j of a real filter: the conjugate
-        re[size - j] = re[j];
-        im[size - j] = -im[j];
-      }
+      bins_of[j] = std::complex<float>(h);
+      if (j > 0 && j < size - j) bins_of[size - j] = std::conj(bins_of[j]);  // a real filter's
     }
     // A constant row m_c has bin 0 = n m_c and nothing else: its latent is
     // sum_c Re(filter_c[0]) n m_c everywhere.
-    dc_gains_.push_back(re[0] * static_cast<float>(n));
-    filter_re_.push_back(std::move(re));
-    filter_im_.push_back(std::move(im));
+    dc_gains_.push_back(bins_of[0].real() * static_cast<float>(n));
+    filters_.push_back(std::move(filter));
   }
   blend_ = periodic_blend(width, n);
 }
 
 void JointWiener::skip_flat_rows(std::vector<double> base_variance) {
   flat_base_variance_ = std::move(base_variance);
-  flat_base_variance_.resize(filter_re_.size(), 0.0);
+  flat_base_variance_.resize(filters_.size(), 0.0);
 }
 
 template <typename LevelOf>
@@ -115,7 +156,7 @@ bool JointWiener::fill_if_flat(const LevelOf& level_of, std::span<float> out) co
   // A sample variance of m noise samples has a relative standard error of about sqrt(2 / m).
   const double allowed = 1 + kFlatRowSigmas * std::sqrt(2.0 / static_cast<double>(shortest));
   float fill = 0;
-  for (std::size_t c = 0; c < filter_re_.size(); ++c) {
+  for (std::size_t c = 0; c < filters_.size(); ++c) {
     const RowLevel level = level_of(c);
     const float mean = level.mean(n);
     const double noise = flat_base_variance_[c] + std::max(0.0, static_cast<double>(mean));
@@ -127,44 +168,39 @@ bool JointWiener::fill_if_flat(const LevelOf& level_of, std::span<float> out) co
 }
 
 JointWiener::Scratch JointWiener::make_scratch() const {
-  const auto n = static_cast<std::size_t>(fft_.length());
+  const auto complex_floats = 2 * static_cast<std::size_t>(fft_.length());
   Scratch s{{},
             {},
             {},
             {},
-            AlignedFloats(n),
-            AlignedFloats(n),
-            AlignedFloats(n),
-            AlignedFloats(n),
-            AlignedFloats(n),
-            AlignedFloats(n),
+            AlignedFloats(complex_floats),
+            AlignedFloats(complex_floats),
+            AlignedFloats(complex_floats),
+            AlignedFloats(complex_floats),
             0};
   const auto width = static_cast<std::size_t>(width_);
-  for (std::size_t c = 0; c < filter_re_.size(); ++c) {
-    s.first.emplace_back(n);
-    s.second.emplace_back(n);
-    s.first_rows.push_back(s.first.back().span().first(width));
-    s.second_rows.push_back(s.second.back().span().first(width));
+  for (std::size_t c = 0; c < filters_.size(); ++c) {
+    s.first.emplace_back(width);
+    s.second.emplace_back(width);
+    s.first_rows.push_back(s.first.back().span());
+    s.second_rows.push_back(s.second.back().span());
   }
   return s;
 }
 
 void JointWiener::deconvolve_pair(Scratch& s, std::span<float> a, std::span<float> b) const {
-  const auto n = static_cast<std::size_t>(fft_.length());
-  for (std::size_t c = 0; c < filter_re_.size(); ++c) {
-    extend_row_periodically(s.first[c].span(), width_, blend_);
-    extend_row_periodically(s.second[c].span(), width_, blend_);
-    fft_.forward(s.first[c].data(), s.second[c].data(), s.spectrum_re.data(), s.spectrum_im.data());
+  const auto bins = static_cast<std::size_t>(fft_.length());
+  for (std::size_t c = 0; c < filters_.size(); ++c) {
+    interleave_pair(s.first[c].data(), b.empty() ? nullptr : s.second[c].data(), width_, blend_,
+                    s.pair.data());
+    fft_.forward(s.pair.complex(), s.spectrum.complex());
     if (c == 0)
-      multiply_split(filter_re_[c].data(), filter_im_[c].data(), s.spectrum_re.data(),
-                     s.spectrum_im.data(), s.sum_re.data(), s.sum_im.data(), n);
+      multiply_spectra(filters_[c].data(), s.spectrum.data(), s.sum.data(), bins);
     else
-      accumulate_split(filter_re_[c].data(), filter_im_[c].data(), s.spectrum_re.data(),
-                       s.spectrum_im.data(), s.sum_re.data(), s.sum_im.data(), n);
+      accumulate_spectra(filters_[c].data(), s.spectrum.data(), s.sum.data(), bins, false);
   }
-  fft_.inverse(s.sum_re.data(), s.sum_im.data(), s.out_re.data(), s.out_im.data());
-  std::copy(s.out_re.data(), s.out_re.data() + a.size(), a.begin());
-  if (!b.empty()) std::copy(s.out_im.data(), s.out_im.data() + b.size(), b.begin());
+  fft_.inverse(s.sum.complex(), s.out.complex());
+  deinterleave_pair(s.out.data(), a, b);
 }
 
 template <typename LoadUnlessFlat>
@@ -189,10 +225,7 @@ void JointWiener::deconvolve_rows(const LoadUnlessFlat& load_unless_flat, int he
       deconvolve_pair(s, out.row(waiting), out.row(y));
       waiting = -1;
     }
-    if (waiting >= 0) {
-      for (AlignedFloats& row : s.second) std::fill(row.data(), row.data() + row.size(), 0.0f);
-      deconvolve_pair(s, out.row(waiting), {});
-    }
+    if (waiting >= 0) deconvolve_pair(s, out.row(waiting), {});
   });
   flat_rows_ = 0;
   for (const Scratch& scratch : workers_) flat_rows_ += scratch.flat_rows;

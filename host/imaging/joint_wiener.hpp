@@ -16,7 +16,9 @@
 // transformed at once as the real and imaginary parts of one complex row
 // (RowPairFft), filtered by the full-length spectrum, and come back as the
 // real and imaginary parts of one inverse: four complex transforms for two rows
-// where real-input ones took eight.
+// where real-input ones took eight. The rows are interleaved into the complex
+// row (and extended) in one pass, and the inverse is read back into the latent
+// rows in one.
 //
 // Flat rows (optional, skip_flat_rows()): a row whose every channel varies
 // about its mean no more than its noise would is not transformed; its latent
@@ -66,7 +68,7 @@ class JointWiener {
               PlanEffort effort = PlanEffort::kEstimate);
 
   int width() const { return width_; }
-  int channel_count() const { return static_cast<int>(filter_re_.size()); }
+  int channel_count() const { return static_cast<int>(filters_.size()); }
   int padded_length() const { return fft_.length(); }
 
   /// \brief Writes row `y` of every channel (electrons, width() samples) into `rows[c]`.
@@ -93,24 +95,24 @@ class JointWiener {
   int flat_rows() const { return flat_rows_; }
 
  private:
-  /// One thread's buffers: the pair's padded rows per channel (the real and the
-  /// imaginary part of the complex rows transformed), the spectrum, its filtered
-  /// sum and the inverse.
+  /// One thread's buffers: each channel's two rows as loaded (width() samples),
+  /// then the pair as one complex row (N complex values, interleaved floats), its
+  /// spectrum, the channels' filtered sum and its inverse.
   struct Scratch {
     std::vector<AlignedFloats> first, second;
-    std::vector<std::span<float>> first_rows, second_rows;  ///< their first width() samples
-    AlignedFloats spectrum_re, spectrum_im, sum_re, sum_im, out_re, out_im;
+    std::vector<std::span<float>> first_rows, second_rows;
+    AlignedFloats pair, spectrum, sum, out;
     int flat_rows = 0;  ///< rows this scratch found flat (skip_flat_rows())
   };
   Scratch make_scratch() const;
   /// The rows loaded in scratch.first and .second, deconvolved into `a` and `b`
-  /// (`b` empty: the second is discarded).
+  /// (`b` empty: there is no second row).
   void deconvolve_pair(Scratch& scratch, std::span<float> a, std::span<float> b) const;
 
   int width_;
   RowPairFft fft_;
-  /// conj(G_c) / v_c / D / N on all N bins (Hermitian), per channel, split.
-  std::vector<AlignedFloats> filter_re_, filter_im_;
+  /// conj(G_c) / v_c / D / N on all N bins (Hermitian), per channel, interleaved complex.
+  std::vector<AlignedFloats> filters_;
   std::vector<float> blend_;
   std::vector<Scratch> workers_;
   std::vector<double> flat_base_variance_;  ///< empty: every row transformed

@@ -142,38 +142,42 @@ void RowFft::inverse(std::complex<float>* in, float* out) const {
 }
 
 RowPairFft::RowPairFft(int n, PlanEffort effort) : n_(n) {
-  const auto size = static_cast<std::size_t>(n);
-  AlignedFloats in_re(size), in_im(size), out_re(size), out_im(size);
-  const fftwf_iodim dim{n, 1, 1};
+  const auto floats = 2 * static_cast<std::size_t>(n);
+  AlignedFloats in(floats), out(floats);
+  auto* in_complex = reinterpret_cast<fftwf_complex*>(in.data());
+  auto* out_complex = reinterpret_cast<fftwf_complex*>(out.data());
   const std::lock_guard lock(planner_mutex());
   // FFTW_MEASURE overwrites the buffers while planning: they are scratch here.
   auto make = [&](unsigned flags) {
-    return fftwf_plan_guru_split_dft(1, &dim, 0, nullptr, in_re.data(), in_im.data(), out_re.data(),
-                                     out_im.data(), flags);
+    forward_ = fftwf_plan_dft_1d(n, in_complex, out_complex, FFTW_FORWARD, flags);
+    inverse_ = fftwf_plan_dft_1d(n, in_complex, out_complex, FFTW_BACKWARD, flags);
   };
   if (effort == PlanEffort::kMeasuredIfKnown) {
-    plan_ = make(FFTW_MEASURE | FFTW_WISDOM_ONLY);  // null unless measured before
-    if (plan_ != nullptr) return;
+    make(FFTW_MEASURE | FFTW_WISDOM_ONLY);  // no plan (null) unless measured before
+    if (forward_ != nullptr && inverse_ != nullptr) return;
+    if (forward_ != nullptr) fftwf_destroy_plan(forward_);
+    if (inverse_ != nullptr) fftwf_destroy_plan(inverse_);
   }
-  plan_ = make(effort == PlanEffort::kMeasure ? FFTW_MEASURE : FFTW_ESTIMATE);
+  make(effort == PlanEffort::kMeasure ? FFTW_MEASURE : FFTW_ESTIMATE);
 }
 
 RowPairFft::~RowPairFft() {
   const std::lock_guard lock(planner_mutex());
-  fftwf_destroy_plan(plan_);
+  fftwf_destroy_plan(forward_);
+  fftwf_destroy_plan(inverse_);
 }
 
-void RowPairFft::forward(const float* in_re, const float* in_im, float* out_re,
-                         float* out_im) const {
-  fftwf_execute_split_dft(plan_, const_cast<float*>(in_re), const_cast<float*>(in_im), out_re,
-                          out_im);
+void RowPairFft::forward(const std::complex<float>* in, std::complex<float>* out) const {
+  // An out-of-place complex transform leaves its input as it was (FFTW's default).
+  fftwf_execute_dft(forward_,
+                    reinterpret_cast<fftwf_complex*>(const_cast<std::complex<float>*>(in)),
+                    reinterpret_cast<fftwf_complex*>(out));
 }
 
-void RowPairFft::inverse(const float* in_re, const float* in_im, float* out_re,
-                         float* out_im) const {
-  // conj(DFT(conj(x))) is the unnormalised inverse: swapping the parts conjugates (times i).
-  fftwf_execute_split_dft(plan_, const_cast<float*>(in_im), const_cast<float*>(in_re), out_im,
-                          out_re);
+void RowPairFft::inverse(const std::complex<float>* in, std::complex<float>* out) const {
+  fftwf_execute_dft(inverse_,
+                    reinterpret_cast<fftwf_complex*>(const_cast<std::complex<float>*>(in)),
+                    reinterpret_cast<fftwf_complex*>(out));
 }
 
 }  // namespace flutterscan::imaging

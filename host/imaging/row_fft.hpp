@@ -76,16 +76,16 @@ class RowFft {
   fftwf_plan inverse_ = nullptr;
 };
 
-/// \brief Complex transforms of length n in split form (real and imaginary
-/// parts in separate arrays), for two real rows at once: the transform of
-/// a + i b. A filter whose impulse response is real applies to both rows as one
-/// product with its full-length (Hermitian) spectrum, and the inverse gives the
-/// two filtered rows back as the real and imaginary parts. FFTW's split-complex
-/// codelets run such a pair in about the time of one real-input transform of
-/// length n (docs/algorithms.md, "joint-wiener", rows in pairs). One plan serves both
-/// directions (the inverse swaps the real and imaginary arrays, as FFTW
-/// documents). Every array: n floats from AlignedFloats; inputs are not changed
-/// and may not alias the outputs.
+/// \brief Complex transforms of length n (interleaved std::complex<float>), for
+/// two real rows at once: the transform of a + i b. A filter whose impulse
+/// response is real applies to both rows as one product with its full-length
+/// (Hermitian) spectrum, and the inverse gives the two filtered rows back as the
+/// real and imaginary parts. FFTW's interleaved complex transform of a pair
+/// costs less than two real-input ones at every length row_fft_length() gives
+/// (its split-complex form, used before, only at powers of two up to 2048:
+/// docs/algorithms.md, "joint-wiener", rows in pairs). Every array: n complex
+/// values from AlignedFloats (2n floats); inputs are not changed and may not
+/// alias the outputs.
 class RowPairFft {
  public:
   explicit RowPairFft(int n, PlanEffort effort = PlanEffort::kEstimate);
@@ -95,34 +95,15 @@ class RowPairFft {
 
   int length() const { return n_; }
   /// \brief out = DFT(in) (sign -1).
-  void forward(const float* in_re, const float* in_im, float* out_re, float* out_im) const;
+  void forward(const std::complex<float>* in, std::complex<float>* out) const;
   /// \brief out = n x inverse DFT(in) (sign +1, unnormalised).
-  void inverse(const float* in_re, const float* in_im, float* out_re, float* out_im) const;
+  void inverse(const std::complex<float>* in, std::complex<float>* out) const;
 
  private:
   int n_;
-  fftwf_plan plan_ = nullptr;
+  fftwf_plan forward_ = nullptr;
+  fftwf_plan inverse_ = nullptr;
 };
-
-/// \brief out = a x b over `n` complex values in split form.
-inline void multiply_split(const float* __restrict a_re, const float* __restrict a_im,
-                           const float* __restrict b_re, const float* __restrict b_im,
-                           float* __restrict out_re, float* __restrict out_im, std::size_t n) {
-  for (std::size_t j = 0; j < n; ++j) {
-    out_re[j] = a_re[j] * b_re[j] - a_im[j] * b_im[j];
-    out_im[j] = a_re[j] * b_im[j] + a_im[j] * b_re[j];
-  }
-}
-
-/// \brief acc += a x b over `n` complex values in split form.
-inline void accumulate_split(const float* __restrict a_re, const float* __restrict a_im,
-                             const float* __restrict b_re, const float* __restrict b_im,
-                             float* __restrict acc_re, float* __restrict acc_im, std::size_t n) {
-  for (std::size_t j = 0; j < n; ++j) {
-    acc_re[j] += a_re[j] * b_re[j] - a_im[j] * b_im[j];
-    acc_im[j] += a_re[j] * b_im[j] + a_im[j] * b_re[j];
-  }
-}
 
 /// \brief A RowFft of length n (estimated plan) kept for this thread, as
 /// real_dft_bins() keeps its plans: the last few lengths the thread used, so a

@@ -76,6 +76,7 @@ TotalVariation::TotalVariation(std::span<const ChannelPsf> channels, int width,
             return row_fft_length(width + static_cast<int>(longest));
           }(),
           effort),
+      pair_fft_(fft_.length(), effort),
       settings_(settings) {
   const int n = fft_.length();
   const auto bins = static_cast<std::size_t>(fft_.bins());
@@ -113,7 +114,12 @@ void TotalVariation::prepare(int height, int threads) {
   const auto n = stride_;
   const auto complex_floats = static_cast<std::size_t>(2 * fft_.bins());
   while (static_cast<int>(workers_.size()) < threads) {
-    Scratch s{{}, {}, AlignedFloats(n), AlignedFloats(complex_floats)};
+    Scratch s{{},
+              {},
+              AlignedFloats(n),
+              AlignedFloats(complex_floats),
+              AlignedFloats(2 * n),
+              AlignedFloats(2 * n)};
     for (std::size_t c = 0; c < filters_.size(); ++c) {
       s.padded.emplace_back(n);
       s.rows.push_back(s.padded.back().span().first(static_cast<std::size_t>(width_)));
@@ -129,6 +135,7 @@ void TotalVariation::prepare(int height, int threads) {
     *a = AlignedFloats(n * h);
   spectra_ = AlignedFloats(spectrum_stride_ * h);
   pivots_ = AlignedFloats(static_cast<std::size_t>(fft_.bins()) * h);
+  rhs_waiting_.resize(h);
   factored_ = {0, 0, 0};
 }
 
@@ -212,16 +219,14 @@ void TotalVariation::split_edge(int edge, float threshold, bool restart) {
     relaxed_split<false>(lower[i] - upper[i], split[i], dual[i], alpha, -t, t);
 }
 
-void TotalVariation::transform_row(int y, Scratch& s, const Penalties& rho) {
+void TotalVariation::right_hand_side(int y, const Penalties& rho, float* __restrict real) const {
   const std::size_t n = stride_;
-  const auto bins = static_cast<std::size_t>(fft_.bins());
   const std::size_t at = static_cast<std::size_t>(y) * n;
-  float* __restrict real = s.real.data();
   const float* __restrict along = split_along_.data() + at;
   const float* __restrict box = split_box_.data() + at;
-  // The x-update's right-hand side beside the data: rho_along D_along^T s_along +
-  // rho_box s_box + rho_across D_across^T s_across, D^T s [i] = s[i-1] - s[i] (wrapping
-  // along the row, none beyond the first and last row across).
+  // rho_along D_along^T s_along + rho_box s_box + rho_across D_across^T s_across,
+  // D^T s [i] = s[i-1] - s[i] (wrapping along the row, none beyond the first and
+  // last row across).
   real[0] = rho.along * (along[n - 1] - along[0]) + rho.box * box[0];
 #pragma omp simd
   for (std::size_t i = 1; i < n; ++i)
@@ -236,12 +241,92 @@ void TotalVariation::transform_row(int y, Scratch& s, const Penalties& rho) {
 #pragma omp simd
     for (std::size_t i = 0; i < n; ++i) real[i] -= rho.across * below[i];
   }
-  float* __restrict spectrum = spectra_.data() + static_cast<std::size_t>(y) * spectrum_stride_;
-  fft_.forward(real, reinterpret_cast<std::complex<float>*>(spectrum));
-  // Plus the data part, over N (the inverse FFT is unnormalised).
-  const float* __restrict data = data_.data() + static_cast<std::size_t>(y) * 2 * bins;
-  const float scale = 1.0f / static_cast<float>(n);
-  for (std::size_t j = 0; j < 2 * bins; ++j) spectrum[j] = (spectrum[j] + data[j]) * scale;
+}
+
+void TotalVariation::transform_row(int y, Scratch& s, const Penalties& rho) {
+  const std::size_t n = stride_;
+  const auto bins = static_cast<std::size_t>(fft_.bins());
+  const float scale = 1.0f / static_cast<float>(n);  // the inverse FFT is unnormalised
+  auto spectrum_row = [&](int row) {
+    return spectra_.data() + static_cast<std::size_t>(row) * spectrum_stride_;
+  };
+  auto data_row = [&](int row) { return data_.data() + static_cast<std::size_t>(row) * 2 * bins; };
+  const int partner = y ^ 1;
+  if (partner >= height_) {
+    right_hand_side(y, rho, s.real.data());
+    float* __restrict spectrum = spectrum_row(y);
+    fft_.forward(s.real.data(), reinterpret_cast<std::complex<float>*>(spectrum));
+    const float* __restrict data = data_row(y);
+    for (std::size_t j = 0; j < 2 * bins; ++j) spectrum[j] = (spectrum[j] + data[j]) * scale;
+    return;
+  }
+  const auto waiting = [&](int row) { return rhs_waiting_[static_cast<std::size_t>(row)]; };
+  if (!waiting(partner)) {  // the first of the pair: it waits where its spectrum will go
+    right_hand_side(y, rho, spectrum_row(y));
+    rhs_waiting_[static_cast<std::size_t>(y)] = 1;
+    return;
+  }
+  rhs_waiting_[static_cast<std::size_t>(partner)] = 0;
+  right_hand_side(y, rho, s.real.data());
+  const int even = y & ~1;
+  const float* __restrict re = y == even ? s.real.data() : spectrum_row(even);
+  const float* __restrict im = y == even ? spectrum_row(even + 1) : s.real.data();
+  float* __restrict pair = s.pair.data();
+  for (std::size_t i = 0; i < n; ++i) {
+    pair[2 * i] = re[i];
+    pair[2 * i + 1] = im[i];
+  }
+  pair_fft_.forward(s.pair.complex(), s.pair_spectrum.complex());
+  // Z = A + i B with A, B the rows' (Hermitian) spectra: A[k] = (Z[k] + conj Z[n-k]) / 2,
+  // B[k] = (Z[k] - conj Z[n-k]) / 2i, k = 0..n/2; plus the data part, over N.
+  const float* __restrict z = s.pair_spectrum.data();
+  float* __restrict a = spectrum_row(even);
+  float* __restrict b = spectrum_row(even + 1);
+  const float* __restrict data_a = data_row(even);
+  const float* __restrict data_b = data_row(even + 1);
+  a[0] = (z[0] + data_a[0]) * scale;
+  a[1] = data_a[1] * scale;
+  b[0] = (z[1] + data_b[0]) * scale;
+  b[1] = data_b[1] * scale;
+  for (std::size_t k = 1; k < bins; ++k) {
+    const std::size_t m = n - k;
+    const float zr = z[2 * k], zi = z[2 * k + 1], mr = z[2 * m], mi = z[2 * m + 1];
+    a[2 * k] = (0.5f * (zr + mr) + data_a[2 * k]) * scale;
+    a[2 * k + 1] = (0.5f * (zi - mi) + data_a[2 * k + 1]) * scale;
+    b[2 * k] = (0.5f * (zi + mi) + data_b[2 * k]) * scale;
+    b[2 * k + 1] = (0.5f * (mr - zr) + data_b[2 * k + 1]) * scale;
+  }
+}
+
+void TotalVariation::invert_pair(int y, Scratch& s) {
+  const std::size_t n = stride_;
+  const auto bins = static_cast<std::size_t>(fft_.bins());
+  const float* __restrict a = spectra_.data() + static_cast<std::size_t>(y) * spectrum_stride_;
+  const float* __restrict b = a + spectrum_stride_;
+  float* __restrict z = s.pair.data();
+  // Z = A + i B over all n bins, A[n-k] = conj A[k] (likewise B). Bins 0 and n/2
+  // take the real parts only, as a real-output inverse does.
+  const std::size_t nyquist = n / 2;
+  z[0] = a[0];
+  z[1] = b[0];
+  z[2 * nyquist] = a[2 * nyquist];
+  z[2 * nyquist + 1] = b[2 * nyquist];
+  for (std::size_t k = 1; k < bins - 1; ++k) {
+    const float ar = a[2 * k], ai = a[2 * k + 1], br = b[2 * k], bi = b[2 * k + 1];
+    const std::size_t m = n - k;
+    z[2 * k] = ar - bi;
+    z[2 * k + 1] = ai + br;
+    z[2 * m] = ar + bi;
+    z[2 * m + 1] = br - ai;
+  }
+  pair_fft_.inverse(s.pair.complex(), s.pair_spectrum.complex());
+  const float* __restrict rows = s.pair_spectrum.data();
+  float* __restrict upper = x_.data() + static_cast<std::size_t>(y) * n;
+  float* __restrict lower = upper + n;
+  for (std::size_t i = 0; i < n; ++i) {
+    upper[i] = rows[2 * i];
+    lower[i] = rows[2 * i + 1];
+  }
 }
 
 void TotalVariation::factor_across(const Penalties& rho) {
@@ -326,6 +411,7 @@ void TotalVariation::finish_seams(std::span<const std::pair<int, int>> shares, c
 void TotalVariation::deconvolve(const RowLoader& load, int height, const Plane& warm_start,
                                 Plane& out, RowPool& pool) {
   prepare(height, pool.threads());
+  std::fill(rhs_waiting_.begin(), rhs_waiting_.end(), 0);
   const std::size_t n = stride_;
   const auto bins = static_cast<std::size_t>(fft_.bins());
   const bool own_start = warm_start.empty();
@@ -339,10 +425,13 @@ void TotalVariation::deconvolve(const RowLoader& load, int height, const Plane& 
     for (int i = 0; i < width_; ++i)
       row[static_cast<std::size_t>(i)] = std::clamp(x[i], 0.0f, 1.0f);
   };
+  // The row passes go by pairs of rows (2k, 2k + 1): every share starts at an even row.
+  const int pairs = (height + 1) / 2;
   // The first estimate, and iteration 1's splits and right-hand sides.
   const Step first = step_of(settings_, 1);
-  pool.run(height, [&](int from, int to, int worker) {
+  pool.run(pairs, [&](int first_pair, int last_pair, int worker) {
     Scratch& s = workers_[static_cast<std::size_t>(worker)];
+    const int from = 2 * first_pair, to = std::min(height, 2 * last_pair);
     shares[static_cast<std::size_t>(worker)] = {from, to};
     for (int y = from; y < to; ++y) {
       load_data(y, load, s, own_start);
@@ -375,16 +464,23 @@ void TotalVariation::deconvolve(const RowLoader& load, int height, const Plane& 
     // x's rows; unless this was the last iteration, each row's splits and the
     // next iteration's right-hand side while the row is in cache.
     const bool last = k == iterations;
-    pool.run(height, [&](int from, int to, int worker) {
+    pool.run(pairs, [&](int first_pair, int last_pair, int worker) {
       Scratch& s = workers_[static_cast<std::size_t>(worker)];
-      for (int y = from; y < to; ++y) {
-        auto* spectrum = reinterpret_cast<std::complex<float>*>(
-            spectra_.data() + static_cast<std::size_t>(y) * spectrum_stride_);
-        fft_.inverse(spectrum, x_.data() + static_cast<std::size_t>(y) * n);
-        if (last)
-          write_out(y);
-        else
-          finish_row(y, from, s, next.threshold_along, false, next);
+      const int from = 2 * first_pair, to = std::min(height, 2 * last_pair);
+      for (int y = from; y < to; y += 2) {
+        if (y + 1 < to) {
+          invert_pair(y, s);
+        } else {  // the last row of an odd height
+          auto* spectrum = reinterpret_cast<std::complex<float>*>(
+              spectra_.data() + static_cast<std::size_t>(y) * spectrum_stride_);
+          fft_.inverse(spectrum, x_.data() + static_cast<std::size_t>(y) * n);
+        }
+        for (int row = y; row < std::min(to, y + 2); ++row) {
+          if (last)
+            write_out(row);
+          else
+            finish_row(row, from, s, next.threshold_along, false, next);
+        }
       }
     });
     if (!last) finish_seams(shares, next, false);

@@ -39,9 +39,13 @@
 // one back up the rows per bin (vectorised across the bins), and the rows'
 // inverse FFTs. The data part of the right-hand side, sum_c conj(G_c) Y_c / v_c,
 // is computed once per frame. z-updates are soft thresholds (hard for L0), w
-// is the clip to [0, 1]. Each iteration is four passes over the frame on the
-// RowPool: the across-row splits, the row FFTs, the sweeps (bins split between
-// the threads), the inverse row FFTs with the along-row and box splits.
+// is the clip to [0, 1]. Each iteration is two passes over the frame on the
+// RowPool: the sweeps (bins split between the threads), then the rows: each
+// row's inverse FFT, its splits, the edge above it and the next iteration's
+// right-hand side one row behind, while the rows are in cache. Rows 2k and
+// 2k + 1 go through both FFTs together as one complex row (RowPairFft, as in
+// joint_wiener.hpp), on any number of threads (the threads' shares start at
+// even rows), so the result does not depend on the thread count.
 // An earlier solver linearised the across-row term instead (a proximal term
 // 4 rho_across I, which kept the update row-separable but damped every step),
 // without relaxation and with thresholds of 2 sigma: it needed 40 iterations
@@ -167,6 +171,7 @@ class TotalVariation {
     std::vector<std::span<float>> rows;  ///< first width() samples of each
     AlignedFloats real;                  ///< N
     AlignedFloats spectrum;              ///< bins complex
+    AlignedFloats pair, pair_spectrum;   ///< N complex each: two rows as one (RowPairFft)
   };
   struct Penalties {
     float along, across, box;
@@ -184,7 +189,15 @@ class TotalVariation {
   void load_data(int y, const RowLoader& load, Scratch& s, bool wiener_start);
   void split_row(int y, float threshold, bool restart);
   void split_edge(int edge, float threshold, bool restart);
+  /// Row y's part of the x-update's right-hand side that the splits make, into `real` (N).
+  void right_hand_side(int y, const Penalties& rho, float* real) const;
+  /// Row y's right-hand side transformed, with the data part, into its spectra_ row.
+  /// Rows 2k and 2k + 1 are transformed together (RowPairFft), whichever comes
+  /// second; the first waits in its spectra_ row (rhs_waiting_). A row without a
+  /// partner (the last of an odd height) goes alone.
   void transform_row(int y, Scratch& s, const Penalties& rho);
+  /// Rows y and y + 1 (y even) of x from their solved spectra, as one inverse.
+  void invert_pair(int y, Scratch& s);
   /// Row y of x is this iteration's: its along and box splits (`threshold_along`),
   /// then the `next` iteration's split of the edge above it (rows y - 1 and y are
   /// both done) and right-hand side of the row above (it waited for that edge).
@@ -200,6 +213,7 @@ class TotalVariation {
 
   int width_;
   RowFft fft_;
+  RowPairFft pair_fft_;
   TotalVariationSettings settings_;
   std::vector<std::vector<std::complex<float>>> filters_;  ///< conj(G_c) / v_c
   std::vector<double> data_power_;                         ///< sum_c |G_c|^2 / v_c per bin
@@ -213,9 +227,10 @@ class TotalVariation {
   AlignedFloats data_;  ///< sum_c conj(G_c) Y_c / v_c, bins complex per row (stride 2 * bins)
   // Each split keeps its scaled dual u and s = z - u (TV), or z (L0); s_across per edge.
   AlignedFloats x_, dual_along_, split_along_, dual_box_, split_box_, dual_across_, split_across_;
-  AlignedFloats spectra_;        ///< the x-update's right-hand side, then its solution, per row
-  AlignedFloats pivots_;         ///< 1 / the tridiagonal pivots, bins per row
-  Penalties factored_{0, 0, 0};  ///< the penalties pivots_ hold (0: none yet)
+  AlignedFloats spectra_;          ///< the x-update's right-hand side, then its solution, per row
+  AlignedFloats pivots_;           ///< 1 / the tridiagonal pivots, bins per row
+  std::vector<char> rhs_waiting_;  ///< per row: its right-hand side waits for its pair's
+  Penalties factored_{0, 0, 0};    ///< the penalties pivots_ hold (0: none yet)
 };
 
 }  // namespace flutterscan::imaging
