@@ -84,16 +84,20 @@ bool on_code_rows(const reader::DecodedCode& code, double y) {
 }
 
 /// The window's rows summed along its bars and deblurred by joint Wiener (one
-/// thread): `crop` the window's samples, `tv_latent` tv's latent of them, whose
-/// columns [keep_from, keep_to) (the window kept) give the bars' `slope`.
+/// thread): `crop` the window's samples, `first_latent` the first pass's latent
+/// of them (joint Wiener's), whose columns [keep_from, keep_to) (the window kept)
+/// give the bars' `slope`. Not tv's latent: on a real label turned 8 degrees
+/// (ean13-2-05 of the real-print photos, beside a second code, print and shadow)
+/// the slope found on tv's latent of the window was 0, on joint Wiener's -0.14,
+/// as on the sharp scene (docs/algorithms.md, "Sums along the bars").
 Result<imaging::DeblurResult, std::string> deblur_bar_sums(const imaging::MotionFrame& crop,
-                                                           const imaging::Plane& tv_latent,
+                                                           const imaging::Plane& first_latent,
                                                            int keep_from, int keep_to,
                                                            const imaging::CaptureModel& model,
                                                            double& slope) {
-  imaging::Plane kept = imaging::Plane::uninitialised(keep_to - keep_from, tv_latent.height);
-  for (int y = 0; y < tv_latent.height; ++y)
-    std::copy_n(tv_latent.row(y).begin() + keep_from, keep_to - keep_from, kept.row(y).begin());
+  imaging::Plane kept = imaging::Plane::uninitialised(keep_to - keep_from, first_latent.height);
+  for (int y = 0; y < first_latent.height; ++y)
+    std::copy_n(first_latent.row(y).begin() + keep_from, keep_to - keep_from, kept.row(y).begin());
   slope = imaging::bar_slope(kept, kSlopeHalfRows);
   auto sums = imaging::MotionFrame::make(imaging::sum_along_bars(crop.image(), slope, kBarHalfRows),
                                          imaging::Direction::kPlusX);
@@ -348,15 +352,12 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
     const DeblurOut deblurred = cropped.ok() ? imaging::deblur(cropped.value(), frame.model, tv)
                                              : DeblurOut::failure(cropped.error());
     if (deblurred.ok()) {
-      // Where the window read codes before: the latent as it was over the window
-      // kept, in the crop's coordinates (paste()'s), to put back if tv's loses one.
-      imaging::Plane first;
-      if (!held.empty()) {
-        first = imaging::Plane::uninitialised(c1 - c0, r1 - r0);
-        for (int y = r0; y < r1; ++y)
-          for (int n = keep0; n < keep1; ++n)
-            first.at(n - c0, y - r0) = frame.motion_latent.at(n, y);
-      }
+      // The first pass's latent over the window kept, in the crop's coordinates
+      // (paste()'s): put back if tv's loses a code the window read before, and
+      // where the bars' slope is measured.
+      imaging::Plane first = imaging::Plane(c1 - c0, r1 - r0);
+      for (int y = r0; y < r1; ++y)
+        for (int n = keep0; n < keep1; ++n) first.at(n - c0, y - r0) = frame.motion_latent.at(n, y);
       const imaging::Plane& patch = deblurred.value().latent;
       paste(patch);
       const std::size_t before = readout.codes.size();
@@ -374,7 +375,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
         // No linear code: the rows summed along the bars (at 17 times the light)
         // for one that tv's noise hid.
         BarSumsTry bars;
-        const DeblurOut profile = deblur_bar_sums(cropped.value(), patch, keep0 - c0, keep1 - c0,
+        const DeblurOut profile = deblur_bar_sums(cropped.value(), first, keep0 - c0, keep1 - c0,
                                                   frame.model, bars.slope);
         // Bars that lean: a short code's rows may not cross it whole; read turned upright too.
         const double turn =
