@@ -861,6 +861,32 @@ TEST_F(ImagingCliTest, TheCascadesPictureIsTvsWholeFrameBeyondItsWindowsWhenTheB
   EXPECT_GT(inside_differ, 0) << cascade;
 }
 
+TEST_F(ImagingCliTest, TheBarSumsFindTheSlopeOfARealLabelTurnedEightDegrees) {
+  // ean13-2-05 of the shared real-label photos (../shared/data beside the
+  // repository, from ZXing's test images; skipped where absent): an EAN-13 turned
+  // 8 degrees beside a second code cut by the photo's edge, print and a shadow.
+  // At 1000 e- tv's latent of its window reads no linear code, so its rows are
+  // summed along the bars: along the slope found on the first pass's latent,
+  // -0.14 px per row as on the sharp scene (on tv's latent it was 0.00).
+  const fs::path photo = fs::path(FLUTTERSCAN_REAL_LABELS) / "ean13-2-05.png";
+  if (!fs::exists(photo)) GTEST_SKIP() << "no real-label photos at " << photo.parent_path();
+  const RunResult simulated =
+      run({"simulate", "--scene", "photo:" + photo.string(), "--code", "seed-maxmin-1",
+           "--electrons", "1000", "--seed", "7", "-o", frame()});
+  ASSERT_EQ(simulated.exit_code, 0) << simulated;
+  const RunResult result =
+      run({"deblur", frame(), "--descriptor", descriptor(), "--decode", "--json", "-o", output()});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  const json report = json_lines(result.out)[0];
+  int summed = 0;
+  for (const json& window : report["second_pass"]["windows"]) {
+    if (!window.contains("bar_sums")) continue;
+    ++summed;
+    EXPECT_NEAR(window["bar_sums"]["slope"].get<double>(), -0.14, 0.03) << result;
+  }
+  EXPECT_GT(summed, 0) << result;
+}
+
 TEST_F(ImagingCliTest, InDimLightTheCascadeReadsAMatrixCodeWithAnIsotropicPrior) {
   // 130 e-: tv's prior, heavier across the motion (bars upright), reads nothing
   // in the QR code's window, nor do the bar sums; the window deblurred once more
