@@ -319,7 +319,7 @@ std::vector<SpeedSample> speed_samples_live(const SpeedFlags& f) {
   std::vector<SpeedSample> samples;
   for (const auto& frame : captured.frames) {
     const auto format = frame.format.pixel_format;
-    if (format == capture::PixelFormat::kBayerRggb8 || format == capture::PixelFormat::kBayerRggb16)
+    if (capture::is_bayer_mosaic(format))
       throw UsageError("camera " + captured.config.camera.spec +
                        " delivers raw Bayer frames: the blur estimate needs the channels apart "
                        "(configure an RGB pixel format for calibrate speed)");

@@ -92,6 +92,10 @@ bool keeps_channels_apart(PixelFormat format) {
   return format != PixelFormat::kYuyv && format != PixelFormat::kMjpeg;
 }
 
+bool is_bayer_mosaic(PixelFormat format) {
+  return format == PixelFormat::kBayerRggb8 || format == PixelFormat::kBayerRggb16;
+}
+
 int bytes_per_pixel(PixelFormat format) {
   for (const auto& entry : kPixelFormats) {
     if (entry.format == format) return entry.bytes;

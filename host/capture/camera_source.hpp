@@ -51,6 +51,8 @@ std::optional<PixelFormat> pixel_format_from_name(const std::string& name);
 /// \brief True for formats whose values keep the camera channels apart (every
 /// one but YUYV and MJPEG).
 bool keeps_channels_apart(PixelFormat format);
+/// \brief True for the raw Bayer mosaics (kBayerRggb8, kBayerRggb16).
+bool is_bayer_mosaic(PixelFormat format);
 /// \brief Bytes per pixel of an uncompressed format (YUYV: 2; MJPEG: 0).
 int bytes_per_pixel(PixelFormat format);
 

@@ -277,7 +277,7 @@ Result<ElectronFrame, std::string> frame_to_electrons(const Frame& frame,
   ElectronFrame out;
   out.electrons = planes(channels, f.width, f.height);
   // Row levels for a motion frame's rows: a Bayer mosaic is split into planes first.
-  const bool mosaic = p == PixelFormat::kBayerRggb8 || p == PixelFormat::kBayerRggb16;
+  const bool mosaic = is_bayer_mosaic(p);
   if (!mosaic) out.levels = imaging::RowLevels(channels, f.height, f.width);
   std::size_t saturated = 0;
   for (int y = 0; y < f.height; ++y) {

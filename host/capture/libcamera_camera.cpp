@@ -140,8 +140,7 @@ class LibcameraCamera final : public CameraSource {
     if (!camera_) return "camera " + name() + ": not opened";
     if (wanted.trigger != TriggerMode::kFreeRun)
       return "camera " + name() + ": libcamera has no trigger control: use trigger free-run";
-    const bool raw = !wanted.pixel_format || *wanted.pixel_format == PixelFormat::kBayerRggb8 ||
-                     *wanted.pixel_format == PixelFormat::kBayerRggb16;
+    const bool raw = !wanted.pixel_format || is_bayer_mosaic(*wanted.pixel_format);
     config_ = camera_->generateConfiguration(
         {raw ? libcamera::StreamRole::Raw : libcamera::StreamRole::StillCapture});
     if (!config_ || config_->empty()) return "camera " + name() + ": no configuration for the role";

@@ -77,7 +77,7 @@ void fuzz_camera_frame(fuzz::Bytes& in) {
   frame.data = in.rest();
   using capture::PixelFormat;
   const PixelFormat f = frame.format.pixel_format;
-  const bool bayer = f == PixelFormat::kBayerRggb8 || f == PixelFormat::kBayerRggb16;
+  const bool bayer = capture::is_bayer_mosaic(f);
   const bool mono = f == PixelFormat::kMono8 || f == PixelFormat::kMono16;
   auto dn = capture::frame_to_dn(frame);
   if (!dn.ok()) {

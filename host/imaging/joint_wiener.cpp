@@ -41,44 +41,16 @@ void filter_and_sum_channels(const RowFft& fft,
 
 namespace {
 
-/// Rows a and b (`width` samples; b null: a row of zeros) into one complex row
-/// of blend.size() + width values, a + i b, each extended as
-/// extend_row_periodically() extends a row.
-void interleave_pair(const float* __restrict a, const float* __restrict b, int width,
-                     std::span<const float> blend, float* __restrict pair) {
+/// Extends the complex row `pair` (a + i b, its first `width` values loaded) to
+/// width + blend.size() values: each part as extend_row_periodically() extends a row.
+void extend_pair_periodically(float* __restrict pair, int width, std::span<const float> blend) {
   const auto w = static_cast<std::size_t>(width);
-  if (b != nullptr) {
-    for (std::size_t i = 0; i < w; ++i) {
-      pair[2 * i] = a[i];
-      pair[2 * i + 1] = b[i];
-    }
-  } else {
-    for (std::size_t i = 0; i < w; ++i) {
-      pair[2 * i] = a[i];
-      pair[2 * i + 1] = 0.0f;
-    }
-  }
-  const float last_a = a[w - 1], step_a = a[0] - last_a;
-  const float last_b = b != nullptr ? b[w - 1] : 0.0f;
-  const float step_b = b != nullptr ? b[0] - last_b : 0.0f;
+  const float last_a = pair[2 * (w - 1)], step_a = pair[0] - last_a;
+  const float last_b = pair[2 * (w - 1) + 1], step_b = pair[1] - last_b;
   float* __restrict tail = pair + 2 * w;
   for (std::size_t i = 0; i < blend.size(); ++i) {
     tail[2 * i] = last_a + step_a * blend[i];
     tail[2 * i + 1] = last_b + step_b * blend[i];
-  }
-}
-
-/// The real parts of a complex row into `a`, the imaginary ones into `b` (`b` may be empty).
-void deinterleave_pair(const float* __restrict pair, std::span<float> a, std::span<float> b) {
-  float* __restrict to_a = a.data();
-  if (b.empty()) {
-    for (std::size_t i = 0; i < a.size(); ++i) to_a[i] = pair[2 * i];
-    return;
-  }
-  float* __restrict to_b = b.data();
-  for (std::size_t i = 0; i < a.size(); ++i) {
-    to_a[i] = pair[2 * i];
-    to_b[i] = pair[2 * i + 1];
   }
 }
 
@@ -191,8 +163,9 @@ JointWiener::Scratch JointWiener::make_scratch() const {
 void JointWiener::deconvolve_pair(Scratch& s, std::span<float> a, std::span<float> b) const {
   const auto bins = static_cast<std::size_t>(fft_.length());
   for (std::size_t c = 0; c < filters_.size(); ++c) {
-    interleave_pair(s.first[c].data(), b.empty() ? nullptr : s.second[c].data(), width_, blend_,
-                    s.pair.data());
+    interleave_rows(s.first[c].data(), b.empty() ? nullptr : s.second[c].data(),
+                    static_cast<std::size_t>(width_), s.pair.data());
+    extend_pair_periodically(s.pair.data(), width_, blend_);
     fft_.forward(s.pair.complex(), s.spectrum.complex());
     if (c == 0)
       multiply_spectra(filters_[c].data(), s.spectrum.data(), s.sum.data(), bins);
@@ -200,7 +173,7 @@ void JointWiener::deconvolve_pair(Scratch& s, std::span<float> a, std::span<floa
       accumulate_spectra(filters_[c].data(), s.spectrum.data(), s.sum.data(), bins, false);
   }
   fft_.inverse(s.sum.complex(), s.out.complex());
-  deinterleave_pair(s.out.data(), a, b);
+  deinterleave_rows(s.out.data(), a, b);
 }
 
 template <typename LoadUnlessFlat>

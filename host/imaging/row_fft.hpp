@@ -105,6 +105,39 @@ class RowPairFft {
   fftwf_plan inverse_ = nullptr;
 };
 
+/// \brief Rows a and b (`count` samples each; b null: a row of zeros) into one
+/// complex row a + i b, interleaved (2 count floats): RowPairFft's input.
+inline void interleave_rows(const float* __restrict a, const float* __restrict b, std::size_t count,
+                            float* __restrict pair) {
+  if (b == nullptr) {
+    for (std::size_t i = 0; i < count; ++i) {
+      pair[2 * i] = a[i];
+      pair[2 * i + 1] = 0.0f;
+    }
+    return;
+  }
+  for (std::size_t i = 0; i < count; ++i) {
+    pair[2 * i] = a[i];
+    pair[2 * i + 1] = b[i];
+  }
+}
+
+/// \brief The first a.size() values of an interleaved complex row: the real parts
+/// into `a`, the imaginary ones into `b` (empty: not wanted).
+inline void deinterleave_rows(const float* __restrict pair, std::span<float> a,
+                              std::span<float> b) {
+  float* __restrict to_a = a.data();
+  if (b.empty()) {
+    for (std::size_t i = 0; i < a.size(); ++i) to_a[i] = pair[2 * i];
+    return;
+  }
+  float* __restrict to_b = b.data();
+  for (std::size_t i = 0; i < a.size(); ++i) {
+    to_a[i] = pair[2 * i];
+    to_b[i] = pair[2 * i + 1];
+  }
+}
+
 /// \brief A RowFft of length n (estimated plan) kept for this thread, as
 /// real_dft_bins() keeps its plans: the last few lengths the thread used, so a
 /// search called per frame does not plan again (the reference stays valid until

@@ -247,9 +247,6 @@ void TotalVariation::transform_row(int y, Scratch& s, const Penalties& rho) {
   const std::size_t n = stride_;
   const auto bins = static_cast<std::size_t>(fft_.bins());
   const float scale = 1.0f / static_cast<float>(n);  // the inverse FFT is unnormalised
-  auto spectrum_row = [&](int row) {
-    return spectra_.data() + static_cast<std::size_t>(row) * spectrum_stride_;
-  };
   auto data_row = [&](int row) { return data_.data() + static_cast<std::size_t>(row) * 2 * bins; };
   const int partner = y ^ 1;
   if (partner >= height_) {
@@ -271,11 +268,7 @@ void TotalVariation::transform_row(int y, Scratch& s, const Penalties& rho) {
   const int even = y & ~1;
   const float* __restrict re = y == even ? s.real.data() : spectrum_row(even);
   const float* __restrict im = y == even ? spectrum_row(even + 1) : s.real.data();
-  float* __restrict pair = s.pair.data();
-  for (std::size_t i = 0; i < n; ++i) {
-    pair[2 * i] = re[i];
-    pair[2 * i + 1] = im[i];
-  }
+  interleave_rows(re, im, n, s.pair.data());
   pair_fft_.forward(s.pair.complex(), s.pair_spectrum.complex());
   // Z = A + i B with A, B the rows' (Hermitian) spectra: A[k] = (Z[k] + conj Z[n-k]) / 2,
   // B[k] = (Z[k] - conj Z[n-k]) / 2i, k = 0..n/2; plus the data part, over N.
@@ -301,8 +294,8 @@ void TotalVariation::transform_row(int y, Scratch& s, const Penalties& rho) {
 void TotalVariation::invert_pair(int y, Scratch& s) {
   const std::size_t n = stride_;
   const auto bins = static_cast<std::size_t>(fft_.bins());
-  const float* __restrict a = spectra_.data() + static_cast<std::size_t>(y) * spectrum_stride_;
-  const float* __restrict b = a + spectrum_stride_;
+  const float* __restrict a = spectrum_row(y);
+  const float* __restrict b = spectrum_row(y + 1);
   float* __restrict z = s.pair.data();
   // Z = A + i B over all n bins, A[n-k] = conj A[k] (likewise B). Bins 0 and n/2
   // take the real parts only, as a real-output inverse does.
@@ -320,13 +313,8 @@ void TotalVariation::invert_pair(int y, Scratch& s) {
     z[2 * m + 1] = br - ai;
   }
   pair_fft_.inverse(s.pair.complex(), s.pair_spectrum.complex());
-  const float* __restrict rows = s.pair_spectrum.data();
-  float* __restrict upper = x_.data() + static_cast<std::size_t>(y) * n;
-  float* __restrict lower = upper + n;
-  for (std::size_t i = 0; i < n; ++i) {
-    upper[i] = rows[2 * i];
-    lower[i] = rows[2 * i + 1];
-  }
+  float* upper = x_.data() + static_cast<std::size_t>(y) * n;
+  deinterleave_rows(s.pair_spectrum.data(), {upper, n}, {upper + n, n});
 }
 
 void TotalVariation::factor_across(const Penalties& rho) {
@@ -471,9 +459,8 @@ void TotalVariation::deconvolve(const RowLoader& load, int height, const Plane& 
         if (y + 1 < to) {
           invert_pair(y, s);
         } else {  // the last row of an odd height
-          auto* spectrum = reinterpret_cast<std::complex<float>*>(
-              spectra_.data() + static_cast<std::size_t>(y) * spectrum_stride_);
-          fft_.inverse(spectrum, x_.data() + static_cast<std::size_t>(y) * n);
+          fft_.inverse(reinterpret_cast<std::complex<float>*>(spectrum_row(y)),
+                       x_.data() + static_cast<std::size_t>(y) * n);
         }
         for (int row = y; row < std::min(to, y + 2); ++row) {
           if (last)

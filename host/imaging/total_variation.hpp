@@ -196,6 +196,10 @@ class TotalVariation {
   /// second; the first waits in its spectra_ row (rhs_waiting_). A row without a
   /// partner (the last of an odd height) goes alone.
   void transform_row(int y, Scratch& s, const Penalties& rho);
+  /// Row y of spectra_ (spectrum_stride_ floats: bins complex, or a waiting right-hand side).
+  float* spectrum_row(int y) const {
+    return spectra_.data() + static_cast<std::size_t>(y) * spectrum_stride_;
+  }
   /// Rows y and y + 1 (y even) of x from their solved spectra, as one inverse.
   void invert_pair(int y, Scratch& s);
   /// Row y of x is this iteration's: its along and box splits (`threshold_along`),

@@ -86,8 +86,7 @@ Result<imaging::CaptureModel, std::string> frame_model(const ExposureRecord& eve
   m.bit_depth = format.bit_depth;
   m.black_level = o.black_level_dn;
   m.gain = o.gain_e_per_dn > 0 ? o.gain_e_per_dn : o.full_well_e / (std::pow(2.0, m.bit_depth) - 1);
-  m.bayer_rggb = format.pixel_format == capture::PixelFormat::kBayerRggb8 ||
-                 format.pixel_format == capture::PixelFormat::kBayerRggb16;
+  m.bayer_rggb = capture::is_bayer_mosaic(format.pixel_format);
   if (auto problem = imaging::capture_model_problem(m); !problem.empty())
     return Out::failure(where + ": " + problem);
   return Out::success(std::move(m));

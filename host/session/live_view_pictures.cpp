@@ -32,8 +32,7 @@ capture::Frame thinned(const capture::Frame& frame, int step) {
   const capture::PixelFormat format = frame.format.pixel_format;
   const int bytes = capture::bytes_per_pixel(format);
   if (step <= 1 || bytes == 0 || format == capture::PixelFormat::kYuyv) return frame;
-  const bool bayer =
-      format == capture::PixelFormat::kBayerRggb8 || format == capture::PixelFormat::kBayerRggb16;
+  const bool bayer = capture::is_bayer_mosaic(format);
   const int cell = bayer ? 2 : 1;
   auto kept = [&](int length) {
     std::vector<int> at;

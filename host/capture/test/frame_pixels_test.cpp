@@ -71,8 +71,7 @@ TEST(FrameToElectrons, OnePassEqualsTheThreeStepsForEveryFastFormat) {
     ASSERT_EQ(fast.value().electrons.channel_count(), expected.channel_count());
     // The row levels made while converting are the converted rows' (bit for bit);
     // a Bayer mosaic's rows are no motion frame's.
-    const bool mosaic =
-        c.format == PixelFormat::kBayerRggb8 || c.format == PixelFormat::kBayerRggb16;
+    const bool mosaic = is_bayer_mosaic(c.format);
     EXPECT_EQ(fast.value().levels.empty(), mosaic);
     const imaging::RowLevels levels = imaging::RowLevels::of(fast.value().electrons);
     for (int ch = 0; ch < (mosaic ? 0 : expected.channel_count()); ++ch)
