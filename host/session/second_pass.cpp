@@ -355,7 +355,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
       // The first pass's latent over the window kept, in the crop's coordinates
       // (paste()'s): put back if tv's loses a code the window read before, and
       // where the bars' slope is measured.
-      imaging::Plane first = imaging::Plane(c1 - c0, r1 - r0);
+      imaging::Plane first = imaging::Plane::uninitialised(c1 - c0, r1 - r0);
       for (int y = r0; y < r1; ++y)
         for (int n = keep0; n < keep1; ++n) first.at(n - c0, y - r0) = frame.motion_latent.at(n, y);
       const imaging::Plane& patch = deblurred.value().latent;
