@@ -111,22 +111,42 @@ cv::Mat paper_level(const imaging::Plane& latent, int x0, int y0, int x1, int y1
   return paper;
 }
 
+/// The smoothed view's Gaussian, px: what a module's centre averages over. A
+/// 2.5 px module (a QR code of 57 modules in 140 px) keeps its centre's value
+/// against its neighbours', and the noise each sample carries falls by the
+/// Gaussian's footprint (about 6 pixels).
+constexpr double kModuleCentreSigmaPx = 0.7;
+
+/// Columns [x0, x1) of rows [y0, y1) of `latent`, smoothed (kModuleCentreSigmaPx).
+cv::Mat smoothed(const imaging::Plane& latent, int x0, int y0, int x1, int y1) {
+  const cv::Mat whole(latent.height, latent.width, CV_32F,
+                      const_cast<float*>(latent.pixels.data()));
+  cv::Mat out;
+  cv::GaussianBlur(whole(cv::Range(y0, y1), cv::Range(x0, x1)), out, {0, 0}, kModuleCentreSigmaPx,
+                   kModuleCentreSigmaPx, cv::BORDER_REPLICATE);
+  return out;
+}
+
 /// Columns [x0, x1) of rows [y0, y1) of `latent` into `lum` (rows of x1 - x0
 /// bytes) as ZXing's 8-bit luminance: linear in reflectance, sRGB-encoded,
-/// sRGB-encoded from the window's black level, or from it to the paper.
+/// sRGB-encoded from the window's black level, from it to the paper, or
+/// smoothed and encoded from it.
 void to_luminance(const imaging::Plane& latent, int x0, int y0, int x1, int y1, LuminanceView view,
                   std::vector<std::uint8_t>& lum) {
   const auto width = static_cast<std::size_t>(x1 - x0);
   lum.resize(width * static_cast<std::size_t>(y1 - y0));
   const std::vector<std::uint8_t>& srgb = srgb_table();
-  const bool from_black =
-      view == LuminanceView::kSrgbFromBlack || view == LuminanceView::kSrgbToPaper;
+  const bool from_black = view == LuminanceView::kSrgbFromBlack ||
+                          view == LuminanceView::kSrgbToPaper ||
+                          view == LuminanceView::kSmoothedFromBlack;
   const float black = from_black ? black_level(latent, x0, y0, x1, y1) : 0.0f;
   const float gain = black < 1.0f ? 1.0f / (1.0f - black) : 1.0f;
   const cv::Mat paper =
       view == LuminanceView::kSrgbToPaper ? paper_level(latent, x0, y0, x1, y1) : cv::Mat();
+  const cv::Mat smooth =
+      view == LuminanceView::kSmoothedFromBlack ? smoothed(latent, x0, y0, x1, y1) : cv::Mat();
   for (int y = y0; y < y1; ++y) {
-    const float* row = latent.row(y).data() + x0;
+    const float* row = smooth.empty() ? latent.row(y).data() + x0 : smooth.ptr<float>(y - y0);
     std::uint8_t* out = lum.data() + static_cast<std::size_t>(y - y0) * width;
     if (view == LuminanceView::kLinear) {
       for (std::size_t x = 0; x < width; ++x)
@@ -208,6 +228,8 @@ std::string luminance_view_name(LuminanceView view) {
       return "srgb-from-black";
     case LuminanceView::kSrgbToPaper:
       return "srgb-to-paper";
+    case LuminanceView::kSmoothedFromBlack:
+      return "smoothed-from-black";
   }
   return "linear";
 }
@@ -243,10 +265,15 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
       .setTryRotate(try_rotate);
   // The paper view is for linear codes: ZXing thresholds their rows by each
   // row's histogram, matrix codes by local blocks that the paper beside them
-  // does not sway.
+  // does not sway. The smoothed view is for matrix codes: a linear code's rows
+  // are read along their whole length, which averages its noise already.
   const ZXing::BarcodeFormats linear = linear_formats(hints.formats());
   ZXing::DecodeHints linear_hints = hints;
   linear_hints.setFormats(linear);
+  const ZXing::BarcodeFormats matrix =
+      hints.formats() & ZXing::BarcodeFormats(ZXing::BarcodeFormat::MatrixCodes);
+  ZXing::DecodeHints matrix_hints = hints;
+  matrix_hints.setFormats(matrix);
   const DecodeWindow whole{0, 0, latent.width, latent.height};
   std::vector<std::array<int, 4>> reading;  // windows that read a code: x0, y0, x1, y1
   for (const DecodeWindow& w :
@@ -269,15 +296,18 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
       continue;
     }
     // The linear view first; a window it reads nothing in, again sRGB-encoded,
-    // again from its black level, and its linear codes again to the paper.
+    // again from its black level, its linear codes again to the paper and its
+    // matrix codes again smoothed.
     constexpr std::array<LuminanceView, kLuminanceViews> kViews = {
         LuminanceView::kLinear, LuminanceView::kSrgb, LuminanceView::kSrgbFromBlack,
-        LuminanceView::kSrgbToPaper};
+        LuminanceView::kSrgbToPaper, LuminanceView::kSmoothedFromBlack};
     for (int v = 0; v < std::min(w.views, kLuminanceViews); ++v) {
       const LuminanceView luminance = kViews[static_cast<std::size_t>(v)];
       const bool to_paper = luminance == LuminanceView::kSrgbToPaper;
-      if (to_paper && linear.empty()) break;
-      const ZXing::DecodeHints& view_hints = to_paper ? linear_hints : hints;
+      const bool smooth = luminance == LuminanceView::kSmoothedFromBlack;
+      if ((to_paper && linear.empty()) || (smooth && matrix.empty())) continue;
+      const ZXing::DecodeHints& view_hints =
+          to_paper ? linear_hints : (smooth ? matrix_hints : hints);
       to_luminance(latent, x0, y0, x1, y1, luminance, lum);
       const ZXing::ImageView view(lum.data(), x1 - x0, y1 - y0, ZXing::ImageFormat::Lum);
       ZXing::Results results;

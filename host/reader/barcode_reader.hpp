@@ -30,16 +30,20 @@ namespace flutterscan::reader {
 /// for linear codes only, sRGB-encoded from the black level to the paper
 /// beside each pixel (a window none of those reads: a label darker than what
 /// lies beside it on its rows, which ZXing's per-row threshold for linear
-/// codes takes for the white).
-enum class LuminanceView { kLinear, kSrgb, kSrgbFromBlack, kSrgbToPaper };
+/// codes takes for the white); and, for matrix codes only, smoothed over a
+/// module's centre and sRGB-encoded from the black level (a window none of
+/// those reads: ZXing samples each module at one pixel, and a deblurred
+/// latent's noise is the pixel's own).
+enum class LuminanceView { kLinear, kSrgb, kSrgbFromBlack, kSrgbToPaper, kSmoothedFromBlack };
 /// The luminance views, in the order a window is read in them.
-inline constexpr int kLuminanceViews = 4;
+inline constexpr int kLuminanceViews = 5;
 
 /// \brief The linear (1-D) symbologies among `symbologies` (ZXing's names, as
 /// processing.symbologies gives them); empty if it names none.
 std::string linear_symbologies(const std::string& symbologies);
 
-/// \brief The view's name in logs: "linear", "srgb", "srgb-from-black", "srgb-to-paper".
+/// \brief The view's name in logs: "linear", "srgb", "srgb-from-black", "srgb-to-paper",
+/// "smoothed-from-black".
 std::string luminance_view_name(LuminanceView view);
 
 /// \brief One decoded barcode.
@@ -108,7 +112,8 @@ struct DecodeWindow {
 /// (each decoded on its own, in at most its `views`; none: the whole image), each window on the
 /// linear view and, where that reads nothing, on the sRGB-encoded one, then on
 /// the sRGB-encoded one from the window's black level, then (its linear
-/// symbologies only) from the black level to the paper (LuminanceView). A
+/// symbologies only) from the black level to the paper, then (its matrix
+/// symbologies only) smoothed from the black level (LuminanceView). A
 /// linear symbol that reaches its window's edge along its reading direction is
 /// cut by it and not taken for a read (it can decode to another value that
 /// passes its check). Positions are the latent's. `try_rotate`: also look for
