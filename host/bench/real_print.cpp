@@ -39,6 +39,7 @@
 #include <iostream>
 #include <map>
 #include <numbers>
+#include <set>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -88,6 +89,9 @@ struct SharpRead {
   double skew_deg = 0;  ///< the symbol's turn off the nearest axis, 0..45
   double contrast = 0;  ///< symbol contrast on the sharp scene (reflectance)
   double colour = 0;    ///< mean |band - grey| over the photo: how coloured it is
+  /// Texts other than the photo's the reader reads on the photo file or the sharp
+  /// scene: second codes on it (an add-on, a neighbour's label).
+  std::set<std::string> others;
 };
 
 struct Trial {
@@ -96,7 +100,17 @@ struct Trial {
   double electrons = 0;
   std::string method;
   bool read = false;
+  std::vector<std::string> others;  ///< texts read other than the photo's
 };
+
+/// The texts of `texts` other than `text`.
+std::vector<std::string> other_texts(const std::vector<std::string>& texts,
+                                     const std::string& text) {
+  std::vector<std::string> out;
+  for (const std::string& t : texts)
+    if (t != text) out.push_back(t);
+  return out;
+}
 
 bool reads(const reader::BarcodeReadout& readout, const std::string& text) {
   return std::any_of(readout.codes.begin(), readout.codes.end(),
@@ -124,6 +138,9 @@ SharpRead sharp_read(const bench::RealPhoto& photo, const imaging::Plane& truth,
   const reader::BarcodeReadout original = read_whole(original_grey(photo.path));
   s.original = reads(original, photo.text);
   for (const reader::DecodedCode& code : readout.codes) s.scene |= code.text == photo.text;
+  for (const auto* read : {&readout, &original})
+    for (const std::string& t : other_texts(reader::code_texts(*read), photo.text))
+      s.others.insert(t);
   // The code's properties where it reads: on the sharp scene, else on the photo.
   for (const reader::DecodedCode& code : s.scene ? readout.codes : original.codes) {
     if (code.text != photo.text) continue;
@@ -276,8 +293,11 @@ int run(const Options& o) {
           options.method = *imaging::method_from_name(name);
           options.threads = 1;
           const auto latent = imaging::deblur(capture.electrons, capture.model, options);
-          const bool read = latent.ok() && reads(read_whole(latent.value().latent), photo.text);
-          trials.push_back({photo.name, colour, electrons, name, read});
+          const reader::BarcodeReadout readout =
+              latent.ok() ? read_whole(latent.value().latent) : reader::BarcodeReadout{};
+          const bool read = reads(readout, photo.text);
+          trials.push_back({photo.name, colour, electrons, name, read,
+                            other_texts(reader::code_texts(readout), photo.text)});
           if (s.original && !read && colour && electrons == top_level && name == "tv" &&
               latent.ok())
             worst.push_back(
@@ -290,7 +310,8 @@ int run(const Options& o) {
           const std::vector<std::string> session_reads = session->read(capture.dn);
           trials.push_back({photo.name, colour, electrons, path,
                             std::find(session_reads.begin(), session_reads.end(), photo.text) !=
-                                session_reads.end()});
+                                session_reads.end(),
+                            other_texts(session_reads, photo.text)});
         }
       }
     }
@@ -376,6 +397,22 @@ int run(const Options& o) {
                "| method | light | photo | format | module px | turn deg | contrast | colour | "
                "cause |\n|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& line : failure_lines) std::cout << line << "\n";
+
+  // Texts read other than the photo's: a second code the sharp scene or the
+  // photo file reads too, or a misread (read on neither).
+  std::cout << "\nOther texts read (second: the photo file or the sharp scene reads it too; "
+               "misread: neither does)\n\n| method | scene | light | photo | text | |\n"
+               "|---|---|---|---|---|---|\n";
+  int misreads = 0;
+  for (const Trial& t : trials)
+    for (const std::string& text : t.others) {
+      const bool second = sharp[t.photo].others.contains(text);
+      misreads += !second;
+      std::cout << "| " << t.method << " | " << (t.colour ? "colour" : "grey") << " | "
+                << t.electrons << " | " << t.photo << " | " << text << " | "
+                << (second ? "second" : "**misread**") << " |\n";
+    }
+  std::cout << "\nmisreads: " << misreads << "\n";
 
   if (!o.out.empty()) {
     fs::create_directories(o.out);

@@ -6,6 +6,7 @@
 #include "imaging/frame_conversion.hpp"
 #include "imaging/motion_frame.hpp"
 #include "reader/assertion_guard.hpp"
+#include "reader/zbar_reader.hpp"
 
 #include <ZXing/BarcodeFormat.h>
 #include <ZXing/DecodeHints.h>
@@ -192,6 +193,37 @@ DecodedCode decoded_code(const ZXing::Result& result, int offset_x, int offset_y
   return code;
 }
 
+/// The linear code zbar read in a window at (offset_x, offset_y) of `latent`,
+/// measured on the latent. Its corners are the box of its scan lines' ends,
+/// in ZXing's order (the top edge first, along the reading direction).
+DecodedCode decoded_code(const ZbarSymbol& symbol, int offset_x, int offset_y,
+                         const imaging::Plane& latent) {
+  DecodedCode code;
+  code.text = symbol.text;
+  code.format = symbol.format;
+  code.symbology_id = symbol.symbology_id;
+  code.orientation_deg = symbol.along_x ? 0 : 90;
+  code.luminance = LuminanceView::kSrgbFromBlack;
+  code.decoder = "zbar";
+  const double x0 = symbol.min_x + offset_x, x1 = symbol.max_x + offset_x;
+  const double y0 = symbol.min_y + offset_y, y1 = symbol.max_y + offset_y;
+  const CodeCorners corners = symbol.along_x
+                                  ? CodeCorners{{{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}}}
+                                  : CodeCorners{{{x1, y0}, {x1, y1}, {x0, y1}, {x0, y0}}};
+  code.quality = measure_code(latent, code.format, corners);
+  code.min_x = code.max_x = code.quality.corners[0].x;
+  double sx = 0, sy = 0;
+  for (const CodePoint& c : code.quality.corners) {
+    sx += c.x;
+    sy += c.y;
+    code.min_x = std::min(code.min_x, c.x);
+    code.max_x = std::max(code.max_x, c.x);
+  }
+  code.centre_x = sx / 4;
+  code.centre_y = sy / 4;
+  return code;
+}
+
 /// Whether linear symbol `result`, read in a window `width` x `height` px,
 /// reaches the window's edge along its reading direction: its quiet zone, and
 /// maybe its last modules, lay outside what the decoder saw, and a symbol cut
@@ -301,6 +333,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
     constexpr std::array<LuminanceView, kLuminanceViews> kViews = {
         LuminanceView::kLinear, LuminanceView::kSrgb, LuminanceView::kSrgbFromBlack,
         LuminanceView::kSrgbToPaper, LuminanceView::kSmoothedFromBlack};
+    bool window_read = false;
     for (int v = 0; v < std::min(w.views, kLuminanceViews); ++v) {
       const LuminanceView luminance = kViews[static_cast<std::size_t>(v)];
       const bool to_paper = luminance == LuminanceView::kSrgbToPaper;
@@ -336,9 +369,25 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
       }
       if (any) {
         reading.push_back({x0, y0, x1, y1});
+        window_read = true;
         break;
       }
     }
+    // Read nothing in every view: zbar, for the linear codes, finds a row's
+    // edges where ZXing's one threshold per row found none.
+    if (window_read || linear.empty() || w.views < kLuminanceViews || !w.second_decoder) continue;
+    to_luminance(latent, x0, y0, x1, y1, LuminanceView::kSrgbFromBlack, lum);
+    bool any = false;
+    for (const ZbarSymbol& symbol : zbar_read(lum, x1 - x0, y1 - y0, symbologies, try_rotate)) {
+      const bool cut = symbol.along_x
+                           ? symbol.min_x <= kEdgePx || symbol.max_x >= x1 - x0 - 1 - kEdgePx
+                           : symbol.min_y <= kEdgePx || symbol.max_y >= y1 - y0 - 1 - kEdgePx;
+      if (cut) continue;
+      any = true;
+      DecodedCode code = decoded_code(symbol, x0, y0, latent);
+      if (!already_read(out.codes, code)) out.codes.push_back(std::move(code));
+    }
+    if (any) reading.push_back({x0, y0, x1, y1});
   }
   return out;
 }

@@ -59,6 +59,9 @@ struct DecodedCode {
   double centre_y = 0;
   double min_x = 0, max_x = 0;                       ///< extent along x
   LuminanceView luminance = LuminanceView::kLinear;  ///< the view it was read on
+  /// The decoder that read it: "zxing", or "zbar" (a linear code ZXing read in
+  /// no view of its window: zbar_reader.hpp).
+  std::string decoder = "zxing";
   /// Where it lies (corners refined on the image for linear codes), its module
   /// size and its indicative print quality (measure_code()).
   CodeQuality quality;
@@ -101,10 +104,12 @@ std::pair<double, double> corner_rows(const DecodedCode& code);
 bool same_symbol(const DecodedCode& a, const DecodedCode& b);
 
 /// \brief A rectangle of the latent image to decode: columns [x, x + width), rows [y, y + height),
-/// read in at most its first `views` luminance views (LuminanceView's order).
+/// read in at most its first `views` luminance views (LuminanceView's order)
+/// and, where it reads nothing in all of them, by zbar if `second_decoder`.
 struct DecodeWindow {
   int x = 0, y = 0, width = 0, height = 0;
   int views = kLuminanceViews;
+  bool second_decoder = true;
 };
 
 /// \brief Every barcode of the named symbologies (check_symbologies() passed)
@@ -113,7 +118,9 @@ struct DecodeWindow {
 /// linear view and, where that reads nothing, on the sRGB-encoded one, then on
 /// the sRGB-encoded one from the window's black level, then (its linear
 /// symbologies only) from the black level to the paper, then (its matrix
-/// symbologies only) smoothed from the black level (LuminanceView). A
+/// symbologies only) smoothed from the black level (LuminanceView); a window
+/// ZXing reads nothing in is read once more by zbar (its linear symbologies,
+/// from the black level: zbar_reader.hpp). A
 /// linear symbol that reaches its window's edge along its reading direction is
 /// cut by it and not taken for a read (it can decode to another value that
 /// passes its check). Positions are the latent's. `try_rotate`: also look for

@@ -24,6 +24,11 @@ struct ReaderOptions {
   /// read in (area "labels"): all of them, or fewer where the label is seen
   /// whole in another frame (the session's line: the linear view only).
   int cut_window_views = kLuminanceViews;
+  /// A window ZXing reads nothing in is read by zbar too (zbar_reader.hpp: a
+  /// quarter again of the five views' time on a window of noise). The
+  /// session's cascade leaves it to its second pass, which reads those windows
+  /// again under the frame's budget.
+  bool second_decoder = true;
 };
 
 /// \brief The default options, reading the whole frame: what the benches and

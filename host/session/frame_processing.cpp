@@ -190,9 +190,12 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
   // Code regions serve only the labels area and the cascade's second pass.
   if (processing.decode_area == reader::DecodeArea::kLabels || processing.cascade)
     out.code = reader::find_code_regions(image.motion_latent);
-  reader::CodeReading reading =
-      reader::read_codes(image.latent(), reader::regions_to_read(out.paper, out.code), direction,
-                         reader_options(processing));
+  // The cascade's second pass reads the windows this pass read nothing in with
+  // zbar (under the frame's budget); without it, this pass is the only one.
+  reader::ReaderOptions options = reader_options(processing);
+  options.second_decoder = !processing.cascade;
+  reader::CodeReading reading = reader::read_codes(
+      image.latent(), reader::regions_to_read(out.paper, out.code), direction, options);
   out.readout = std::move(reading.readout);
   out.windows = reading.windows;
   return out;
@@ -323,7 +326,8 @@ nlohmann::json decoded_json(const std::vector<reader::DecodedCode>& codes,
                             {"format", code.format},
                             {"x", std::lround(code.centre_x)},
                             {"y", std::lround(code.centre_y)},
-                            {"view", reader::luminance_view_name(code.luminance)}};
+                            {"view", reader::luminance_view_name(code.luminance)},
+                            {"decoder", code.decoder}};
     entry.update(code_record(code));
     const double along = imaging::position_along_motion(direction, code.centre_x, code.centre_y,
                                                         latent.width, latent.height);

@@ -112,7 +112,10 @@ TEST(FrameProcessing, AWholeLabelIsDeblurredAndReadAtItsGroundTruth) {
   EXPECT_FALSE(out.decode_failed);
   // Each code says the view it was read on: white paper, black ink, nominal light: the first.
   ASSERT_FALSE(out.log["decoded"].empty()) << out.log.dump();
-  for (const auto& code : out.log["decoded"]) EXPECT_EQ(code["view"], "linear") << code.dump();
+  for (const auto& code : out.log["decoded"]) {
+    EXPECT_EQ(code["view"], "linear") << code.dump();
+    EXPECT_EQ(code["decoder"], "zxing") << code.dump();
+  }
   for (const char* stage : {"convert", "deblur", "decode"})
     EXPECT_TRUE(out.log["times_ms"].contains(stage)) << stage;
   EXPECT_EQ(out.log["event"]["counter"], 8);
