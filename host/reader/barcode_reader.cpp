@@ -167,6 +167,23 @@ void to_luminance(const imaging::Plane& latent, int x0, int y0, int x1, int y1, 
   }
 }
 
+/// `code` (its format known) measured on `latent` where a decoder found it
+/// (`corners`), and its centre and extent along x from the corners measured.
+void measure_and_place(DecodedCode& code, const imaging::Plane& latent,
+                       const CodeCorners& corners) {
+  code.quality = measure_code(latent, code.format, corners);
+  double sx = 0, sy = 0;
+  code.min_x = code.max_x = code.quality.corners[0].x;
+  for (const CodePoint& c : code.quality.corners) {
+    sx += c.x;
+    sy += c.y;
+    code.min_x = std::min(code.min_x, c.x);
+    code.max_x = std::max(code.max_x, c.x);
+  }
+  code.centre_x = sx / 4;
+  code.centre_y = sy / 4;
+}
+
 /// The code ZXing read in a window at (offset_x, offset_y) of `latent`, measured on the latent.
 DecodedCode decoded_code(const ZXing::Result& result, int offset_x, int offset_y,
                          const imaging::Plane& latent) {
@@ -179,17 +196,7 @@ DecodedCode decoded_code(const ZXing::Result& result, int offset_x, int offset_y
   const auto& p = result.position();
   CodeCorners corners;
   for (int i = 0; i < 4; ++i) corners[i] = {p[i].x + 0.0 + offset_x, p[i].y + 0.0 + offset_y};
-  code.quality = measure_code(latent, code.format, corners);
-  double sx = 0, sy = 0;
-  code.min_x = code.max_x = code.quality.corners[0].x;
-  for (const CodePoint& c : code.quality.corners) {
-    sx += c.x;
-    sy += c.y;
-    code.min_x = std::min(code.min_x, c.x);
-    code.max_x = std::max(code.max_x, c.x);
-  }
-  code.centre_x = sx / 4;
-  code.centre_y = sy / 4;
+  measure_and_place(code, latent, corners);
   return code;
 }
 
@@ -210,17 +217,7 @@ DecodedCode decoded_code(const ZbarSymbol& symbol, int offset_x, int offset_y,
   const CodeCorners corners = symbol.along_x
                                   ? CodeCorners{{{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}}}
                                   : CodeCorners{{{x1, y0}, {x1, y1}, {x0, y1}, {x0, y0}}};
-  code.quality = measure_code(latent, code.format, corners);
-  code.min_x = code.max_x = code.quality.corners[0].x;
-  double sx = 0, sy = 0;
-  for (const CodePoint& c : code.quality.corners) {
-    sx += c.x;
-    sy += c.y;
-    code.min_x = std::min(code.min_x, c.x);
-    code.max_x = std::max(code.max_x, c.x);
-  }
-  code.centre_x = sx / 4;
-  code.centre_y = sy / 4;
+  measure_and_place(code, latent, corners);
   return code;
 }
 

@@ -1,10 +1,12 @@
 #include "reader/zbar_reader.hpp"
 
+#include <ZXing/BarcodeFormat.h>
 #include <zbar.h>
 
 #include <algorithm>
+#include <array>
 #include <memory>
-#include <sstream>
+#include <stdexcept>
 
 namespace flutterscan::reader {
 
@@ -36,16 +38,17 @@ constexpr std::array<Linear, 11> kLinear = {{
     {"DataBarExpanded", ZBAR_DATABAR_EXP, "DataBar Expanded", "]e0"},
 }};
 
-/// The entries of kLinear `symbologies` names (ZXing's names, comma-separated, spaces ignored).
+/// The entries of kLinear `symbologies` names (ZXing's names, as ZXing parses them).
 std::vector<const Linear*> named(const std::string& symbologies) {
   std::vector<const Linear*> out;
-  std::istringstream list(symbologies);
-  std::string name;
-  while (std::getline(list, name, ',')) {
-    std::erase(name, ' ');
-    for (const Linear& l : kLinear)
-      if (name == l.zxing) out.push_back(&l);
+  ZXing::BarcodeFormats formats;
+  try {
+    formats = ZXing::BarcodeFormatsFromString(symbologies);
+  } catch (const std::exception&) {
+    return out;  // not a list ZXing knows (check_symbologies() says so before)
   }
+  for (const Linear& l : kLinear)
+    if (formats.testFlag(ZXing::BarcodeFormatFromString(l.zxing))) out.push_back(&l);
   return out;
 }
 

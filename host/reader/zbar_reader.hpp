@@ -9,7 +9,6 @@
 // edges, so a space that rises only part of the way to the paper still ends
 // at its edges. barcode_reader.cpp tries it on a window ZXing read nothing in.
 
-#include <array>
 #include <cstdint>
 #include <span>
 #include <string>

@@ -52,7 +52,7 @@ TEST(ZbarReader, ReadsTheLinearSymbologiesItIsGivenWithTheirPlace) {
   // Not a symbology it is given: nothing (zbar reads no matrix code here).
   EXPECT_TRUE(zbar_read(lum, width, height, "Code128,QRCode", false).empty());
   EXPECT_EQ(zbar_symbologies("QRCode, EAN-13,DataMatrix,Code128"),
-            (std::vector<std::string>{"EAN-13", "Code 128"}));
+            (std::vector<std::string>{"Code 128", "EAN-13"}));
   EXPECT_TRUE(zbar_symbologies("QRCode,DataMatrix").empty());
 }
 
