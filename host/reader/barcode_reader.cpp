@@ -221,22 +221,30 @@ DecodedCode decoded_code(const ZbarSymbol& symbol, int offset_x, int offset_y,
   return code;
 }
 
-/// Whether linear symbol `result`, read in a window `width` x `height` px,
-/// reaches the window's edge along its reading direction: its quiet zone, and
-/// maybe its last modules, lay outside what the decoder saw, and a symbol cut
-/// there can decode to another value that passes its check digit (the sim
-/// session at nominal noise: an EAN-13 cut by the frame's last column read
-/// 4000001979714 in one frame, its value 4000001979752 in the next two).
+/// Whether a linear symbol spanning [low, high] along its reading direction,
+/// in a window `length` px along it, reaches the window's edge: its quiet
+/// zone, and maybe its last modules, lay outside what the decoder saw, and a
+/// symbol cut there can decode to another value that passes its check digit
+/// (the sim session at nominal noise: an EAN-13 cut by the frame's last column
+/// read 4000001979714 in one frame, its value 4000001979752 in the next two).
+/// The rule for both decoders.
+bool cut_along_reading(int low, int high, int length) {
+  return low <= kEdgePx || high >= length - 1 - kEdgePx;
+}
+
+/// cut_along_reading() for symbol `result` ZXing read in a window `width` x `height` px.
 bool cut_along_reading(const ZXing::Result& result, int width, int height) {
   if (!ZXing::BarcodeFormats(ZXing::BarcodeFormat::LinearCodes).testFlag(result.format()))
     return false;
   const double turn = result.orientation() * std::numbers::pi / 180;
   const bool along_x = std::abs(std::cos(turn)) >= std::abs(std::sin(turn));
   const auto& corners = result.position();
-  return std::any_of(corners.begin(), corners.end(), [&](const ZXing::PointI& p) {
-    return along_x ? p.x <= kEdgePx || p.x >= width - 1 - kEdgePx
-                   : p.y <= kEdgePx || p.y >= height - 1 - kEdgePx;
-  });
+  const auto [low, high] = std::minmax_element(corners.begin(), corners.end(),
+                                               [&](const ZXing::PointI& a, const ZXing::PointI& b) {
+                                                 return along_x ? a.x < b.x : a.y < b.y;
+                                               });
+  return along_x ? cut_along_reading(low->x, high->x, width)
+                 : cut_along_reading(low->y, high->y, height);
 }
 
 /// Windows may overlap: a symbol in two of them is one symbol.
@@ -376,10 +384,9 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
     to_luminance(latent, x0, y0, x1, y1, LuminanceView::kSrgbFromBlack, lum);
     bool any = false;
     for (const ZbarSymbol& symbol : zbar_read(lum, x1 - x0, y1 - y0, symbologies, try_rotate)) {
-      const bool cut = symbol.along_x
-                           ? symbol.min_x <= kEdgePx || symbol.max_x >= x1 - x0 - 1 - kEdgePx
-                           : symbol.min_y <= kEdgePx || symbol.max_y >= y1 - y0 - 1 - kEdgePx;
-      if (cut) continue;
+      if (symbol.along_x ? cut_along_reading(symbol.min_x, symbol.max_x, x1 - x0)
+                         : cut_along_reading(symbol.min_y, symbol.max_y, y1 - y0))
+        continue;
       any = true;
       DecodedCode code = decoded_code(symbol, x0, y0, latent);
       if (!already_read(out.codes, code)) out.codes.push_back(std::move(code));
