@@ -212,7 +212,8 @@ nlohmann::json SecondPass::log(double credit_ms) const {
     if (r.bar_sums)
       window["bar_sums"] = {{"slope", std::round(r.bar_sums->slope * 100) / 100},
                             {"read", r.bar_sums->read}};
-    if (r.isotropic) window["isotropic"] = {{"read", *r.isotropic}};
+    if (r.isotropic)
+      window["isotropic"] = {{"read", r.isotropic->read}, {"weights", r.isotropic->weights}};
     windows.push_back(std::move(window));
   }
   return {{"windows", std::move(windows)},
@@ -288,7 +289,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
       continue;
     }
     const auto t0 = std::chrono::steady_clock::now();
-    double isotropic_ms = 0;  // the isotropic try's, settled on its own
+    double isotropic_ms = 0;  // the isotropic tries', settled on their own
     imaging::Image crop;
     for (int c = 0; c < electrons.channel_count(); ++c) {
       crop.channels.push_back(imaging::Plane::uninitialised(c1 - c0, r1 - r0));
@@ -398,18 +399,24 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
       }
       // Nothing read: tv's prior has the print constant across the motion (bars
       // upright), which a matrix code's modules and a turned label's bars are
-      // not. The window once more with the same weight across as along, if the
-      // budget holds a second tv; its latent stays where it reads.
-      if (held.empty() && retry.read.empty() && budget.take(estimate)) {
+      // not. The window again with the same weight across as along, at
+      // each of kIsotropicWeights while nothing reads and the budget holds
+      // another tv; its latent stays where it reads.
+      for (const double weight : kIsotropicWeights) {
+        if (!held.empty() || !retry.read.empty() || !budget.take(estimate)) break;
         const auto t1 = std::chrono::steady_clock::now();
+        tv_isotropic.tv_weight_per_noise = weight;
         const DeblurOut isotropic = imaging::deblur(cropped.value(), frame.model, tv_isotropic);
+        if (!retry.isotropic) retry.isotropic.emplace();
+        retry.isotropic->weights.push_back(weight);
         if (isotropic.ok()) {
           paste(isotropic.value().latent);
-          retry.isotropic = read_again(options.symbologies);
-          if (retry.isotropic->empty()) paste(patch);
+          retry.isotropic->read = read_again(options.symbologies);
+          if (retry.isotropic->read.empty()) paste(patch);
         }
-        isotropic_ms = ms_since(t1);
-        budget.settle(estimate, isotropic_ms, pixels);
+        const double ms = ms_since(t1);
+        isotropic_ms += ms;
+        budget.settle(estimate, ms, pixels);
       }
     }
     retry.ms = ms_since(t0);

@@ -7,6 +7,7 @@
 // summed along the bars: imaging/bar_sums.hpp), while the session's CPU budget lasts. A window the
 // budget cannot pay for is counted and flagged, never dropped silently.
 
+#include <array>
 #include <cstdint>
 #include <mutex>
 #include <optional>
@@ -19,6 +20,7 @@
 #include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
 #include "imaging/motion_frame.hpp"
+#include "imaging/total_variation.hpp"
 #include "reader/barcode_reader.hpp"
 #include "reader/reader_options.hpp"
 
@@ -101,15 +103,32 @@ struct BarSumsTry {
   std::vector<std::string> read;  ///< the codes read on the sums
 };
 
+/// \brief tv's kappa for the isotropic tries, in turn: the reading weight, then
+/// half of it. The weight that reads bars best (imaging::kReadingWeightPerNoise)
+/// flattens small modules: as in TV denoising, a feature loses contrast about
+/// in proportion to the weight times its edge length over its area, and an
+/// isotropic prior puts four edges round a module where the anisotropic one
+/// counts a bar's two along the motion; half the weight treats a module of one
+/// width as the reading weight treats a bar of that width.
+inline constexpr std::array<double, 2> kIsotropicWeights = {imaging::kReadingWeightPerNoise,
+                                                            imaging::kReadingWeightPerNoise / 2};
+
+/// \brief A window deblurred again by tv with the same weight across the motion
+/// as along it, at each of kIsotropicWeights in turn until one reads.
+struct IsotropicTry {
+  std::vector<double> weights;    ///< tv's kappa of each try made, in order
+  std::vector<std::string> read;  ///< the codes the last try read
+};
+
 /// \brief One window the second pass deblurred again.
 struct WindowRetry {
   reader::DecodeWindow window;    ///< in the frame (camera coordinates)
   double ms = 0;                  ///< its deblurs and decodes, wall time
   std::vector<std::string> read;  ///< the codes it read (tv's, the bar sums', the isotropic tv's)
   std::optional<BarSumsTry> bar_sums;  ///< absent: not tried
-  /// The codes tv read with an isotropic prior (the window once more where
-  /// nothing else read); absent: not tried.
-  std::optional<std::vector<std::string>> isotropic;
+  /// tv with an isotropic prior (the window once more where nothing else
+  /// read); absent: not tried.
+  std::optional<IsotropicTry> isotropic;
 };
 
 /// \brief What a frame's second pass did.
@@ -152,9 +171,10 @@ std::vector<reader::LabelRegion> retry_regions(std::span<const reader::LabelRegi
 /// that reads no linear code, and `options` reads linear symbologies, the
 /// window's rows summed along its bars are deblurred (joint Wiener), pasted
 /// and read for those (tv's latent is put back if they read nothing). A window
-/// where neither read anything, and nothing was read before, is deblurred once
-/// more by tv with an isotropic prior if `budget` holds a second window, and
-/// read for every symbology (its latent kept only where it reads). A window
+/// where neither read anything, and nothing was read before, is deblurred again
+/// by tv with an isotropic prior, at each of kIsotropicWeights while nothing
+/// reads and `budget` holds another window, and read for every symbology (its
+/// latent kept only where it reads). A window
 /// whose codes of `readout` (read before it) tv's latent does not read again
 /// keeps the latent it had. The codes found are added to `readout` and to `reads`.
 SecondPass run_second_pass(const SecondPassFrame& frame,

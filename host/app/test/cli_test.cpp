@@ -903,6 +903,23 @@ TEST_F(ImagingCliTest, InDimLightTheCascadeReadsAMatrixCodeWithAnIsotropicPrior)
   const json& window = report["second_pass"]["windows"][0];
   EXPECT_TRUE(window["bar_sums"]["read"].empty()) << result;
   EXPECT_EQ(window["isotropic"]["read"], json::array({"FS-QR-0042"})) << result;
+  EXPECT_EQ(window["isotropic"]["weights"], json::array({0.3})) << result;  // read at the first
+}
+
+TEST_F(ImagingCliTest, InDimmerLightTheIsotropicPriorReadsAtHalfTheWeight) {
+  // 80 e-: the QR code's window reads nothing with tv's anisotropic prior, the
+  // bar sums, or the isotropic prior at the reading weight (kappa 0.3), which
+  // flattens its 3 px modules; at half the weight it reads.
+  ASSERT_NO_FATAL_FAILURE(simulate_label("80", "3", "qr:FS-QR-0042"));
+  const RunResult result =
+      run({"deblur", frame(), "--descriptor", descriptor(), "--decode", "--json", "-o", output()});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  const json report = json_lines(result.out)[0];
+  EXPECT_EQ(report["decoded"], json::array({"FS-QR-0042"})) << result;
+  ASSERT_EQ(report["second_pass"]["windows"].size(), 1u) << result;
+  const json& window = report["second_pass"]["windows"][0];
+  EXPECT_EQ(window["isotropic"]["weights"], json::array({0.3, 0.15})) << result;
+  EXPECT_EQ(window["isotropic"]["read"], json::array({"FS-QR-0042"})) << result;
 }
 
 TEST_F(ImagingCliTest, SimulateRefusesABadPhotoOrTurn) {
