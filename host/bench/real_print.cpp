@@ -4,7 +4,7 @@
 // against what the reader reads on the photo itself (the ceiling).
 //
 //   real_print_bench [--photos DIR] [--electrons 300,1000,3000] [--methods LIST]
-//                    [--every N] [--match TEXT] [--out DIR] [--pictures N]
+//                    [--every N] [--match TEXT] [--out DIR] [--pictures N] [--seed K]
 //
 // DIR holds photos (.png, .jpg, .jpeg, .tif, .tiff), each with NAME.txt beside
 // it holding the text its code encodes; default $FLUTTERSCAN_REAL_LABELS, else
@@ -15,7 +15,9 @@
 // bands' mean under all three ("grey"). The capture is the session's default
 // (code, crosstalk, read noise 4 e-, cap 3, 12 bits) with 52 px of motion
 // along +x. REAL_PRINT_EVERY=N (every N-th photo) and REAL_PRINT_MATCH=TEXT
-// (names containing TEXT) subset the set, as --every and --match do.
+// (names containing TEXT) subset the set, as --every and --match do. --seed K
+// draws every frame's noise again (K > 0; 0 gives the documented figures): a
+// photo read at one draw and not at another is marginal at that light.
 //
 // Prints the CPU, the ceiling, the read rates (method x light x colour/grey),
 // the failures by cause and the failures themselves; --out writes every trial
@@ -77,6 +79,7 @@ struct Options {
   std::string match;
   std::string out;
   int pictures = 4;
+  std::uint64_t seed = 0;  ///< added to every frame's noise seed: another draw of the noise
 };
 
 /// What the sharp scene shows of a photo's code: the ceiling and the
@@ -284,7 +287,8 @@ int run(const Options& o) {
         Capture capture;
         capture.model = level.model();
         const std::uint64_t seed = std::hash<std::string>{}(photo.name) + (colour ? 1 : 2) +
-                                   static_cast<std::uint64_t>(electrons);
+                                   static_cast<std::uint64_t>(electrons) +
+                                   o.seed * 0x9E3779B97F4A7C15ULL;
         capture.dn =
             sim::record_frame(scaled(expected, reference, capture.model), capture.model, seed);
         capture.electrons = imaging::dn_to_electrons(capture.dn, capture.model);
@@ -471,6 +475,7 @@ int main(int argc, char** argv) {
   app.add_option("--match", o.match, "photos whose name contains this");
   app.add_option("--out", o.out, "folder for the CSV and the pictures");
   app.add_option("--pictures", o.pictures, "worst cases to picture")->check(CLI::NonNegativeNumber);
+  app.add_option("--seed", o.seed, "added to every frame's noise seed (0: the documented figures)");
   CLI11_PARSE(app, argc, argv);
   try {
     return run(o);

@@ -1,6 +1,7 @@
 #include "session/second_pass.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <utility>
@@ -23,11 +24,14 @@ constexpr int kWindowMargin = 24;
 /// samples (docs/algorithms.md, borders), and the periodic extension rings a
 /// little further.
 constexpr int kCropSlack = 16;
-/// Rows summed either side of each along a linear code's bars: 17 in all, a
-/// quarter of the noise's rms (docs/algorithms.md, "Sums along the bars").
-constexpr int kBarHalfRows = 8;
-/// Rows either side the bars' slope is judged over: more than are summed, so
-/// that a slope off by a little loses contrast enough to tell.
+/// Rows summed either side of each along a linear code's bars, in turn while
+/// nothing reads: 17 in all (a quarter of the noise's rms), then 49 (a seventh:
+/// the bars of most labels are taller; docs/algorithms.md, "Sums along the bars").
+constexpr std::array<int, 2> kBarHalfRows = {8, 24};
+/// Rows either side the bars' slope is judged over, at the least: more than
+/// 17 rows summed, so that a slope off by a little loses contrast enough to
+/// tell; the taller sums' slope is judged over as many rows as they sum (a
+/// slope's error shifts the outer rows the further).
 constexpr int kSlopeHalfRows = 16;
 
 /// A bar slope from which a window is also read turned upright: 0.05 px per
@@ -83,28 +87,31 @@ bool on_code_rows(const reader::DecodedCode& code, double y) {
   return y >= y0 - 4 && y <= y1 + 4;
 }
 
-/// The window's rows summed along its bars and deblurred by joint Wiener (one
-/// thread): `crop` the window's samples, `first_latent` the first pass's latent
-/// of them (joint Wiener's), whose columns [keep_from, keep_to) (the window kept)
-/// give the bars' `slope`. Not tv's latent: on a real label turned 8 degrees
-/// (ean13-2-05 of the real-print photos, beside a second code, print and shadow)
-/// the slope found on tv's latent of the window was 0, on joint Wiener's -0.14,
-/// as on the sharp scene (docs/algorithms.md, "Sums along the bars").
-Result<imaging::DeblurResult, std::string> deblur_bar_sums(const imaging::MotionFrame& crop,
-                                                           const imaging::Plane& first_latent,
-                                                           int keep_from, int keep_to,
-                                                           const imaging::CaptureModel& model,
-                                                           double& slope) {
+/// The slope of the bars in the window kept, columns [keep_from, keep_to) of
+/// `first_latent`, the first pass's latent of the window's crop (joint
+/// Wiener's), judged over `half_rows` either side of each row. Not tv's latent: on a real label
+/// turned 8 degrees (ean13-2-05 of the real-print photos, beside a second code, print and shadow)
+/// the slope found on tv's latent of the window was 0, on joint Wiener's -0.14, as on the sharp
+/// scene (docs/algorithms.md, "Sums along the bars").
+double window_bar_slope(const imaging::Plane& first_latent, int keep_from, int keep_to,
+                        int half_rows) {
   imaging::Plane kept = imaging::Plane::uninitialised(keep_to - keep_from, first_latent.height);
   for (int y = 0; y < first_latent.height; ++y)
     std::copy_n(first_latent.row(y).begin() + keep_from, keep_to - keep_from, kept.row(y).begin());
-  slope = imaging::bar_slope(kept, kSlopeHalfRows);
-  auto sums = imaging::MotionFrame::make(imaging::sum_along_bars(crop.image(), slope, kBarHalfRows),
+  return imaging::bar_slope(kept, half_rows);
+}
+
+/// The window's rows, `crop` its samples, summed `half_rows` either side of each
+/// along the bars' `slope` and deblurred by joint Wiener (one thread).
+Result<imaging::DeblurResult, std::string> deblur_bar_sums(const imaging::MotionFrame& crop,
+                                                           double slope, int half_rows,
+                                                           const imaging::CaptureModel& model) {
+  auto sums = imaging::MotionFrame::make(imaging::sum_along_bars(crop.image(), slope, half_rows),
                                          imaging::Direction::kPlusX);
   if (!sums.ok()) return Result<imaging::DeblurResult, std::string>::failure(sums.error());
   imaging::DeblurOptions wiener;
   wiener.threads = 1;
-  return imaging::deblur(sums.value(), imaging::model_of_row_sums(model, 2 * kBarHalfRows + 1),
+  return imaging::deblur(sums.value(), imaging::model_of_row_sums(model, 2 * half_rows + 1),
                          wiener);
 }
 
@@ -211,6 +218,7 @@ nlohmann::json SecondPass::log(double credit_ms) const {
                              {"read", r.read}};
     if (r.bar_sums)
       window["bar_sums"] = {{"slope", std::round(r.bar_sums->slope * 100) / 100},
+                            {"rows", r.bar_sums->rows},
                             {"read", r.bar_sums->read}};
     if (r.isotropic)
       window["isotropic"] = {{"read", r.isotropic->read}, {"weights", r.isotropic->weights}};
@@ -373,15 +381,19 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
       if (!held_read) {
         paste(first);  // tv's latent loses a code the window read before: it keeps its first
       } else if (!linear_read && !linear.empty()) {
-        // No linear code: the rows summed along the bars (at 17 times the light)
-        // for one that tv's noise hid.
+        // No linear code: the rows summed along the bars (at 17, then 49 times
+        // the light) for one that tv's noise hid.
         BarSumsTry bars;
-        const DeblurOut profile = deblur_bar_sums(cropped.value(), first, keep0 - c0, keep1 - c0,
-                                                  frame.model, bars.slope);
-        // Bars that lean: a short code's rows may not cross it whole; read turned upright too.
-        const double turn =
-            std::abs(bars.slope) >= kMinTurnSlope ? camera_lean(direction, bars.slope) : 0;
-        if (profile.ok()) {
+        double turn = 0;
+        for (const int half_rows : kBarHalfRows) {
+          bars.slope =
+              window_bar_slope(first, keep0 - c0, keep1 - c0, std::max(kSlopeHalfRows, half_rows));
+          // Bars that lean: a short code's rows may not cross it whole; read turned upright too.
+          turn = std::abs(bars.slope) >= kMinTurnSlope ? camera_lean(direction, bars.slope) : 0;
+          const DeblurOut profile =
+              deblur_bar_sums(cropped.value(), bars.slope, half_rows, frame.model);
+          if (!profile.ok()) break;
+          bars.rows.push_back(2 * half_rows + 1);
           const auto sums_from = static_cast<std::ptrdiff_t>(readout.codes.size());
           paste(profile.value().latent);
           bars.read = read_again(linear);
@@ -391,8 +403,10 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
           // matrix code above or below that tv or the first pass read, text)
           // along the bars' slope.
           paste(patch);
-          if (!bars.read.empty())
+          if (!bars.read.empty()) {
             paste(profile.value().latent, {readout.codes.begin() + sums_from, readout.codes.end()});
+            break;
+          }
         }
         if (bars.read.empty() && turn != 0) read_again(linear, turn);  // tv's latent, turned
         retry.bar_sums = std::move(bars);

@@ -99,8 +99,9 @@ class BeltReads {
 /// \brief A window's rows summed along its bars and deblurred again
 /// (imaging/bar_sums.hpp): tried where tv read no linear code.
 struct BarSumsTry {
-  double slope = 0;               ///< the bars' slope found, px along the motion per row
-  std::vector<std::string> read;  ///< the codes read on the sums
+  double slope = 0;  ///< the bars' slope the last try summed along, px along the motion per row
+  std::vector<int> rows;          ///< the rows summed of each try made, in order
+  std::vector<std::string> read;  ///< the codes the last try read
 };
 
 /// \brief tv's kappa for the isotropic tries, in turn: the reading weight, then
@@ -169,8 +170,9 @@ std::vector<reader::LabelRegion> retry_regions(std::span<const reader::LabelRegi
 /// again with tv (one thread), alone with the margin its blur needs, pastes it
 /// into the latents, and reads its decode window again with `options`; where
 /// that reads no linear code, and `options` reads linear symbologies, the
-/// window's rows summed along its bars are deblurred (joint Wiener), pasted
-/// and read for those (tv's latent is put back if they read nothing). A window
+/// window's rows summed along its bars (17 rows, then 49 where that reads
+/// nothing) are deblurred (joint Wiener), pasted and read for those (tv's
+/// latent is put back if they read nothing). A window
 /// where neither read anything, and nothing was read before, is deblurred again
 /// by tv with an isotropic prior, at each of kIsotropicWeights while nothing
 /// reads and `budget` holds another window, and read for every symbology (its

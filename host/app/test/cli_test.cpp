@@ -889,6 +889,26 @@ TEST_F(ImagingCliTest, TheBarSumsFindTheSlopeOfARealLabelTurnedEightDegrees) {
   EXPECT_GT(summed, 0) << result;
 }
 
+TEST_F(ImagingCliTest, WhereSeventeenRowsSummedReadNothingFortyNineDo) {
+  // 18 e-: the Code 128 label's tv latent reads nothing, nor do its rows summed
+  // 17 at a time along the bars; summed 49 at a time (the bars are taller)
+  // they carry 49 times the light and read.
+  ASSERT_NO_FATAL_FAILURE(simulate_label("18", "3"));
+  const RunResult result =
+      run({"deblur", frame(), "--descriptor", descriptor(), "--decode", "--json", "-o", output()});
+  ASSERT_EQ(result.exit_code, 0) << result;
+  const json report = json_lines(result.out)[0];
+  EXPECT_EQ(report["decoded"], json::array({"FS-0042"})) << result;
+  int read_on_sums = 0;
+  for (const json& window : report["second_pass"]["windows"]) {
+    if (window["read"].empty()) continue;
+    ++read_on_sums;
+    EXPECT_EQ(window["bar_sums"]["rows"], json::array({17, 49})) << result;
+    EXPECT_EQ(window["bar_sums"]["read"], json::array({"FS-0042"})) << result;
+  }
+  EXPECT_EQ(read_on_sums, 1) << result;
+}
+
 TEST_F(ImagingCliTest, InDimLightTheCascadeReadsAMatrixCodeWithAnIsotropicPrior) {
   // 130 e-: tv's prior, heavier across the motion (bars upright), reads nothing
   // in the QR code's window, nor do the bar sums; the window deblurred once more
