@@ -5,6 +5,7 @@
 #include <complex>
 #include <numbers>
 #include <optional>
+#include <utility>
 #include <vector>
 
 namespace flutterscan::reader {
@@ -124,15 +125,24 @@ std::vector<Element> elements(const std::vector<double>& p, double threshold, do
   return out;
 }
 
-/// Modules of a linear symbol of `format` with `count` elements (bars and
-/// spaces, first bar to last), where the symbology fixes it; 0 otherwise.
+/// Elements (bars and spaces, first bar to last) and modules of every symbol of
+/// `format`, for the symbologies of one length; {0, 0} for the others.
+std::pair<std::size_t, int> fixed_structure(const std::string& format) {
+  if (format == "EAN-13" || format == "UPC-A") return {59, 95};
+  if (format == "EAN-8") return {43, 67};
+  if (format == "UPC-E") return {33, 51};
+  return {0, 0};
+}
+
+/// Modules of a linear symbol of `format` with `count` elements, where the
+/// symbology and the count fix it; 0 otherwise. A symbology of one length
+/// fixes it whatever was counted: a profile through paper texture or noise
+/// splits an element or merges two, and the symbol's extent still holds its
+/// modules.
 int structured_modules(const std::string& format, std::size_t count) {
   const auto n = static_cast<int>(count);
   if (format == "Code128" && n >= 13 && (n - 7) % 6 == 0) return 11 * ((n - 7) / 6) + 13;
-  if ((format == "EAN-13" || format == "UPC-A") && n == 59) return 95;
-  if (format == "EAN-8" && n == 43) return 67;
-  if (format == "UPC-E" && n == 33) return 51;
-  return 0;
+  return fixed_structure(format).second;
 }
 
 /// The graded parameters of one scan.
@@ -299,7 +309,10 @@ CodeQuality measure_linear(const imaging::Plane& latent, const std::string& form
   const double down = bar_extent(latent, line, t_begin, t_end, bars, +1, 2 * span);
   auto at = [&](double t, double s) { return line.origin + t * line.axis + s * line.across; };
   q.corners = {at(t_begin, -up), at(t_end, -up), at(t_end, down), at(t_begin, down)};
-  // Ten scans over 10%-90% of the bar height.
+  // Ten scans over 10%-90% of the bar height, each expected to find the
+  // symbology's elements where it fixes them, else the centre line's.
+  const std::size_t fixed_elements = fixed_structure(format).first;
+  const std::size_t expected_elements = fixed_elements > 0 ? fixed_elements : es.size();
   const double height = up + down;
   const double paper = threshold;  // beyond the quiet zone the belt is darker than this
   constexpr int kScans = 10;
@@ -307,7 +320,7 @@ CodeQuality measure_linear(const imaging::Plane& latent, const std::string& form
   for (int i = 0; i < kScans; ++i) {
     const double s = -up + height * (0.1 + 0.8 * (i + 0.5) / kScans);
     const ScanGrade g =
-        grade_scan(latent, line, s, t_begin, t_end, 10 * q.module_px, paper, es.size());
+        grade_scan(latent, line, s, t_begin, t_end, 10 * q.module_px, paper, expected_elements);
     q.r_min += g.r_min / kScans;
     q.r_max += g.r_max / kScans;
     q.symbol_contrast += g.sc / kScans;
