@@ -127,7 +127,7 @@ struct WindowRetry {
   double ms = 0;                  ///< its deblurs and decodes, wall time
   std::vector<std::string> read;  ///< the codes it read (tv's, the bar sums', the isotropic tv's)
   std::optional<BarSumsTry> bar_sums;  ///< absent: not tried
-  /// tv with an isotropic prior (the window once more where nothing else
+  /// tv with an isotropic prior (the window again where nothing else
   /// read); absent: not tried.
   std::optional<IsotropicTry> isotropic;
 };
