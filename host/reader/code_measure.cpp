@@ -279,12 +279,32 @@ CodeQuality measure_linear(const imaging::Plane& latent, const std::string& form
   const double lo = *std::min_element(centre.begin(), centre.end());
   const double hi = *std::max_element(centre.begin(), centre.end());
   const double threshold = (lo + hi) / 2;
-  std::vector<Element> es = elements(centre, threshold, t0, kStep);
-  while (!es.empty() && !es.front().bar) es.erase(es.begin());
-  while (!es.empty() && !es.back().bar) es.pop_back();
+  auto bars_and_spaces = [&](const std::vector<double>& p) {
+    std::vector<Element> out = elements(p, threshold, t0, kStep);
+    while (!out.empty() && !out.front().bar) out.erase(out.begin());
+    while (!out.empty() && !out.back().bar) out.pop_back();
+    return out;
+  };
+  std::vector<Element> es = bars_and_spaces(centre);
   if (es.size() < 3 || hi - lo < 0.05) {
     q.problem = "no bars along the decoded line";
     return q;
+  }
+  // A count that is no symbol's (texture or noise on the line splits a bar or
+  // bridges a space): counted again on the lines kAlongBars px either side
+  // averaged, which follow the bars, and taken if that is a symbol's count.
+  if (structured_modules(format, es.size()) == 0) {
+    constexpr int kAlongBars = 4;
+    std::vector<double> averaged(centre.size(), 0.0);
+    bool whole = true;
+    for (int s = -kAlongBars; s <= kAlongBars && whole; ++s) {
+      const std::vector<double> p = profile(latent, line, s, t0, span / 2 + kMargin, kStep);
+      whole = p.size() == centre.size();
+      for (std::size_t i = 0; whole && i < p.size(); ++i)
+        averaged[i] += p[i] / (2 * kAlongBars + 1);
+    }
+    std::vector<Element> again = whole ? bars_and_spaces(averaged) : std::vector<Element>{};
+    if (structured_modules(format, again.size()) > 0) es = std::move(again);
   }
   const double t_begin = es.front().begin, t_end = es.back().end;
   q.modules = structured_modules(format, es.size());

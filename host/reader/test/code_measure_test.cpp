@@ -164,6 +164,34 @@ TEST(CodeMeasure, AnEan13WhoseCentreLineSplitsItsBarsStillHas95Modules) {
   EXPECT_NEAR(q.module_px, 2.0, 0.04);
 }
 
+TEST(CodeMeasure, ACode128WhoseCentreLineSplitsItsBarsIsCountedAlongTheBars) {
+  // Code 128 has no one length: its modules follow from its count of bars and
+  // spaces (11 per character and 13). Every dark run of 4 px or more on the
+  // symbol's middle three rows gets a 1 px bright gap, as a fleck of paper
+  // texture would make: the centre line's count is no Code 128 symbol's, the
+  // lines 4 px either side averaged along the bars give it back.
+  Rendered r = render("code128:FS-00042", 2.5);
+  CodeCorners corners{};
+  for (int i = 0; i < 4; ++i) corners[i] = {r.truth.corners[i][0], r.truth.corners[i][1]};
+  const int middle = static_cast<int>(std::lround(0.5 * (corners[0].y + corners[3].y)));
+  const int x0 = static_cast<int>(corners[0].x), x1 = static_cast<int>(corners[1].x);
+  int gaps = 0;
+  for (int x = x0; x < x1;) {
+    int end = x;
+    while (end < x1 && r.image.at(end, middle) < 0.5f) ++end;
+    if (end - x >= 4) {
+      for (int y = middle - 1; y <= middle + 1; ++y) r.image.at((x + end) / 2, y) = 0.9f;
+      ++gaps;
+    }
+    x = std::max(end, x + 1);
+  }
+  ASSERT_GE(gaps, 5);
+  const CodeQuality q = measure_code(r.image, "Code128", corners);
+  ASSERT_TRUE(q.measured) << q.problem;
+  EXPECT_EQ(q.modules, r.truth.modules);
+  EXPECT_NEAR(q.module_px, 2.5, 0.05);
+}
+
 TEST(CodeMeasure, WhatCannotBeMeasuredSaysWhy) {
   const imaging::Plane flat(100, 100, 0.9f);
   const CodeCorners tiny{{{10, 10}, {14, 10}, {14, 14}, {10, 14}}};
