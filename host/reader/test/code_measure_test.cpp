@@ -137,60 +137,62 @@ TEST(CodeMeasure, ACodeTurnedBy90DegreesHasItsCornersTurnedToo) {
   EXPECT_NEAR(max_y, r.truth.corners[2][0], 1.0);
 }
 
-TEST(CodeMeasure, AnEan13WhoseCentreLineSplitsItsBarsStillHas95Modules) {
-  // Paper texture or noise along the line the reader decoded on splits wide
-  // bars: every dark run of 4 px or more on the symbol's middle five rows gets
-  // a 1 px bright gap. The count of elements there is no EAN-13's (59), but
-  // the symbology has one length: 95 modules over the symbol's extent.
-  Rendered r = render("ean13:590123412345", 2.0);
+/// The scene's symbol corners, as the reader gives them.
+CodeCorners truth_corners(const Rendered& r) {
   CodeCorners corners{};
   for (int i = 0; i < 4; ++i) corners[i] = {r.truth.corners[i][0], r.truth.corners[i][1]};
-  const int middle = static_cast<int>(std::lround(0.5 * (corners[0].y + corners[3].y)));
-  const int x0 = static_cast<int>(corners[0].x), x1 = static_cast<int>(corners[1].x);
-  int gaps = 0;
-  for (int x = x0; x < x1;) {
-    int end = x;
-    while (end < x1 && r.image.at(end, middle) < 0.5f) ++end;
-    if (end - x >= 4) {
-      for (int y = middle - 2; y <= middle + 2; ++y) r.image.at((x + end) / 2, y) = 0.9f;
-      ++gaps;
-    }
-    x = std::max(end, x + 1);
-  }
-  ASSERT_GE(gaps, 5);
-  const CodeQuality q = measure_code(r.image, "EAN-13", corners);
-  ASSERT_TRUE(q.measured) << q.problem;
-  EXPECT_EQ(q.modules, 95);
-  EXPECT_NEAR(q.module_px, 2.0, 0.04);
+  return corners;
 }
 
-TEST(CodeMeasure, ACode128WhoseCentreLineSplitsItsBarsIsCountedAlongTheBars) {
-  // Code 128 has no one length: its modules follow from its count of bars and
-  // spaces (11 per character and 13). Every dark run of 4 px or more on the
-  // symbol's middle three rows gets a 1 px bright gap, as a fleck of paper
-  // texture would make: the centre line's count is no Code 128 symbol's, the
-  // lines 4 px either side averaged along the bars give it back.
-  Rendered r = render("code128:FS-00042", 2.5);
-  CodeCorners corners{};
-  for (int i = 0; i < 4; ++i) corners[i] = {r.truth.corners[i][0], r.truth.corners[i][1]};
+/// Paper texture or noise on the line the reader decoded on: every dark run of
+/// 4 px or more along the symbol's middle row gets a 1 px bright gap over the
+/// `half_rows` rows either side of it. Returns the gaps made.
+int split_wide_bars(imaging::Plane& image, const CodeCorners& corners, int half_rows) {
   const int middle = static_cast<int>(std::lround(0.5 * (corners[0].y + corners[3].y)));
   const int x0 = static_cast<int>(corners[0].x), x1 = static_cast<int>(corners[1].x);
   int gaps = 0;
   for (int x = x0; x < x1;) {
     int end = x;
-    while (end < x1 && r.image.at(end, middle) < 0.5f) ++end;
+    while (end < x1 && image.at(end, middle) < 0.5f) ++end;
     if (end - x >= 4) {
-      for (int y = middle - 1; y <= middle + 1; ++y) r.image.at((x + end) / 2, y) = 0.9f;
+      for (int y = middle - half_rows; y <= middle + half_rows; ++y)
+        image.at((x + end) / 2, y) = 0.9f;
       ++gaps;
     }
     x = std::max(end, x + 1);
   }
-  ASSERT_GE(gaps, 5);
-  const CodeQuality q = measure_code(r.image, "Code128", corners);
-  ASSERT_TRUE(q.measured) << q.problem;
-  EXPECT_EQ(q.modules, r.truth.modules);
-  EXPECT_NEAR(q.module_px, 2.5, 0.05);
+  return gaps;
 }
+
+/// A linear code whose centre line's wide bars are split: the scene, its
+/// format, module px and the rows split either side of the middle one.
+struct SplitBars {
+  std::string scene, format;
+  double module_px = 0;
+  int half_rows = 0;
+};
+
+class SplitLinearCodes : public ::testing::TestWithParam<SplitBars> {};
+
+// The count of elements on the centre line is no symbol's. EAN-13 (split over
+// five rows) has one length: 95 modules over the symbol's extent. Code 128
+// (split over three rows, as a fleck of paper texture would) has none: its
+// modules follow from its count of bars and spaces (11 per character and 13),
+// which the lines 4 px either side, averaged along the bars, give back.
+TEST_P(SplitLinearCodes, TheModulesAreTheSymbolsWhateverTheCentreLineCounts) {
+  const SplitBars& c = GetParam();
+  Rendered r = render(c.scene, c.module_px);
+  const CodeCorners corners = truth_corners(r);
+  ASSERT_GE(split_wide_bars(r.image, corners, c.half_rows), 5);
+  const CodeQuality q = measure_code(r.image, c.format, corners);
+  ASSERT_TRUE(q.measured) << q.problem;
+  EXPECT_EQ(q.modules, r.truth.modules) << c.scene;
+  EXPECT_NEAR(q.module_px, c.module_px, 0.02 * c.module_px) << c.scene;
+}
+
+INSTANTIATE_TEST_SUITE_P(Scenes, SplitLinearCodes,
+                         ::testing::Values(SplitBars{"ean13:590123412345", "EAN-13", 2.0, 2},
+                                           SplitBars{"code128:FS-00042", "Code128", 2.5, 1}));
 
 TEST(CodeMeasure, WhatCannotBeMeasuredSaysWhy) {
   const imaging::Plane flat(100, 100, 0.9f);
