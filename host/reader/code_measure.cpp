@@ -290,10 +290,12 @@ CodeQuality measure_linear(const imaging::Plane& latent, const std::string& form
     q.problem = "no bars along the decoded line";
     return q;
   }
-  // A count that is no symbol's (texture or noise on the line splits a bar or
-  // bridges a space): counted again on the lines kAlongBars px either side
-  // averaged, which follow the bars, and taken if that is a symbol's count.
-  if (structured_modules(format, es.size()) == 0) {
+  // A Code 128 count that is no symbol's (texture or noise on the line splits
+  // a bar or bridges a space): counted again on the lines kAlongBars px either
+  // side averaged, which follow the bars, and taken if that is a symbol's
+  // count. (The symbologies of one length need no count; the others' counts
+  // cannot be checked.)
+  if (format == "Code128" && structured_modules(format, es.size()) == 0) {
     constexpr int kAlongBars = 4;
     std::vector<double> averaged(centre.size(), 0.0);
     bool whole = true;

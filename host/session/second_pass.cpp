@@ -87,18 +87,17 @@ bool on_code_rows(const reader::DecodedCode& code, double y) {
   return y >= y0 - 4 && y <= y1 + 4;
 }
 
-/// The slope of the bars in the window kept, columns [keep_from, keep_to) of
-/// `first_latent`, the first pass's latent of the window's crop (joint
-/// Wiener's), judged over `half_rows` either side of each row. Not tv's latent: on a real label
-/// turned 8 degrees (ean13-2-05 of the real-print photos, beside a second code, print and shadow)
-/// the slope found on tv's latent of the window was 0, on joint Wiener's -0.14, as on the sharp
-/// scene (docs/algorithms.md, "Sums along the bars").
-double window_bar_slope(const imaging::Plane& first_latent, int keep_from, int keep_to,
-                        int half_rows) {
+/// Columns [keep_from, keep_to) of `first_latent`, the first pass's latent of
+/// the window's crop (joint Wiener's): the window kept, where the bars' slope
+/// is judged. Not tv's latent: on a real label turned 8 degrees (ean13-2-05 of
+/// the real-print photos, beside a second code, print and shadow) the slope
+/// found on tv's latent of the window was 0, on joint Wiener's -0.14, as on the
+/// sharp scene (docs/algorithms.md, "Sums along the bars").
+imaging::Plane kept_columns(const imaging::Plane& first_latent, int keep_from, int keep_to) {
   imaging::Plane kept = imaging::Plane::uninitialised(keep_to - keep_from, first_latent.height);
   for (int y = 0; y < first_latent.height; ++y)
     std::copy_n(first_latent.row(y).begin() + keep_from, keep_to - keep_from, kept.row(y).begin());
-  return imaging::bar_slope(kept, half_rows);
+  return kept;
 }
 
 /// The window's rows, `crop` its samples, summed `half_rows` either side of each
@@ -384,10 +383,10 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
         // No linear code: the rows summed along the bars (at 17, then 49 times
         // the light) for one that tv's noise hid.
         BarSumsTry bars;
+        const imaging::Plane kept = kept_columns(first, keep0 - c0, keep1 - c0);
         double turn = 0;
         for (const int half_rows : kBarHalfRows) {
-          bars.slope =
-              window_bar_slope(first, keep0 - c0, keep1 - c0, std::max(kSlopeHalfRows, half_rows));
+          bars.slope = imaging::bar_slope(kept, std::max(kSlopeHalfRows, half_rows));
           // Bars that lean: a short code's rows may not cross it whole; read turned upright too.
           turn = std::abs(bars.slope) >= kMinTurnSlope ? camera_lean(direction, bars.slope) : 0;
           const DeblurOut profile =
