@@ -26,14 +26,58 @@ void add_shifted(std::span<const float> row, double shift, std::span<float> sum)
   for (int x = inner1; x < width; ++x) sum[x] += g * sample(x + whole) + f * sample(x + whole + 1);
 }
 
+/// Adds `row` read at `offset` + `scale` x for each sample x (linearly
+/// interpolated, clamped to the row's ends) into `sum`. The shift, `offset` +
+/// (`scale` - 1) x, changes slowly: over each run of samples where its whole
+/// part holds, x reads the row at x + that whole part, its fraction a ramp.
+void add_resampled(std::span<const float> row, double offset, double scale, std::span<float> sum) {
+  if (scale == 1) {
+    add_shifted(row, offset, sum);
+    return;
+  }
+  const int width = static_cast<int>(sum.size()), last = static_cast<int>(row.size()) - 1;
+  const double stretch = scale - 1;
+  for (int x = 0; x < width;) {
+    const int whole = static_cast<int>(std::floor(offset + stretch * x));
+    // The first sample past x whose shift has another whole part (at least x + 1).
+    const double crossing = ((stretch > 0 ? whole + 1 : whole) - offset) / stretch;
+    const int end = std::clamp(
+        stretch > 0 ? static_cast<int>(std::ceil(crossing)) : static_cast<int>(crossing) + 1, x + 1,
+        width);
+    // Where both neighbours lie inside the row: no clamp (the loop vectorises).
+    const int inner0 = std::clamp(-whole, x, end), inner1 = std::clamp(last - whole, inner0, end);
+    auto clamped = [&](int at) {
+      const double p = std::clamp(offset + scale * at, 0.0, static_cast<double>(last));
+      const int i = static_cast<int>(p);
+      const auto f = static_cast<float>(p - i);
+      sum[static_cast<std::size_t>(at)] += (1 - f) * row[static_cast<std::size_t>(i)] +
+                                           f * row[static_cast<std::size_t>(std::min(i + 1, last))];
+    };
+    for (int at = x; at < inner0; ++at) clamped(at);
+    const float* from = row.data() + whole;
+    float* to = sum.data();
+    const auto f0 = static_cast<float>(offset + stretch * inner0 - whole);
+    const auto step = static_cast<float>(stretch);
+    for (int at = inner0; at < inner1; ++at) {
+      const float f = f0 + step * static_cast<float>(at - inner0);
+      to[at] += from[at] + f * (from[at + 1] - from[at]);
+    }
+    for (int at = inner1; at < end; ++at) clamped(at);
+    x = end;
+  }
+}
+
 /// Row `y` of `plane` summed along `slope` over the rows [y - half_rows,
 /// y + half_rows] that exist, into `sum` (zeroed first); returns how many.
-int sum_row(const Plane& plane, int y, double slope, int half_rows, std::span<float> sum) {
+int sum_row(const Plane& plane, int y, const BarSlope& slope, int half_rows, std::span<float> sum) {
   std::fill(sum.begin(), sum.end(), 0.0f);
+  // On row y the bars' slope is linear along the row: at(origin_x, y) + rate (x - origin_x).
+  const double at_origin = slope.at(slope.origin_x, y);
+  const double rate = slope.at(slope.origin_x + 1, y) - at_origin;
   int count = 0;
   for (int k = -half_rows; k <= half_rows; ++k) {
     if (y + k < 0 || y + k >= plane.height) continue;
-    add_shifted(plane.row(y + k), k * slope, sum);
+    add_resampled(plane.row(y + k), k * (at_origin - rate * slope.origin_x), 1 + k * rate, sum);
     ++count;
   }
   return count;
@@ -42,7 +86,7 @@ int sum_row(const Plane& plane, int y, double slope, int half_rows, std::span<fl
 /// Contrast along the rows kept by summing along `slope`: the sums' squared
 /// steps between neighbours, over every 8th row at least half_rows from the
 /// ends.
-double kept_contrast(const Plane& latent, double slope, int half_rows) {
+double kept_contrast(const Plane& latent, const BarSlope& slope, int half_rows) {
   constexpr int kRowStep = 8;
   std::vector<float> sum(static_cast<std::size_t>(latent.width));
   double energy = 0;
@@ -58,29 +102,52 @@ double kept_contrast(const Plane& latent, double slope, int half_rows) {
 
 }  // namespace
 
-double bar_slope(const Plane& latent, int half_rows) {
-  constexpr double kCoarse = 0.05, kFine = 0.01;
-  double best = 0, best_contrast = kept_contrast(latent, 0, half_rows);
-  auto consider = [&](double slope) {
+double BarSlope::at(double x, double y) const {
+  // The perspective's denominator kept from nearing 0 (a vanishing point
+  // inside the window is no label's): at least half.
+  return (at_origin + per_column * (x - origin_x)) / std::max(0.5, 1 + per_column * (y - origin_y));
+}
+
+BarSlope bar_slope(const Plane& latent, int half_rows) {
+  constexpr double kCoarse = 0.05, kFine = 0.01, kCoarseChange = 0.04;
+  BarSlope best{.origin_x = latent.width / 2.0, .origin_y = latent.height / 2.0};
+  double best_contrast = kept_contrast(latent, best, half_rows);
+  auto consider = [&](double at_origin, double change) {
+    BarSlope slope = best;
+    slope.at_origin = at_origin;
+    slope.per_column = change / latent.width;
     const double c = kept_contrast(latent, slope, half_rows);
     if (c > best_contrast) {
       best_contrast = c;
       best = slope;
     }
   };
-  const int coarse = static_cast<int>(std::lround(kMaxBarSlope / kCoarse));
-  for (int i = -coarse; i <= coarse; ++i)
-    if (i != 0) consider(i * kCoarse);
-  const double centre = best;
-  const int fine = static_cast<int>(std::lround(kCoarse / kFine));
-  for (int i = -fine + 1; i < fine; ++i) {
-    const double slope = centre + i * kFine;
-    if (i != 0 && std::abs(slope) <= kMaxBarSlope + 1e-9) consider(slope);
-  }
+  auto change = [&] { return best.per_column * latent.width; };
+  // Around the best so far, `steps` either side `step` apart: the slope at the centre, or its
+  // change.
+  auto refine_slope = [&](double step, int steps) {
+    const double centre = best.at_origin, now = change();
+    for (int i = -steps; i <= steps; ++i) {
+      const double slope = centre + i * step;
+      if (i != 0 && std::abs(slope) <= kMaxBarSlope + 1e-9) consider(slope, now);
+    }
+  };
+  auto refine_change = [&](double step, int steps) {
+    const double centre = change(), slope = best.at_origin;
+    for (int i = -steps; i <= steps; ++i) {
+      const double c = centre + i * step;
+      if (i != 0 && std::abs(c) <= kMaxSlopeChange + 1e-9) consider(slope, c);
+    }
+  };
+  refine_slope(kCoarse, static_cast<int>(std::lround(kMaxBarSlope / kCoarse)));
+  refine_slope(kFine, static_cast<int>(std::lround(kCoarse / kFine)) - 1);
+  refine_change(kCoarseChange, static_cast<int>(std::lround(kMaxSlopeChange / kCoarseChange)));
+  refine_slope(kFine, 3);
+  refine_change(kFine, static_cast<int>(std::lround(kCoarseChange / kFine)) - 1);
   return best;
 }
 
-Image sum_along_bars(const Image& electrons, double slope, int half_rows) {
+Image sum_along_bars(const Image& electrons, const BarSlope& slope, int half_rows) {
   Image out;
   const int rows = 2 * half_rows + 1;
   for (const Plane& plane : electrons.channels) {

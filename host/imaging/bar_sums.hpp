@@ -18,18 +18,40 @@ namespace flutterscan::imaging {
 /// closer to the motion, and the blur along them costs them less.
 inline constexpr double kMaxBarSlope = 0.5;
 
-/// \brief The slope (x shift per row, |slope| <= kMaxBarSlope) along which
-/// `latent`'s rows, summed `half_rows` either side, keep the most contrast
-/// along the rows: the bars' slope where a linear code fills most of it.
-/// Slopes 0.05 apart, then 0.01 apart around the best.
-double bar_slope(const Plane& latent, int half_rows);
+/// Largest change of the bars' slope across a window that bar_slope() looks
+/// for: bars in strong perspective (a label's vanishing point two widths away).
+inline constexpr double kMaxSlopeChange = 0.48;
+
+/// \brief The bars' slope (x shift per row) over a window. A label seen in
+/// perspective has bars that are not parallel: its bars meet at a vanishing
+/// point, and through each point (x, y) passes the bar of slope
+/// (at_origin + per_column (x - origin_x)) / (1 + per_column (y - origin_y)),
+/// exact for lines through one point; per_column 0: parallel bars.
+struct BarSlope {
+  double at_origin = 0;   ///< the slope of the bar through the origin
+  double per_column = 0;  ///< how much more a bar one column further along the origin's row slopes
+  double origin_x = 0;
+  double origin_y = 0;
+
+  /// The slope of the bar through (x, y).
+  [[nodiscard]] double at(double x, double y) const;
+};
+
+/// \brief The bars' slope in `latent`, its origin the plane's centre: the
+/// slopes along which its rows, summed `half_rows` either side, keep the most
+/// contrast along the rows (where a linear code fills most of it). Parallel
+/// bars first (|slope| <= kMaxBarSlope, 0.05 then 0.01 apart), then bars in
+/// perspective about the slope found (the slope's change across the width
+/// within +-kMaxSlopeChange, 0.04 then 0.01 apart; the slope at the centre
+/// again 0.01 apart between).
+BarSlope bar_slope(const Plane& latent, int half_rows);
 
 /// \brief Each row of each plane of `electrons` replaced by the sum of the
-/// 2 `half_rows` + 1 rows centred on it, row k away shifted by k `slope`
-/// pixels along the rows (linear interpolation; beyond a row's ends, its end
+/// 2 `half_rows` + 1 rows centred on it, along the bars: row k away read at
+/// x + k `slope`.at(x, y) (linear interpolation; beyond a row's ends, its end
 /// sample). Near the first and last rows, the rows there are summed and scaled
 /// to as many.
-Image sum_along_bars(const Image& electrons, double slope, int half_rows);
+Image sum_along_bars(const Image& electrons, const BarSlope& slope, int half_rows);
 
 /// \brief The capture model of `rows` rows summed: the light (LEDs and ambient)
 /// and full well `rows` times, the read noise and the quantisation's step

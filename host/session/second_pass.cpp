@@ -103,7 +103,8 @@ imaging::Plane kept_columns(const imaging::Plane& first_latent, int keep_from, i
 /// The window's rows, `crop` its samples, summed `half_rows` either side of each
 /// along the bars' `slope` and deblurred by joint Wiener (one thread).
 Result<imaging::DeblurResult, std::string> deblur_bar_sums(const imaging::MotionFrame& crop,
-                                                           double slope, int half_rows,
+                                                           const imaging::BarSlope& slope,
+                                                           int half_rows,
                                                            const imaging::CaptureModel& model) {
   auto sums = imaging::MotionFrame::make(imaging::sum_along_bars(crop.image(), slope, half_rows),
                                          imaging::Direction::kPlusX);
@@ -217,6 +218,7 @@ nlohmann::json SecondPass::log(double credit_ms) const {
                              {"read", r.read}};
     if (r.bar_sums)
       window["bar_sums"] = {{"slope", std::round(r.bar_sums->slope * 100) / 100},
+                            {"slope_change", std::round(r.bar_sums->slope_change * 100) / 100},
                             {"rows", r.bar_sums->rows},
                             {"read", r.bar_sums->read}};
     if (r.isotropic)
@@ -386,11 +388,13 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
         const imaging::Plane kept = kept_columns(first, keep0 - c0, keep1 - c0);
         double turn = 0;
         for (const int half_rows : kBarHalfRows) {
-          bars.slope = imaging::bar_slope(kept, std::max(kSlopeHalfRows, half_rows));
+          imaging::BarSlope slope = imaging::bar_slope(kept, std::max(kSlopeHalfRows, half_rows));
+          bars.slope = slope.at_origin;
+          bars.slope_change = slope.per_column * kept.width;
           // Bars that lean: a short code's rows may not cross it whole; read turned upright too.
           turn = std::abs(bars.slope) >= kMinTurnSlope ? camera_lean(direction, bars.slope) : 0;
-          const DeblurOut profile =
-              deblur_bar_sums(cropped.value(), bars.slope, half_rows, frame.model);
+          slope.origin_x += keep0 - c0;  // the kept columns' centre, in the crop
+          const DeblurOut profile = deblur_bar_sums(cropped.value(), slope, half_rows, frame.model);
           if (!profile.ok()) break;
           bars.rows.push_back(2 * half_rows + 1);
           const auto sums_from = static_cast<std::ptrdiff_t>(readout.codes.size());

@@ -99,7 +99,11 @@ class BeltReads {
 /// \brief A window's rows summed along its bars and deblurred again
 /// (imaging/bar_sums.hpp): tried where tv read no linear code.
 struct BarSumsTry {
-  double slope = 0;  ///< the bars' slope the last try summed along, px along the motion per row
+  double slope = 0;  ///< the bars' slope the last try summed along at the window's centre,
+                     ///< px along the motion per row
+  /// the slope's change across the window along its centre row, the last try's
+  /// (bars in perspective: imaging::BarSlope); 0: parallel bars
+  double slope_change = 0;
   std::vector<int> rows;          ///< the rows summed of each try made, in order
   std::vector<std::string> read;  ///< the codes the last try read
 };
