@@ -5,6 +5,8 @@
 #include <span>
 #include <vector>
 
+#include "imaging/metrics.hpp"
+
 namespace flutterscan::imaging {
 namespace {
 
@@ -100,15 +102,101 @@ double kept_contrast(const Plane& latent, const BarSlope& slope, int half_rows) 
   return energy;
 }
 
-}  // namespace
-
-double BarSlope::at(double x, double y) const {
-  // The perspective's denominator kept from nearing 0 (a vanishing point
-  // inside the window is no label's): at least half.
-  return (at_origin + per_column * (x - origin_x)) / std::max(0.5, 1 + per_column * (y - origin_y));
+/// Columns [x0, x1) and rows [y0, y1) of `plane`, copied.
+Plane part(const Plane& plane, int x0, int y0, int x1, int y1) {
+  Plane out = Plane::uninitialised(x1 - x0, y1 - y0);
+  for (int y = y0; y < y1; ++y)
+    std::copy_n(plane.row(y).begin() + x0, x1 - x0, out.row(y - y0).begin());
+  return out;
 }
 
-BarSlope bar_slope(const Plane& latent, int half_rows) {
+/// A tile's bars: how much of its contrast along the rows depends on the slope
+/// its rows are summed along (8 either side), and the slope that keeps most.
+struct TileBars {
+  double strength = 0;  ///< the most contrast any slope 0.05 apart keeps, less their mean
+  double slope = 0;     ///< the slope that keeps the most
+};
+
+/// Bars: much strength (summed along any other slope they blur); noise and
+/// plain paper: about none; text and a lone edge: little.
+TileBars tile_bars(const Plane& tile) {
+  constexpr int kHalfRows = 8;
+  constexpr double kStep = 0.05;
+  const int steps = static_cast<int>(std::lround(kMaxBarSlope / kStep));
+  TileBars bars;
+  double most = 0, total = 0;
+  for (int i = -steps; i <= steps; ++i) {
+    const double c = kept_contrast(tile, {.at_origin = i * kStep}, kHalfRows);
+    if (c > most) {
+      most = c;
+      bars.slope = i * kStep;
+    }
+    total += c;
+  }
+  bars.strength = most - total / (2 * steps + 1);
+  return bars;
+}
+
+/// The part of `latent` where one code's bars are: the box round the tiles
+/// (64 px square) reached from the strongest (tile_bars()) through
+/// neighbours (sides and corners) at least a quarter as strong, each sloping
+/// within 0.2 of the tile it was reached from (bars in perspective change their
+/// slope along the code, a little from tile to tile: on a real Code 128 leaning
+/// 0.18 more at one end than the other, neighbours' best slopes 0.05 apart
+/// came 0.15 apart; other stripes, another label's bars, slope otherwise).
+/// The whole plane where no tile has bars.
+Region bar_region(const Plane& latent) {
+  constexpr int kTile = 64, kMinTile = 24;
+  constexpr double kSlopeStep = 0.2 + 1e-9;
+  if (latent.width < kMinTile || latent.height < kMinTile)
+    return {0, 0, latent.width, latent.height};
+  const int columns = (latent.width - kMinTile) / kTile + 1;
+  const int rows = (latent.height - kMinTile) / kTile + 1;
+  auto tile_region = [&](int i) {
+    const int x = i % columns * kTile, y = i / columns * kTile;
+    return Region{x, y, std::min(x + kTile, latent.width), std::min(y + kTile, latent.height)};
+  };
+  std::vector<TileBars> tiles;
+  for (int i = 0; i < columns * rows; ++i) {
+    const Region r = tile_region(i);
+    tiles.push_back(tile_bars(part(latent, r.x0, r.y0, r.x1, r.y1)));
+  }
+  const auto strongest =
+      static_cast<int>(std::max_element(tiles.begin(), tiles.end(),
+                                        [](const TileBars& a, const TileBars& b) {
+                                          return a.strength < b.strength;
+                                        }) -
+                       tiles.begin());
+  if (tiles[static_cast<std::size_t>(strongest)].strength <= 0)
+    return {0, 0, latent.width, latent.height};
+  const double enough = tiles[static_cast<std::size_t>(strongest)].strength / 4;
+  std::vector<bool> reached(tiles.size(), false);
+  std::vector<int> next{strongest};
+  reached[static_cast<std::size_t>(strongest)] = true;
+  Region box = tile_region(strongest);
+  while (!next.empty()) {
+    const int i = next.back();
+    next.pop_back();
+    const Region r = tile_region(i);
+    box = {std::min(box.x0, r.x0), std::min(box.y0, r.y0), std::max(box.x1, r.x1),
+           std::max(box.y1, r.y1)};
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int cx = i % columns + dx, cy = i / columns + dy;
+        if (cx < 0 || cx >= columns || cy < 0 || cy >= rows) continue;
+        const auto j = static_cast<std::size_t>(cy * columns + cx);
+        if (reached[j] || tiles[j].strength < enough ||
+            std::abs(tiles[j].slope - tiles[static_cast<std::size_t>(i)].slope) > kSlopeStep)
+          continue;
+        reached[j] = true;
+        next.push_back(static_cast<int>(j));
+      }
+  }
+  return box;
+}
+
+/// bar_slope() over the whole of `latent`, its origin the plane's centre.
+BarSlope slope_over(const Plane& latent, int half_rows) {
   constexpr double kCoarse = 0.05, kFine = 0.01, kCoarseChange = 0.04;
   BarSlope best{.origin_x = latent.width / 2.0, .origin_y = latent.height / 2.0};
   double best_contrast = kept_contrast(latent, best, half_rows);
@@ -145,6 +233,68 @@ BarSlope bar_slope(const Plane& latent, int half_rows) {
   refine_slope(kFine, 3);
   refine_change(kFine, static_cast<int>(std::lround(kCoarseChange / kFine)) - 1);
   return best;
+}
+
+}  // namespace
+
+double BarSlope::at(double x, double y) const {
+  // The perspective's denominator kept from nearing 0 (a vanishing point
+  // inside the window is no label's): at least half.
+  return (at_origin + per_column * (x - origin_x)) / std::max(0.5, 1 + per_column * (y - origin_y));
+}
+
+BarSlope bar_slope(const Plane& latent, int half_rows) {
+  // Judged where the bars are: the rest of a window (text, a hand, the label's
+  // and the belt's edges) pulls the slope elsewhere. Rows summed half_rows
+  // beyond the box's, so that the rows judged are the box's.
+  const Region box = bar_region(latent);
+  const int y0 = std::max(0, box.y0 - half_rows);
+  const int y1 = std::min(latent.height, box.y1 + half_rows);
+  BarSlope slope = slope_over(part(latent, box.x0, y0, box.x1, y1), half_rows);
+  slope.origin_x += box.x0;
+  slope.origin_y += y0;
+  slope.judged_over = box;
+  return slope;
+}
+
+std::vector<bool> rows_across_bars(const Plane& latent, const BarSlope& slope, int half_rows) {
+  constexpr int kStrengthHalf = 8;
+  constexpr double kWrongSlope = 0.15;
+  const Region& box = slope.judged_over;
+  std::vector<bool> across(static_cast<std::size_t>(latent.height), false);
+  if (box.x1 - box.x0 < 2) return across;
+  std::vector<float> sum(static_cast<std::size_t>(latent.width));
+  // The squared steps along the box's columns of row y's 17 rows summed along `along`.
+  auto kept = [&](int y, const BarSlope& along) {
+    sum_row(latent, y, along, kStrengthHalf, sum);
+    double e = 0;
+    for (int x = box.x0 + 1; x < box.x1; ++x) {
+      const double d = sum[static_cast<std::size_t>(x)] - sum[static_cast<std::size_t>(x - 1)];
+      e += d * d;
+    }
+    return e;
+  };
+  std::vector<double> strength(static_cast<std::size_t>(latent.height));
+  double strongest = 0;
+  for (int y = 0; y < latent.height; ++y) {
+    BarSlope steeper = slope, shallower = slope;
+    steeper.at_origin += kWrongSlope;
+    shallower.at_origin -= kWrongSlope;
+    strength[static_cast<std::size_t>(y)] =
+        kept(y, slope) - (kept(y, steeper) + kept(y, shallower)) / 2;
+    strongest = std::max(strongest, strength[static_cast<std::size_t>(y)]);
+  }
+  if (strongest <= 0) return across;
+  // Row y's rows [y - half_rows, y + half_rows] are covered by the 17-row sums
+  // of rows [y - reach, y + reach].
+  const int reach = std::max(0, half_rows - kStrengthHalf);
+  for (int y = half_rows; y < latent.height - half_rows; ++y) {
+    bool strong = true;
+    for (int k = -reach; k <= reach && strong; ++k)
+      strong = strength[static_cast<std::size_t>(y + k)] >= strongest / 2;
+    across[static_cast<std::size_t>(y)] = strong;
+  }
+  return across;
 }
 
 Image sum_along_bars(const Image& electrons, const BarSlope& slope, int half_rows) {

@@ -8,8 +8,11 @@
 // is smeared along the slope. A model for linear codes only: the session's
 // second pass tries it on a window where the frame's own latent read nothing.
 
+#include <vector>
+
 #include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
+#include "imaging/metrics.hpp"
 
 namespace flutterscan::imaging {
 
@@ -18,8 +21,9 @@ namespace flutterscan::imaging {
 /// closer to the motion, and the blur along them costs them less.
 inline constexpr double kMaxBarSlope = 0.5;
 
-/// Largest change of the bars' slope across a window that bar_slope() looks
-/// for: bars in strong perspective (a label's vanishing point two widths away).
+/// Largest change of the bars' slope across the box bar_slope() judges it in
+/// that it looks for: bars in strong perspective (a label's vanishing point
+/// about two of its widths away).
 inline constexpr double kMaxSlopeChange = 0.48;
 
 /// \brief The bars' slope (x shift per row) over a window. A label seen in
@@ -32,19 +36,35 @@ struct BarSlope {
   double per_column = 0;  ///< how much more a bar one column further along the origin's row slopes
   double origin_x = 0;
   double origin_y = 0;
+  /// Where bar_slope() judged it: the box round the bars of one code (empty: not judged).
+  Region judged_over{};
 
   /// The slope of the bar through (x, y).
   [[nodiscard]] double at(double x, double y) const;
 };
 
-/// \brief The bars' slope in `latent`, its origin the plane's centre: the
-/// slopes along which its rows, summed `half_rows` either side, keep the most
-/// contrast along the rows (where a linear code fills most of it). Parallel
-/// bars first (|slope| <= kMaxBarSlope, 0.05 then 0.01 apart), then bars in
-/// perspective about the slope found (the slope's change across the width
-/// within +-kMaxSlopeChange, 0.04 then 0.01 apart; the slope at the centre
-/// again 0.01 apart between).
+/// \brief The bars' slope in `latent`, judged where one code's bars are: the
+/// box round the 64 px tiles whose contrast depends most on the slope their
+/// rows are summed along, grown from the strongest through neighbours at least
+/// a quarter as strong and sloping within 0.2 of it (docs/algorithms.md;
+/// the whole plane where no tile has bars). In the box, its origin the box's
+/// centre: the slopes along which the rows, summed `half_rows` either side,
+/// keep the most contrast along the rows. Parallel bars first (|slope| <=
+/// kMaxBarSlope, 0.05 then 0.01 apart), then bars in perspective about the
+/// slope found (the slope's change across the box within +-kMaxSlopeChange,
+/// 0.04 then 0.01 apart; the slope at the centre again 0.01 apart between).
 BarSlope bar_slope(const Plane& latent, int half_rows);
+
+/// \brief Which rows of `latent` sum 2 `half_rows` + 1 rows that all cross
+/// the bars `slope` found (bar_slope() on `latent`). A row's bars' strength:
+/// over the columns the slope was judged on, the contrast its 17 rows keep
+/// summed along the slope less what they keep along slopes 0.15 steeper and
+/// shallower; row y sums bars where every 17-row sum that covers its rows is at
+/// least half the strongest row's. Elsewhere the sums mix the bars with what
+/// lies above or below them (the digits under an EAN-13, another code, a
+/// label's edge), which a decoder can read as another value that passes the
+/// symbology's check. Rows within half_rows of the plane's ends: not.
+std::vector<bool> rows_across_bars(const Plane& latent, const BarSlope& slope, int half_rows);
 
 /// \brief Each row of each plane of `electrons` replaced by the sum of the
 /// 2 `half_rows` + 1 rows centred on it, along the bars: row k away read at

@@ -387,12 +387,14 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
       if (symbol.along_x ? cut_along_reading(symbol.min_x, symbol.max_x, x1 - x0)
                          : cut_along_reading(symbol.min_y, symbol.max_y, y1 - y0))
         continue;
-      any = true;
       DecodedCode code = decoded_code(symbol, x0, y0, latent);
+      if (!quiet_zones_clear(code, latent)) continue;
+      any = true;
       if (!already_read(out.codes, code)) out.codes.push_back(std::move(code));
     }
     if (any) reading.push_back({x0, y0, x1, y1});
   }
+  drop_conflicting(out.codes);
   return out;
 }
 
@@ -436,6 +438,70 @@ BarcodeReadout read_barcodes_turned(const imaging::Plane& latent, const DecodeWi
     }
   }
   return out;
+}
+
+bool quiet_zones_clear(const DecodedCode& code, const imaging::Plane& latent) {
+  const CodeQuality& q = code.quality;
+  if (!q.measured || q.module_px <= 0) return true;
+  const double dark = q.r_min + (q.r_max - q.r_min) / 4;
+  auto lerp = [](const CodePoint& a, const CodePoint& b, double t) {
+    return CodePoint{a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t};
+  };
+  auto sample = [&](double x, double y, double& value) {
+    if (x < 0 || y < 0 || x > latent.width - 1 || y > latent.height - 1) return false;
+    const int ix = std::min(static_cast<int>(x), latent.width - 2);
+    const int iy = std::min(static_cast<int>(y), latent.height - 2);
+    const double fx = x - ix, fy = y - iy;
+    value = (1 - fy) * ((1 - fx) * latent.at(ix, iy) + fx * latent.at(ix + 1, iy)) +
+            fy * ((1 - fx) * latent.at(ix, iy + 1) + fx * latent.at(ix + 1, iy + 1));
+    return true;
+  };
+  const CodeCorners& c = q.corners;
+  // One end: from `start`, away from the symbol along -`reading` (left) or +`reading` (right).
+  for (const int end : {0, 1}) {
+    const int steps = static_cast<int>(std::ceil(kQuietModules * q.module_px));
+    std::vector<double> profile(static_cast<std::size_t>(steps), 0.0);
+    bool inside = true;
+    for (const double t : {0.25, 0.5, 0.75}) {
+      const CodePoint left = lerp(c[0], c[3], t), right = lerp(c[1], c[2], t);
+      const double dx = right.x - left.x, dy = right.y - left.y, length = std::hypot(dx, dy);
+      if (length <= 0) return true;
+      const double ux = dx / length, uy = dy / length, away = end == 0 ? -1.0 : 1.0;
+      const CodePoint& from = end == 0 ? left : right;
+      for (int i = 0; i < steps && inside; ++i) {
+        double v = 0;
+        inside = sample(from.x + away * ux * (i + 1), from.y + away * uy * (i + 1), v);
+        profile[static_cast<std::size_t>(i)] += v / 3;
+      }
+    }
+    if (!inside) continue;
+    const int module = std::max(1, static_cast<int>(std::lround(q.module_px)));
+    // From a module and a half out: the symbol's last edge, blurred, reaches that far.
+    for (int i = static_cast<int>(1.5 * q.module_px); i + module <= steps; ++i) {
+      double run = 0;
+      for (int k = 0; k < module; ++k) run += profile[static_cast<std::size_t>(i + k)];
+      if (run / module < dark) return false;
+    }
+  }
+  return true;
+}
+
+void drop_conflicting(std::vector<DecodedCode>& codes) {
+  std::vector<bool> drop(codes.size(), false);
+  for (std::size_t i = 0; i < codes.size(); ++i)
+    for (std::size_t j = i + 1; j < codes.size(); ++j) {
+      const DecodedCode &a = codes[i], &b = codes[j];
+      if (a.format != b.format || a.text == b.text || !is_linear_format(a.format)) continue;
+      auto with_text = [](DecodedCode code, const std::string& text) {
+        code.text = text;
+        return code;
+      };
+      if (same_symbol(a, with_text(b, a.text))) drop[i] = drop[j] = true;
+    }
+  std::vector<DecodedCode> kept;
+  for (std::size_t i = 0; i < codes.size(); ++i)
+    if (!drop[i]) kept.push_back(std::move(codes[i]));
+  codes = std::move(kept);
 }
 
 std::vector<std::string> code_texts(const BarcodeReadout& readout) {

@@ -389,16 +389,22 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
         double turn = 0;
         for (const int half_rows : kBarHalfRows) {
           imaging::BarSlope slope = imaging::bar_slope(kept, std::max(kSlopeHalfRows, half_rows));
-          bars.slope = slope.at_origin;
+          bars.slope = slope.at(kept.width / 2.0, kept.height / 2.0);
           bars.slope_change = slope.per_column * kept.width;
           // Bars that lean: a short code's rows may not cross it whole; read turned upright too.
           turn = std::abs(bars.slope) >= kMinTurnSlope ? camera_lean(direction, bars.slope) : 0;
-          slope.origin_x += keep0 - c0;  // the kept columns' centre, in the crop
+          const std::vector<bool> across = imaging::rows_across_bars(kept, slope, half_rows);
+          slope.origin_x += keep0 - c0;  // from the kept columns' coordinates to the crop's
           const DeblurOut profile = deblur_bar_sums(cropped.value(), slope, half_rows, frame.model);
           if (!profile.ok()) break;
           bars.rows.push_back(2 * half_rows + 1);
           const auto sums_from = static_cast<std::ptrdiff_t>(readout.codes.size());
-          paste(profile.value().latent);
+          // The sums read where all their rows cross the bars; tv's latent elsewhere.
+          imaging::Plane sums = patch;
+          for (int y = 0; y < sums.height; ++y)
+            if (across[static_cast<std::size_t>(y)])
+              std::copy_n(profile.value().latent.row(y).begin(), sums.width, sums.row(y).begin());
+          paste(sums);
           bars.read = read_again(linear);
           if (bars.read.empty() && turn != 0) bars.read = read_again(linear, turn);
           // The frame shows tv's latent, and the sums' over the rows of the codes
@@ -407,7 +413,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
           // along the bars' slope.
           paste(patch);
           if (!bars.read.empty()) {
-            paste(profile.value().latent, {readout.codes.begin() + sums_from, readout.codes.end()});
+            paste(sums, {readout.codes.begin() + sums_from, readout.codes.end()});
             break;
           }
         }

@@ -431,7 +431,7 @@ TEST(BarcodeReader, TheLinearSymbologiesOfAListAreAListOfTheirOwn) {
   EXPECT_EQ(linear_symbologies("QRCode, DataMatrix"), "");
 }
 
-TEST(BarcodeReader, OneSymbolReadOverDifferentRowsIsOneAndTwoAlikeSideBySideAreTwo) {
+TEST(BarcodeReader, OneSymbolReadOverDifferentRowsIsOneTwoAlikeSideBySideAreTwoTwoValuesAreNone) {
   // A linear code read on two latents: ZXing found it over rows 166-278 in one
   // and 205-278 in the other, so the centres lie 20 px apart across the bars.
   auto code = [](double x0, double x1, double y0, double y1) {
@@ -455,6 +455,21 @@ TEST(BarcodeReader, OneSymbolReadOverDifferentRowsIsOneAndTwoAlikeSideBySideAreT
   DecodedCode other = short_rows;
   other.text = "005-3379497200007";
   EXPECT_FALSE(same_symbol(tall, other));
+  // ...and one of the two a misread: neither is kept. A third code elsewhere
+  // and another symbology's read of the same place (EAN-13 and UPC-A) stay.
+  DecodedCode beside = code(700, 1200, 166, 278);
+  DecodedCode upc = tall;
+  upc.format = "UPC-A";
+  upc.text = "05-3379497200006";
+  std::vector<DecodedCode> codes = {tall, beside, other, upc};
+  drop_conflicting(codes);
+  ASSERT_EQ(codes.size(), 2u);
+  EXPECT_EQ(codes[0].centre_x, beside.centre_x);
+  EXPECT_EQ(codes[1].format, "UPC-A");
+  // The same text twice over one place is one symbol, not a conflict.
+  codes = {tall, short_rows};
+  drop_conflicting(codes);
+  EXPECT_EQ(codes.size(), 2u);
 }
 
 }  // namespace

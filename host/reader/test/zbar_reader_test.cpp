@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "reader/barcode_reader.hpp"
+#include "reader/code_measure.hpp"
 #include "reader/code_reading.hpp"
 #include "reader/reader_options.hpp"
 #include "sim/colour_scene.hpp"
@@ -69,6 +70,42 @@ TEST(ZbarReader, ReadsACodeTurnedBy90DegreesOnlyWithTryRotate) {
   ASSERT_EQ(symbols.size(), 1u);
   EXPECT_EQ(symbols[0].text, "9780804816632");
   EXPECT_FALSE(symbols[0].along_x);
+}
+
+TEST(ZbarReader, ASymbolWithBarsInItsQuietZoneIsNotTakenForARead) {
+  // The EAN-13 (3 px modules, columns 40-325, rows 20-80) measured on the
+  // latent: clear beside it; a bar 3-4 modules past its end (what zbar's
+  // reads inside another symbol's bars have) fails; one 8 modules out, or
+  // beyond the latent's edge, is not judged.
+  const int width = 400, height = 100;
+  const std::vector<std::uint8_t> lum = ean13(width, height);
+  imaging::Plane latent(width, height);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      latent.at(x, y) = lum[static_cast<std::size_t>(y) * width + x] / 255.0f;
+  DecodedCode code;
+  code.format = "EAN-13";
+  auto measured = [&](const imaging::Plane& on) {
+    code.quality = measure_code(on, code.format, {{{40, 20}, {325, 20}, {325, 80}, {40, 80}}});
+    return code;
+  };
+  ASSERT_TRUE(measured(latent).quality.measured) << code.quality.problem;
+  EXPECT_NEAR(code.quality.module_px, 3, 0.5);
+  EXPECT_TRUE(quiet_zones_clear(measured(latent), latent));
+  auto with_bar = [&](int x0) {
+    imaging::Plane barred = latent;
+    for (int y = 20; y < 80; ++y)
+      for (int x = x0; x < x0 + 3; ++x) barred.at(x, y) = 15 / 255.0f;
+    return barred;
+  };
+  const imaging::Plane near = with_bar(325 + 10), far = with_bar(325 + 24);
+  EXPECT_FALSE(quiet_zones_clear(measured(near), near));
+  EXPECT_TRUE(quiet_zones_clear(measured(far), far));
+  // The same symbol with its quiet zone beyond the latent's last column.
+  imaging::Plane cropped(330, height);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < 330; ++x) cropped.at(x, y) = latent.at(x, y);
+  EXPECT_TRUE(quiet_zones_clear(measured(cropped), cropped));
 }
 
 TEST(ZbarReader, TooFewSamplesForTheSizeGivenReadNothing) {
