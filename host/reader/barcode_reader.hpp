@@ -139,9 +139,11 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent,
                              bool try_rotate = true, std::span<const DecodeWindow> windows = {});
 
 /// \brief Modules beyond each end of a linear symbol that quiet_zones_clear()
-/// judges: fewer than any symbology's quiet zone (EAN-13 has 7 on its right,
-/// Code 128 and Code 39 10).
-inline constexpr double kQuietModules = 7;
+/// judges: well inside any symbology's quiet zone (EAN-13 has 7 on its right,
+/// then maybe its add-on's bars: on a real book's EAN-13, 4-6 modules past the
+/// symbol's measured end; Code 128 and Code 39 10). A symbol found inside
+/// another's bars has them within a module or two.
+inline constexpr double kQuietModules = 4;
 
 /// \brief Whether the linear `code` (measured on `latent`) has quiet zones:
 /// on its centre line and the lines a quarter of its height either side, the
