@@ -98,12 +98,15 @@ std::vector<std::string> code_texts(const BarcodeReadout& readout);
 std::pair<double, double> corner_rows(const DecodedCode& code);
 
 /// \brief Drops from `codes` each linear code read over one place as another
-/// of its symbology with another value (same_symbol() but for the text): one
+/// of its symbology with another value (their boxes, widened by 4 px, meet and
+/// share half the shorter one's length along the reading direction): one
 /// symbol cannot be both, so one of them at least is a misread, and which is
-/// not known. read_barcodes() does so with what it reads. Seen on a real
-/// Code 128 at 300 e- (code128-2-04, its rows summed along the bars):
-/// 005993379497200536 on rows 164-201 over its value, 005-3379497200006, on
-/// rows 178-231, both passing the check character.
+/// not known. read_barcodes() does so with what it reads. Seen on real labels:
+/// a Code 128 at 300 e- (code128-2-04, its rows summed along the bars),
+/// 005993379497200536 on rows 164-201 over its value 005-3379497200006 on rows
+/// 178-231; an EAN-13 at 3000 e- (ean13-2-07, tv's whole frame, 2 draws of 8),
+/// 1790801816632 on rows 218-274 below its value 9780804816632 on rows 162-226;
+/// each passing the check digit.
 void drop_conflicting(std::vector<DecodedCode>& codes);
 
 /// \brief Whether `a` and `b` are one symbol read twice (overlapping windows,

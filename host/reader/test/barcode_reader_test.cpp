@@ -470,6 +470,16 @@ TEST(BarcodeReader, OneSymbolReadOverDifferentRowsIsOneTwoAlikeSideBySideAreTwoT
   codes = {tall, short_rows};
   drop_conflicting(codes);
   EXPECT_EQ(codes.size(), 2u);
+  // Another value read on the bars' rows just below (ZXing reports the lines
+  // it read): over one place, both dropped. One printed 22 rows below: two symbols.
+  DecodedCode band = code(136, 631, 270, 330), stacked = code(134, 634, 300, 412);
+  band.text = stacked.text = "005-3379497200007";
+  codes = {tall, band};
+  drop_conflicting(codes);
+  EXPECT_TRUE(codes.empty());
+  codes = {tall, stacked};
+  drop_conflicting(codes);
+  EXPECT_EQ(codes.size(), 2u);
 }
 
 }  // namespace
