@@ -459,7 +459,11 @@ bool quiet_zones_clear(const DecodedCode& code, const imaging::Plane& latent) {
   const CodeCorners& c = q.corners;
   // One end: from `start`, away from the symbol along -`reading` (left) or +`reading` (right).
   for (const int end : {0, 1}) {
-    const int steps = static_cast<int>(std::ceil(kQuietModules * q.module_px));
+    // An EAN/UPC's add-on may follow its right end: less of that side judged.
+    const bool add_on_side =
+        end == 1 && (code.format.starts_with("EAN") || code.format.starts_with("UPC"));
+    const int steps = static_cast<int>(
+        std::ceil((add_on_side ? kAddOnQuietModules : kQuietModules) * q.module_px));
     std::vector<double> profile(static_cast<std::size_t>(steps), 0.0);
     bool inside = true;
     for (const double t : {0.25, 0.5, 0.75}) {

@@ -142,15 +142,21 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent,
                              bool try_rotate = true, std::span<const DecodeWindow> windows = {});
 
 /// \brief Modules beyond each end of a linear symbol that quiet_zones_clear()
-/// judges: well inside any symbology's quiet zone (EAN-13 has 7 on its right,
-/// then maybe its add-on's bars: on a real book's EAN-13, 4-6 modules past the
-/// symbol's measured end; Code 128 and Code 39 10). A symbol found inside
-/// another's bars has them within a module or two.
-inline constexpr double kQuietModules = 4;
+/// judges: no more than any symbology's quiet zone (EAN-13 has 7 on its right,
+/// Code 128 and Code 39 10). A symbol zbar finds inside another's bars, at
+/// half their module, may sit beside one of that symbol's wide spaces (4 of its
+/// modules, 8 of the false symbol's): judged over 4 modules, ean13-2-09's
+/// misread passed.
+inline constexpr double kQuietModules = 7;
+
+/// \brief The same on the right of an EAN or UPC symbol, where its add-on (2
+/// or 5 digits) may follow: 7-12 modules on, 4-6 past the end measured on a
+/// real book's EAN-13 (ean13-2-04, whose read a 7-module check refused).
+inline constexpr double kAddOnQuietModules = 4;
 
 /// \brief Whether the linear `code` (measured on `latent`) has quiet zones:
 /// on its centre line and the lines a quarter of its height either side, the
-/// kQuietModules modules beyond each end from one and a half out (its last
+/// kQuietModules (kAddOnQuietModules) modules beyond each end from one and a half out (its last
 /// edge's blur), averaged over the three lines and one module along them, are
 /// nowhere as dark as a bar (a quarter of the way from its bars' reflectance
 /// to its spaces'). Beyond the latent, or unmeasured: not judged (true).
