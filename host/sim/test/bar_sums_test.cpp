@@ -57,6 +57,22 @@ CaptureModel coded_capture(double electrons) {
   return m;
 }
 
+/// `scene` captured at `electrons` (coded_capture()) and the frame deblurred by joint Wiener.
+struct Captured {
+  CaptureModel model;
+  Image frame;
+  Plane direct;  ///< joint Wiener's latent of the frame
+};
+Captured capture(const Plane& scene, double electrons) {
+  Captured c{coded_capture(electrons), {}, {}};
+  c.frame = dn_to_electrons(sim::record_frame(sim::expected_electrons(scene, c.model), c.model, 9),
+                            c.model);
+  const auto direct = deblur(c.frame, c.model, DeblurOptions{});
+  EXPECT_TRUE(direct.ok());
+  if (direct.ok()) c.direct = direct.value().latent;
+  return c;
+}
+
 /// PSNR over the rows `margin` or more inside the bars (where every summed row is a bar's).
 double psnr_inside_bars(const Plane& scene, const Plane& latent, int margin) {
   auto region = scored_region(scene.width, scene.height, 52, Direction::kPlusX);
@@ -217,17 +233,13 @@ TEST(BarSums, TheModelOfSumsHasTheSumsLightAndNoise) {
 TEST(BarSums, TiltedBarsInDimLightDeblurFarBetterFromTheirSums) {
   const double slope = 0.2;
   const Plane scene = tilted_bars(512, 160, {.at_origin = slope}, 5);
-  const CaptureModel m = coded_capture(300);
-  const Image frame =
-      dn_to_electrons(sim::record_frame(sim::expected_electrons(scene, m), m, 9), m);
-  DeblurOptions wiener;
-  const auto direct = deblur(frame, m, wiener);
-  ASSERT_TRUE(direct.ok());
-  const BarSlope found = bar_slope(direct.value().latent, 16);
+  const Captured c = capture(scene, 300);
+  const BarSlope found = bar_slope(c.direct, 16);
   EXPECT_NEAR(found.at(256, 80), slope, 0.02);
-  const auto summed = deblur(sum_along_bars(frame, found, 8), model_of_row_sums(m, 17), wiener);
+  const auto summed =
+      deblur(sum_along_bars(c.frame, found, 8), model_of_row_sums(c.model, 17), DeblurOptions{});
   ASSERT_TRUE(summed.ok());
-  const double before = psnr_inside_bars(scene, direct.value().latent, 8);
+  const double before = psnr_inside_bars(scene, c.direct, 8);
   const double after = psnr_inside_bars(scene, summed.value().latent, 8);
   // 17 rows: the noise's rms a quarter; the Wiener prior's own error on 2 px
   // bars then bounds it (measured: 16.8 -> 22.4 dB; the sums without noise 22.9).
@@ -241,20 +253,15 @@ TEST(BarSums, BarsInPerspectiveDeblurBetterSummedAlongTheirOwnSlopes) {
   // deblur worse than 17 (measured 23.6 against 24.0 dB); along the bars' own
   // slopes better (24.8; the Wiener prior's error on 2 px bars bounds both).
   const Plane scene = tilted_bars(512, 160, {.at_origin = 0.15, .per_column = -0.1 / 512}, 5);
-  const CaptureModel m = coded_capture(1000);
-  const Image frame =
-      dn_to_electrons(sim::record_frame(sim::expected_electrons(scene, m), m, 9), m);
-  DeblurOptions wiener;
-  const auto direct = deblur(frame, m, wiener);
-  ASSERT_TRUE(direct.ok());
-  const BarSlope found = bar_slope(direct.value().latent, 24);
+  const Captured c = capture(scene, 1000);
+  const BarSlope found = bar_slope(c.direct, 24);
   EXPECT_NEAR(found.at(256, 80), 0.15, 0.011);
   EXPECT_NEAR(found.per_column * scene.width, -0.1, 0.011);
   BarSlope parallel = found;
   parallel.per_column = 0;
   auto summed = [&](const BarSlope& slope, int half_rows) {
-    const auto sums = deblur(sum_along_bars(frame, slope, half_rows),
-                             model_of_row_sums(m, 2 * half_rows + 1), wiener);
+    const auto sums = deblur(sum_along_bars(c.frame, slope, half_rows),
+                             model_of_row_sums(c.model, 2 * half_rows + 1), DeblurOptions{});
     EXPECT_TRUE(sums.ok());
     return sums.ok() ? psnr_inside_bars(scene, sums.value().latent, 24) : 0.0;
   };
