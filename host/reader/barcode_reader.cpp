@@ -457,7 +457,7 @@ bool quiet_zones_clear(const DecodedCode& code, const imaging::Plane& latent) {
     return true;
   };
   const CodeCorners& c = q.corners;
-  // One end: from `start`, away from the symbol along -`reading` (left) or +`reading` (right).
+  // Each end (0: left, 1: right): from the symbol's edge on each line, away from it along the line.
   for (const int end : {0, 1}) {
     // An EAN/UPC's add-on may follow its right end: less of that side judged.
     const bool add_on_side =
