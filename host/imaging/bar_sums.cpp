@@ -137,14 +137,48 @@ TileBars tile_bars(const Plane& tile) {
   return bars;
 }
 
-/// The part of `latent` where one code's bars are: the box round the tiles
-/// (64 px square) reached from the strongest (tile_bars()) through
-/// neighbours (sides and corners) at least a quarter as strong, each sloping
-/// within 0.2 of the tile it was reached from (bars in perspective change their
-/// slope along the code, a little from tile to tile: on a real Code 128 leaning
-/// 0.18 more at one end than the other, neighbours' best slopes 0.05 apart
-/// came 0.15 apart; other stripes, another label's bars, slope otherwise).
-/// The whole plane where no tile has bars.
+/// bar_slope() over the whole of `latent`, its origin the plane's centre.
+BarSlope slope_over(const Plane& latent, int half_rows) {
+  constexpr double kCoarse = 0.05, kFine = 0.01, kCoarseChange = 0.04;
+  BarSlope best{.origin_x = latent.width / 2.0, .origin_y = latent.height / 2.0};
+  double best_contrast = kept_contrast(latent, best, half_rows);
+  auto consider = [&](double at_origin, double change) {
+    BarSlope slope = best;
+    slope.at_origin = at_origin;
+    slope.per_column = change / latent.width;
+    const double c = kept_contrast(latent, slope, half_rows);
+    if (c > best_contrast) {
+      best_contrast = c;
+      best = slope;
+    }
+  };
+  auto change = [&] { return best.per_column * latent.width; };
+  // Around the best so far, `steps` either side `step` apart: the slope at the centre, or its
+  // change.
+  auto refine_slope = [&](double step, int steps) {
+    const double centre = best.at_origin, now = change();
+    for (int i = -steps; i <= steps; ++i) {
+      const double slope = centre + i * step;
+      if (i != 0 && std::abs(slope) <= kMaxBarSlope + 1e-9) consider(slope, now);
+    }
+  };
+  auto refine_change = [&](double step, int steps) {
+    const double centre = change(), slope = best.at_origin;
+    for (int i = -steps; i <= steps; ++i) {
+      const double c = centre + i * step;
+      if (i != 0 && std::abs(c) <= kMaxSlopeChange + 1e-9) consider(slope, c);
+    }
+  };
+  refine_slope(kCoarse, static_cast<int>(std::lround(kMaxBarSlope / kCoarse)));
+  refine_slope(kFine, static_cast<int>(std::lround(kCoarse / kFine)) - 1);
+  refine_change(kCoarseChange, static_cast<int>(std::lround(kMaxSlopeChange / kCoarseChange)));
+  refine_slope(kFine, 3);
+  refine_change(kFine, static_cast<int>(std::lround(kCoarseChange / kFine)) - 1);
+  return best;
+}
+
+}  // namespace
+
 Region bar_region(const Plane& latent) {
   constexpr int kTile = 64, kMinTile = 24;
   constexpr double kSlopeStep = 0.2 + 1e-9;
@@ -195,48 +229,6 @@ Region bar_region(const Plane& latent) {
   return box;
 }
 
-/// bar_slope() over the whole of `latent`, its origin the plane's centre.
-BarSlope slope_over(const Plane& latent, int half_rows) {
-  constexpr double kCoarse = 0.05, kFine = 0.01, kCoarseChange = 0.04;
-  BarSlope best{.origin_x = latent.width / 2.0, .origin_y = latent.height / 2.0};
-  double best_contrast = kept_contrast(latent, best, half_rows);
-  auto consider = [&](double at_origin, double change) {
-    BarSlope slope = best;
-    slope.at_origin = at_origin;
-    slope.per_column = change / latent.width;
-    const double c = kept_contrast(latent, slope, half_rows);
-    if (c > best_contrast) {
-      best_contrast = c;
-      best = slope;
-    }
-  };
-  auto change = [&] { return best.per_column * latent.width; };
-  // Around the best so far, `steps` either side `step` apart: the slope at the centre, or its
-  // change.
-  auto refine_slope = [&](double step, int steps) {
-    const double centre = best.at_origin, now = change();
-    for (int i = -steps; i <= steps; ++i) {
-      const double slope = centre + i * step;
-      if (i != 0 && std::abs(slope) <= kMaxBarSlope + 1e-9) consider(slope, now);
-    }
-  };
-  auto refine_change = [&](double step, int steps) {
-    const double centre = change(), slope = best.at_origin;
-    for (int i = -steps; i <= steps; ++i) {
-      const double c = centre + i * step;
-      if (i != 0 && std::abs(c) <= kMaxSlopeChange + 1e-9) consider(slope, c);
-    }
-  };
-  refine_slope(kCoarse, static_cast<int>(std::lround(kMaxBarSlope / kCoarse)));
-  refine_slope(kFine, static_cast<int>(std::lround(kCoarse / kFine)) - 1);
-  refine_change(kCoarseChange, static_cast<int>(std::lround(kMaxSlopeChange / kCoarseChange)));
-  refine_slope(kFine, 3);
-  refine_change(kFine, static_cast<int>(std::lround(kCoarseChange / kFine)) - 1);
-  return best;
-}
-
-}  // namespace
-
 double BarSlope::at(double x, double y) const {
   // The perspective's denominator kept from nearing 0 (a vanishing point
   // inside the window is no label's): at least half.
@@ -244,10 +236,13 @@ double BarSlope::at(double x, double y) const {
 }
 
 BarSlope bar_slope(const Plane& latent, int half_rows) {
+  return bar_slope(latent, bar_region(latent), half_rows);
+}
+
+BarSlope bar_slope(const Plane& latent, const Region& box, int half_rows) {
   // Judged where the bars are: the rest of a window (text, a hand, the label's
   // and the belt's edges) pulls the slope elsewhere. Rows summed half_rows
   // beyond the box's, so that the rows judged are the box's.
-  const Region box = bar_region(latent);
   const int y0 = std::max(0, box.y0 - half_rows);
   const int y1 = std::min(latent.height, box.y1 + half_rows);
   BarSlope slope = slope_over(part(latent, box.x0, y0, box.x1, y1), half_rows);

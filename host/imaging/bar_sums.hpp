@@ -43,6 +43,17 @@ struct BarSlope {
   [[nodiscard]] double at(double x, double y) const;
 };
 
+/// \brief The part of `latent` where one code's bars are: the box round the tiles
+/// (64 px square) reached from the strongest (each tile's bar strength: the contrast its rows,
+/// summed 8 either side, keep along the best of slopes 0.05 apart, less the mean over them) through
+/// neighbours (sides and corners) at least a quarter as strong, each sloping
+/// within 0.2 of the tile it was reached from (bars in perspective change their
+/// slope along the code, a little from tile to tile: on a real Code 128 leaning
+/// 0.18 more at one end than the other, neighbours' best slopes 0.05 apart
+/// came 0.15 apart; other stripes, another label's bars, slope otherwise).
+/// The whole plane where no tile has bars.
+Region bar_region(const Plane& latent);
+
 /// \brief The bars' slope in `latent`, judged where one code's bars are: the
 /// box round the 64 px tiles whose contrast depends most on the slope their
 /// rows are summed along, grown from the strongest through neighbours at least
@@ -54,6 +65,11 @@ struct BarSlope {
 /// slope found (the slope's change across the box within +-kMaxSlopeChange,
 /// 0.04 then 0.01 apart; the slope at the centre again 0.01 apart between).
 BarSlope bar_slope(const Plane& latent, int half_rows);
+
+/// \brief bar_slope() judged in `box`, bar_region() of `latent` found before
+/// (the session's second pass judges a window's slope twice, over 16 and 24
+/// rows either side, in the one box).
+BarSlope bar_slope(const Plane& latent, const Region& box, int half_rows);
 
 /// \brief Which rows of `latent` sum 2 `half_rows` + 1 rows that all cross
 /// the bars `slope` found (bar_slope() on `latent`). A row's bars' strength:

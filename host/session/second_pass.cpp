@@ -386,9 +386,11 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
         // the light) for one that tv's noise hid.
         BarSumsTry bars;
         const imaging::Plane kept = kept_columns(first, keep0 - c0, keep1 - c0);
+        const imaging::Region bars_box = imaging::bar_region(kept);
         double turn = 0;
         for (const int half_rows : kBarHalfRows) {
-          imaging::BarSlope slope = imaging::bar_slope(kept, std::max(kSlopeHalfRows, half_rows));
+          imaging::BarSlope slope =
+              imaging::bar_slope(kept, bars_box, std::max(kSlopeHalfRows, half_rows));
           bars.slope = slope.at(kept.width / 2.0, kept.height / 2.0);
           bars.slope_change = slope.per_column * kept.width;
           // Bars that lean: a short code's rows may not cross it whole; read turned upright too.
