@@ -4,12 +4,17 @@
 // a session deblurs when it restores one label's window, not the frame); and
 // the motion refinement on one thread, on the same frame at a constant speed
 // and with a belt that jitters 0.2 of its speed per slot (the wandering motion
-// fitted). Medians of repeated runs (Google Benchmark).
+// fitted); and what the bar sums judge on a 696 x 496 label window before they
+// sum (the second pass, one thread): where the bars are and their slope, and
+// which rows cross them (over the columns judged, or, argument 1, every
+// column, as before the twenty-sixth session). Medians of repeated runs
+// (Google Benchmark).
 
 #include <benchmark/benchmark.h>
 
 #include "bench/speed_frame.hpp"
 #include "codes/library.hpp"
+#include "imaging/bar_sums.hpp"
 #include "imaging/deblur.hpp"
 #include "imaging/joint_wiener.hpp"
 #include "imaging/motion_frame.hpp"
@@ -169,6 +174,48 @@ void TotalVariationWindow(benchmark::State& state) {
   run_total_variation(state, window());
 }
 
+/// A second pass's label window: a code of bars 2-6 px wide (0.06 and 0.9),
+/// 320 x 120 px, sloping 0.1 px per row, on paper (0.85) among lines of
+/// text-like strokes.
+const Plane& bar_window() {
+  static const Plane made = [] {
+    constexpr int kBarWidth = 696, kBarHeight = 496;
+    Plane p(kBarWidth, kBarHeight, 0.85f);
+    std::uint32_t state = 12345;
+    auto next = [&] { return state = state * 1664525u + 1013904223u; };
+    std::vector<float> pattern;
+    while (pattern.size() < 400) {
+      const auto run = 2 + static_cast<int>(next() >> 29) % 5;
+      const float v = (next() >> 31) ? 0.9f : 0.06f;
+      pattern.insert(pattern.end(), static_cast<std::size_t>(run), v);
+    }
+    for (int y = 180; y < 300; ++y)
+      for (int x = 180; x < 500; ++x)
+        p.at(x + static_cast<int>(0.1 * (y - 240)), y) = pattern[static_cast<std::size_t>(x - 180)];
+    for (int line = 0; line < 3; ++line)  // text: short strokes
+      for (int x = 120; x < 600; x += 7)
+        for (int y = 60 + 30 * line; y < 72 + 30 * line; ++y) p.at(x + (next() >> 30), y) = 0.1f;
+    return p;
+  }();
+  return made;
+}
+
+void BarRegionAndSlope(benchmark::State& state) {
+  const Plane& p = bar_window();
+  for (auto _ : state) {
+    const imaging::Region box = imaging::bar_region(p);
+    benchmark::DoNotOptimize(imaging::bar_slope(p, box, 24));
+  }
+}
+
+void RowsAcrossBars(benchmark::State& state) {
+  const Plane& p = bar_window();
+  imaging::BarSlope slope = imaging::bar_slope(p, imaging::bar_region(p), 24);
+  if (state.range(0) == 1) slope.judged_over = {0, 0, p.width, p.height};
+  for (auto _ : state) benchmark::DoNotOptimize(imaging::rows_across_bars(p, slope, 24));
+  state.counters["columns"] = slope.judged_over.x1 - slope.judged_over.x0;
+}
+
 }  // namespace
 
 BENCHMARK(JointWienerRgb8)
@@ -213,4 +260,16 @@ BENCHMARK(RefineMotion)
     ->ReportAggregatesOnly(true)
     ->MeasureProcessCPUTime()
     ->Iterations(5);
+BENCHMARK(BarRegionAndSlope)
+    ->Unit(benchmark::kMillisecond)
+    ->Repetitions(9)
+    ->ReportAggregatesOnly(true)
+    ->UseRealTime();
+BENCHMARK(RowsAcrossBars)
+    ->Arg(0)
+    ->Arg(1)
+    ->Unit(benchmark::kMillisecond)
+    ->Repetitions(9)
+    ->ReportAggregatesOnly(true)
+    ->UseRealTime();
 BENCHMARK_MAIN();

@@ -13,14 +13,14 @@ namespace {
 /// Adds `row` shifted by `shift` pixels (sample x takes the row at x + shift,
 /// linearly interpolated, clamped to the row's ends) into `sum`.
 void add_shifted(std::span<const float> row, double shift, std::span<float> sum) {
-  const int width = static_cast<int>(row.size());
+  const int width = static_cast<int>(sum.size()), last = static_cast<int>(row.size()) - 1;
   const int whole = static_cast<int>(std::floor(shift));
   const auto f = static_cast<float>(shift - whole);
   const float g = 1 - f;
-  auto sample = [&](int x) { return row[static_cast<std::size_t>(std::clamp(x, 0, width - 1))]; };
+  auto sample = [&](int x) { return row[static_cast<std::size_t>(std::clamp(x, 0, last))]; };
   // Where both neighbours lie inside the row: no clamp (the loop vectorises).
   const int inner0 = std::clamp(-whole, 0, width);
-  const int inner1 = std::clamp(width - 1 - whole, inner0, width);
+  const int inner1 = std::clamp(last - whole, inner0, width);
   for (int x = 0; x < inner0; ++x) sum[x] += g * sample(x + whole) + f * sample(x + whole + 1);
   const float* from = row.data();
   float* to = sum.data();
@@ -70,8 +70,10 @@ void add_resampled(std::span<const float> row, double offset, double scale, std:
 }
 
 /// Row `y` of `plane` summed along `slope` over the rows [y - half_rows,
-/// y + half_rows] that exist, into `sum` (zeroed first); returns how many.
-int sum_row(const Plane& plane, int y, const BarSlope& slope, int half_rows, std::span<float> sum) {
+/// y + half_rows] that exist, over columns [first_column, first_column +
+/// sum.size()), into `sum` (zeroed first); returns how many rows.
+int sum_row(const Plane& plane, int y, const BarSlope& slope, int half_rows, int first_column,
+            std::span<float> sum) {
   std::fill(sum.begin(), sum.end(), 0.0f);
   // On row y the bars' slope is linear along the row: at(origin_x, y) + rate (x - origin_x).
   const double at_origin = slope.at(slope.origin_x, y);
@@ -79,7 +81,10 @@ int sum_row(const Plane& plane, int y, const BarSlope& slope, int half_rows, std
   int count = 0;
   for (int k = -half_rows; k <= half_rows; ++k) {
     if (y + k < 0 || y + k >= plane.height) continue;
-    add_resampled(plane.row(y + k), k * (at_origin - rate * slope.origin_x), 1 + k * rate, sum);
+    // Column x reads row y + k at x + k (at_origin + rate (x - origin_x)).
+    const double scale = 1 + k * rate;
+    add_resampled(plane.row(y + k), k * (at_origin - rate * slope.origin_x) + scale * first_column,
+                  scale, sum);
     ++count;
   }
   return count;
@@ -93,21 +98,13 @@ double kept_contrast(const Plane& latent, const BarSlope& slope, int half_rows) 
   std::vector<float> sum(static_cast<std::size_t>(latent.width));
   double energy = 0;
   for (int y = half_rows; y < latent.height - half_rows; y += kRowStep) {
-    sum_row(latent, y, slope, half_rows, sum);
+    sum_row(latent, y, slope, half_rows, 0, sum);
     float rows = 0;
     for (std::size_t x = 1; x < sum.size(); ++x)
       rows += (sum[x] - sum[x - 1]) * (sum[x] - sum[x - 1]);
     energy += rows;
   }
   return energy;
-}
-
-/// Columns [x0, x1) and rows [y0, y1) of `plane`, copied.
-Plane part(const Plane& plane, int x0, int y0, int x1, int y1) {
-  Plane out = Plane::uninitialised(x1 - x0, y1 - y0);
-  for (int y = y0; y < y1; ++y)
-    std::copy_n(plane.row(y).begin() + x0, x1 - x0, out.row(y - y0).begin());
-  return out;
 }
 
 /// A tile's bars: how much of its contrast along the rows depends on the slope
@@ -193,7 +190,7 @@ Region bar_region(const Plane& latent) {
   std::vector<TileBars> tiles;
   for (int i = 0; i < columns * rows; ++i) {
     const Region r = tile_region(i);
-    tiles.push_back(tile_bars(part(latent, r.x0, r.y0, r.x1, r.y1)));
+    tiles.push_back(tile_bars(latent.part(r.x0, r.y0, r.x1, r.y1)));
   }
   const auto strongest =
       static_cast<int>(std::max_element(tiles.begin(), tiles.end(),
@@ -245,7 +242,7 @@ BarSlope bar_slope(const Plane& latent, const Region& box, int half_rows) {
   // beyond the box's, so that the rows judged are the box's.
   const int y0 = std::max(0, box.y0 - half_rows);
   const int y1 = std::min(latent.height, box.y1 + half_rows);
-  BarSlope slope = slope_over(part(latent, box.x0, y0, box.x1, y1), half_rows);
+  BarSlope slope = slope_over(latent.part(box.x0, y0, box.x1, y1), half_rows);
   slope.origin_x += box.x0;
   slope.origin_y += y0;
   slope.judged_over = box;
@@ -258,13 +255,13 @@ std::vector<bool> rows_across_bars(const Plane& latent, const BarSlope& slope, i
   const Region& box = slope.judged_over;
   std::vector<bool> across(static_cast<std::size_t>(latent.height), false);
   if (box.x1 - box.x0 < 2) return across;
-  std::vector<float> sum(static_cast<std::size_t>(latent.width));
+  std::vector<float> sum(static_cast<std::size_t>(box.x1 - box.x0));
   // The squared steps along the box's columns of row y's 17 rows summed along `along`.
   auto kept = [&](int y, const BarSlope& along) {
-    sum_row(latent, y, along, kStrengthHalf, sum);
+    sum_row(latent, y, along, kStrengthHalf, box.x0, sum);
     double e = 0;
-    for (int x = box.x0 + 1; x < box.x1; ++x) {
-      const double d = sum[static_cast<std::size_t>(x)] - sum[static_cast<std::size_t>(x - 1)];
+    for (std::size_t x = 1; x < sum.size(); ++x) {
+      const double d = sum[x] - sum[x - 1];
       e += d * d;
     }
     return e;
@@ -299,7 +296,7 @@ Image sum_along_bars(const Image& electrons, const BarSlope& slope, int half_row
     Plane sums = Plane::uninitialised(plane.width, plane.height);
     for (int y = 0; y < plane.height; ++y) {
       const std::span<float> row = sums.row(y);
-      const int count = sum_row(plane, y, slope, half_rows, row);
+      const int count = sum_row(plane, y, slope, half_rows, 0, row);
       const float scale = static_cast<float>(rows) / static_cast<float>(count);
       if (count != rows)
         for (float& v : row) v *= scale;

@@ -1,6 +1,7 @@
 #pragma once
 // Planar float images: the imaging code's currency. Pure data, no I/O.
 
+#include <algorithm>
 #include <cstddef>
 #include <memory>
 #include <new>
@@ -65,6 +66,13 @@ struct Plane {
     return {pixels.data() + static_cast<std::size_t>(y) * width, static_cast<std::size_t>(width)};
   }
   bool empty() const { return pixels.empty(); }
+  /// \brief Columns [x0, x1) of rows [y0, y1) (within the plane), copied.
+  Plane part(int x0, int y0, int x1, int y1) const {
+    Plane out = uninitialised(x1 - x0, y1 - y0);
+    for (int y = y0; y < y1; ++y)
+      std::copy_n(row(y).begin() + x0, x1 - x0, out.row(y - y0).begin());
+    return out;
+  }
 };
 
 /// \brief A multi-channel image as planes of equal size (channel 0 = red for RGB).

@@ -87,19 +87,6 @@ bool on_code_rows(const reader::DecodedCode& code, double y) {
   return y >= y0 - 4 && y <= y1 + 4;
 }
 
-/// Columns [keep_from, keep_to) of `first_latent`, the first pass's latent of
-/// the window's crop (joint Wiener's): the window kept, where the bars' slope
-/// is judged. Not tv's latent: on a real label turned 8 degrees (ean13-2-05 of
-/// the real-print photos, beside a second code, print and shadow) the slope
-/// found on tv's latent of the window was 0, on joint Wiener's -0.14, as on the
-/// sharp scene (docs/algorithms.md, "Sums along the bars").
-imaging::Plane kept_columns(const imaging::Plane& first_latent, int keep_from, int keep_to) {
-  imaging::Plane kept = imaging::Plane::uninitialised(keep_to - keep_from, first_latent.height);
-  for (int y = 0; y < first_latent.height; ++y)
-    std::copy_n(first_latent.row(y).begin() + keep_from, keep_to - keep_from, kept.row(y).begin());
-  return kept;
-}
-
 /// The window's rows, `crop` its samples, summed `half_rows` either side of each
 /// along the bars' `slope` and deblurred by joint Wiener (one thread).
 Result<imaging::DeblurResult, std::string> deblur_bar_sums(const imaging::MotionFrame& crop,
@@ -300,13 +287,8 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
     const auto t0 = std::chrono::steady_clock::now();
     double isotropic_ms = 0;  // the isotropic tries', settled on their own
     imaging::Image crop;
-    for (int c = 0; c < electrons.channel_count(); ++c) {
-      crop.channels.push_back(imaging::Plane::uninitialised(c1 - c0, r1 - r0));
-      for (int y = r0; y < r1; ++y) {
-        const auto from = electrons.channel(c).row(y);
-        std::copy(from.begin() + c0, from.begin() + c1, crop.channels.back().row(y - r0).begin());
-      }
-    }
+    for (int c = 0; c < electrons.channel_count(); ++c)
+      crop.channels.push_back(electrons.channel(c).part(c0, r0, c1, r1));
     WindowRetry retry;
     retry.window =
         reader::decode_windows({&run, 1}, camera_width, camera_height, direction, kWindowMargin)[0];
@@ -385,7 +367,12 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
         // No linear code: the rows summed along the bars (at 17, then 49 times
         // the light) for one that tv's noise hid.
         BarSumsTry bars;
-        const imaging::Plane kept = kept_columns(first, keep0 - c0, keep1 - c0);
+        // Judged on the first pass's latent (joint Wiener's) of the window kept,
+        // not tv's: on a real label turned 8 degrees (ean13-2-05 of the real-print
+        // photos, beside a second code, print and shadow) the slope found on tv's
+        // latent of the window was 0, on joint Wiener's -0.14, as on the sharp scene
+        // (docs/algorithms.md, "Sums along the bars").
+        const imaging::Plane kept = first.part(keep0 - c0, 0, keep1 - c0, first.height);
         const imaging::Region bars_box = imaging::bar_region(kept);
         double turn = 0;
         for (const int half_rows : kBarHalfRows) {
