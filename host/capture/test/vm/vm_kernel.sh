@@ -22,7 +22,9 @@
 # vm_kernel_build_vimc fetches the same version's linux-source-6.1 (its tarball, ~140 MB, of
 # which only drivers/media/test-drivers/vimc is unpacked), linux-headers-<release>, its -common
 # part and linux-kbuild-6.1, all pinned to the image's exact Debian version so the module's
-# vermagic and symbol versions match, and builds vimc.ko out of tree with gcc-12 (what the
+# vermagic and symbol versions match (the source and kbuild, where apt no longer has that
+# version, at the newest Debian revision of the same kernel release: vm_kernel_package_version),
+# and builds vimc.ko out of tree with gcc-12 (what the
 # headers name; `g++` brings it). The module is unsigned: the guest boots without EFI secure
 # boot, so there is no lockdown, and the kernel loads it with a taint. Everything is kept in
 # CACHE_DIR/linux-image-<release>/ (vimc.ko under vimc/); downloads and sources are removed.
@@ -92,6 +94,24 @@ vm_kernel_module() {
   echo "$found"
 }
 
+# The version of NAME to build the image's modules with: the image's own Debian version where apt
+# has it, else the newest of the same kernel release (6.1.192-3 for 6.1.192-2: the archive
+# replaces a source or build-tools package by a new Debian revision of the same kernel, and
+# drops the old one, while the image and its headers stay: seen on 2026-11-29 with
+# linux-kbuild-6.1). The headers carry the symbol versions and vermagic; the source and the
+# build tools of one kernel release build the same module.
+vm_kernel_package_version() {
+  local name=$1 versions
+  versions=$(apt-cache madison "$name" 2>/dev/null | awk -F'|' '{gsub(/ /, "", $2); print $2}')
+  if grep -qxF "$VM_KERNEL_VERSION" <<<"$versions"; then
+    echo "$VM_KERNEL_VERSION"
+    return
+  fi
+  local same
+  same=$(awk -v p="${VM_KERNEL_VERSION%-*}-" 'index($0, p) == 1' <<<"$versions" | sort -V | tail -n 1)
+  echo "${same:-$VM_KERNEL_VERSION}"
+}
+
 vm_kernel_build_vimc() {
   local cache_dir out build log pkg packages started
   cache_dir=$(dirname "$VM_KERNEL_DIR")
@@ -102,10 +122,10 @@ vm_kernel_build_vimc() {
     command -v gcc-12 >/dev/null || fail "gcc-12 is not installed (run tools/install-deps: g++)"
     command -v make >/dev/null || fail "make is not installed (run tools/install-deps: make)"
     command -v xz >/dev/null || fail "xz is not installed (run tools/install-deps: xz-utils)"
-    packages=("linux-source-6.1=$VM_KERNEL_VERSION"
+    packages=("linux-source-6.1=$(vm_kernel_package_version linux-source-6.1)"
       "linux-headers-$VM_KERNEL_RELEASE=$VM_KERNEL_VERSION"
       "linux-headers-${VM_KERNEL_RELEASE%-amd64}-common=$VM_KERNEL_VERSION"
-      "linux-kbuild-6.1=$VM_KERNEL_VERSION")
+      "linux-kbuild-6.1=$(vm_kernel_package_version linux-kbuild-6.1)")
     say "building vimc.ko for $VM_KERNEL_RELEASE from ${packages[*]} (first run only)"
     rm -rf "$cache_dir"/vimc-build.* # left by a failed build
     build=$(mktemp -d "$cache_dir/vimc-build.XXXXXX")
