@@ -12,6 +12,9 @@
 
 #include <benchmark/benchmark.h>
 
+#include <cstdint>
+#include <vector>
+
 #include "bench/speed_frame.hpp"
 #include "codes/library.hpp"
 #include "imaging/bar_sums.hpp"
