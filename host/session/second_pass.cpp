@@ -9,6 +9,7 @@
 #include "imaging/bar_sums.hpp"
 #include "imaging/deblur.hpp"
 #include "imaging/total_variation.hpp"
+#include "reader/bar_pattern_fit.hpp"
 #include "reader/code_reading.hpp"
 #include "reader/code_regions.hpp"
 #include "session/session_config.hpp"
@@ -33,6 +34,17 @@ constexpr std::array<int, 2> kBarHalfRows = {8, 24};
 /// tell; the taller sums' slope is judged over as many rows as they sum (a
 /// slope's error shifts the outer rows the further).
 constexpr int kSlopeHalfRows = 16;
+
+/// tv's kappa on the bar sums where joint Wiener's read nothing: half the
+/// reading weight (kappa 0.15 read ean13-2-04 and -05 of the real-print photos
+/// on the 17-row sums where the reading weight flattened their narrow spaces).
+constexpr double kBarSumsTvWeight = 0.15;
+/// How much better, in noise variances, each character of a value tv's sums
+/// read must fit joint Wiener's sums than any other character allowed in its
+/// place (reader::fit_bar_pattern): tv's flat steps on a noisy profile can
+/// read another value that passes the check digit, which joint Wiener's sums
+/// (no prior: only the light's evidence) do not support.
+constexpr double kMinFitMargin = 1.0;
 
 /// A bar slope from which a window is also read turned upright: 0.05 px per
 /// row, 3 degrees (a 40 px tall code 300 px long then drifts 15 px across the rows).
@@ -88,18 +100,17 @@ bool on_code_rows(const reader::DecodedCode& code, double y) {
 }
 
 /// The window's rows, `crop` its samples, summed `half_rows` either side of each
-/// along the bars' `slope` and deblurred by joint Wiener (one thread).
+/// along the bars' `slope` and deblurred under the sums' model by `options`.
 Result<imaging::DeblurResult, std::string> deblur_bar_sums(const imaging::MotionFrame& crop,
                                                            const imaging::BarSlope& slope,
                                                            int half_rows,
-                                                           const imaging::CaptureModel& model) {
+                                                           const imaging::CaptureModel& model,
+                                                           const imaging::DeblurOptions& options) {
   auto sums = imaging::MotionFrame::make(imaging::sum_along_bars(crop.image(), slope, half_rows),
                                          imaging::Direction::kPlusX);
   if (!sums.ok()) return Result<imaging::DeblurResult, std::string>::failure(sums.error());
-  imaging::DeblurOptions wiener;
-  wiener.threads = 1;
   return imaging::deblur(sums.value(), imaging::model_of_row_sums(model, 2 * half_rows + 1),
-                         wiener);
+                         options);
 }
 
 }  // namespace
@@ -208,6 +219,18 @@ nlohmann::json SecondPass::log(double credit_ms) const {
                             {"slope_change", std::round(r.bar_sums->slope_change * 100) / 100},
                             {"rows", r.bar_sums->rows},
                             {"read", r.bar_sums->read}};
+    if (r.bar_sums && !r.bar_sums->tv_rows.empty()) {
+      nlohmann::json checked = nlohmann::json::array();
+      for (const BarSumsTry::Checked& c : r.bar_sums->tv_checked) {
+        nlohmann::json one = {{"text", c.text}, {"format", c.format}, {"kept", c.kept}};
+        if (c.problem.empty())
+          one["margin"] = std::round(c.margin * 10) / 10;
+        else
+          one["problem"] = c.problem;
+        checked.push_back(std::move(one));
+      }
+      window["bar_sums"]["tv"] = {{"rows", r.bar_sums->tv_rows}, {"checked", std::move(checked)}};
+    }
     if (r.isotropic)
       window["isotropic"] = {{"read", r.isotropic->read}, {"weights", r.isotropic->weights}};
     windows.push_back(std::move(window));
@@ -244,6 +267,18 @@ std::vector<reader::LabelRegion> retry_regions(std::span<const reader::LabelRegi
   return out;
 }
 
+std::vector<reader::DecodedCode> supported_reads(const imaging::Plane& sums,
+                                                 std::vector<reader::DecodedCode> found,
+                                                 std::vector<BarSumsTry::Checked>& checked) {
+  std::erase_if(found, [&](const reader::DecodedCode& code) {
+    const reader::BarPatternFit fit = reader::fit_bar_pattern(sums, code);
+    checked.push_back({code.text, code.format, fit.judged ? fit.worst_margin : 0, fit.problem,
+                       fit.judged && fit.worst_margin >= kMinFitMargin});
+    return !checked.back().kept;
+  });
+  return found;
+}
+
 SecondPass run_second_pass(const SecondPassFrame& frame,
                            std::span<const reader::LabelRegion> unread,
                            const reader::ReaderOptions& options, SecondPassBudget& budget,
@@ -261,7 +296,13 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
   tv.tv_weight_per_noise = imaging::kReadingWeightPerNoise;
   imaging::DeblurOptions tv_isotropic = tv;
   tv_isotropic.tv_across_ratio = 1;
+  imaging::DeblurOptions wiener_sums;
+  wiener_sums.threads = 1;
+  imaging::DeblurOptions tv_sums = tv;
+  tv_sums.tv_weight_per_noise = kBarSumsTvWeight;
   const std::string linear = reader::linear_symbologies(options.symbologies);
+  const imaging::Plane& camera =
+      frame.camera_latent != nullptr ? *frame.camera_latent : frame.motion_latent;
   for (const reader::LabelRegion& run : unread) {
     if (reads.any_over({run.begin - frame.travel_px, run.end - frame.travel_px,
                         static_cast<double>(run.across_begin),
@@ -285,7 +326,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
       continue;
     }
     const auto t0 = std::chrono::steady_clock::now();
-    double isotropic_ms = 0;  // the isotropic tries', settled on their own
+    double own_ms = 0;  // the tries settled on their own (tv on the bar sums, isotropic tv)
     imaging::Image crop;
     for (int c = 0; c < electrons.channel_count(); ++c)
       crop.channels.push_back(electrons.channel(c).part(c0, r0, c1, r1));
@@ -312,11 +353,8 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
     for (const reader::DecodedCode& c : readout.codes)
       if (inside(retry.window, c.centre_x, c.centre_y)) held.push_back(c);
     bool held_read = held.empty();  // all of them read again by the last read_again()
-    // Reads the window on the latents as pasted; the codes not read before
-    // join the readout. Returns them.
-    auto read_again = [&](const std::string& symbologies, double turn_rad = 0) {
-      const imaging::Plane& camera =
-          frame.camera_latent != nullptr ? *frame.camera_latent : frame.motion_latent;
+    // Reads the window on the latents as pasted: the codes not in the readout.
+    auto read_window = [&](const std::string& symbologies, double turn_rad = 0) {
       reader::BarcodeReadout again =
           turn_rad == 0
               ? reader::read_barcodes(camera, symbologies, options.try_rotate, {&retry.window, 1})
@@ -326,17 +364,26 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
         return std::any_of(again.codes.begin(), again.codes.end(),
                            [&](const reader::DecodedCode& c) { return reader::same_symbol(c, h); });
       });
+      std::erase_if(again.codes, [&](const reader::DecodedCode& code) {
+        return std::any_of(
+            readout.codes.begin(), readout.codes.end(),
+            [&](const reader::DecodedCode& c) { return reader::same_symbol(c, code); });
+      });
+      return std::move(again.codes);
+    };
+    // `codes` join the readout. Returns their values.
+    auto take = [&](std::vector<reader::DecodedCode> codes) {
       std::vector<std::string> texts;
-      for (reader::DecodedCode& code : again.codes) {
-        if (std::any_of(readout.codes.begin(), readout.codes.end(),
-                        [&](const reader::DecodedCode& c) { return reader::same_symbol(c, code); }))
-          continue;
+      for (reader::DecodedCode& code : codes) {
         texts.push_back(code.text);
         reads.add(belt_box(code, direction, camera_width, camera_height, frame.travel_px));
         readout.codes.push_back(std::move(code));
       }
       retry.read.insert(retry.read.end(), texts.begin(), texts.end());
       return texts;
+    };
+    auto read_again = [&](const std::string& symbologies, double turn_rad = 0) {
+      return take(read_window(symbologies, turn_rad));
     };
     // The crop is in the motion frame already (+x); its samples passed the frame's checks.
     const auto cropped = imaging::MotionFrame::make(std::move(crop), imaging::Direction::kPlusX);
@@ -384,27 +431,55 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
           turn = std::abs(bars.slope) >= kMinTurnSlope ? camera_lean(direction, bars.slope) : 0;
           const std::vector<bool> across = imaging::rows_across_bars(kept, slope, half_rows);
           slope.origin_x += keep0 - c0;  // from the kept columns' coordinates to the crop's
-          const DeblurOut profile = deblur_bar_sums(cropped.value(), slope, half_rows, frame.model);
+          const DeblurOut profile =
+              deblur_bar_sums(cropped.value(), slope, half_rows, frame.model, wiener_sums);
           if (!profile.ok()) break;
           bars.rows.push_back(2 * half_rows + 1);
-          const auto sums_from = static_cast<std::ptrdiff_t>(readout.codes.size());
           // The sums read where all their rows cross the bars; tv's latent elsewhere.
-          imaging::Plane sums = patch;
-          for (int y = 0; y < sums.height; ++y)
-            if (across[static_cast<std::size_t>(y)])
-              std::copy_n(profile.value().latent.row(y).begin(), sums.width, sums.row(y).begin());
+          auto over_rows_across = [&](const imaging::Plane& sums_latent) {
+            imaging::Plane composite = patch;
+            for (int y = 0; y < composite.height; ++y)
+              if (across[static_cast<std::size_t>(y)])
+                std::copy_n(sums_latent.row(y).begin(), composite.width, composite.row(y).begin());
+            return composite;
+          };
+          const imaging::Plane sums = over_rows_across(profile.value().latent);
           paste(sums);
-          bars.read = read_again(linear);
-          if (bars.read.empty() && turn != 0) bars.read = read_again(linear, turn);
+          std::vector<reader::DecodedCode> found = read_window(linear);
+          if (found.empty() && turn != 0) found = read_window(linear, turn);
           // The frame shows tv's latent, and the sums' over the rows of the codes
           // they read only: the sums smear whatever else the window holds (a
           // matrix code above or below that tv or the first pass read, text)
           // along the bars' slope.
           paste(patch);
-          if (!bars.read.empty()) {
-            paste(sums, {readout.codes.begin() + sums_from, readout.codes.end()});
+          if (!found.empty()) {
+            paste(sums, found);
+            bars.read = take(std::move(found));
             break;
           }
+          // Nothing read: tv on the same sums (noise that joint Wiener's leaves
+          // hides narrow spaces), each value it reads checked against joint
+          // Wiener's sums, where the budget holds another tv.
+          if (!budget.take(estimate)) continue;
+          const auto t1 = std::chrono::steady_clock::now();
+          const DeblurOut tv_profile =
+              deblur_bar_sums(cropped.value(), slope, half_rows, frame.model, tv_sums);
+          bars.tv_rows.push_back(2 * half_rows + 1);
+          if (tv_profile.ok()) {
+            const imaging::Plane tv_composite = over_rows_across(tv_profile.value().latent);
+            paste(tv_composite);
+            found = read_window(linear);
+            if (found.empty() && turn != 0) found = read_window(linear, turn);
+            paste(sums);
+            found = supported_reads(camera, std::move(found), bars.tv_checked);
+            paste(patch);
+            if (!found.empty()) paste(tv_composite, found);
+            bars.read = take(std::move(found));
+          }
+          const double ms = ms_since(t1);
+          own_ms += ms;
+          budget.settle(estimate, ms, pixels);
+          if (!bars.read.empty()) break;
         }
         if (bars.read.empty() && turn != 0) read_again(linear, turn);  // tv's latent, turned
         retry.bar_sums = std::move(bars);
@@ -427,12 +502,12 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
           if (retry.isotropic->read.empty()) paste(patch);
         }
         const double ms = ms_since(t1);
-        isotropic_ms += ms;
+        own_ms += ms;
         budget.settle(estimate, ms, pixels);
       }
     }
     retry.ms = ms_since(t0);
-    budget.settle(estimate, retry.ms - isotropic_ms, pixels);
+    budget.settle(estimate, retry.ms - own_ms, pixels);
     out.retried.push_back(std::move(retry));
   }
   return out;

@@ -106,6 +106,18 @@ struct BarSumsTry {
   double slope_change = 0;
   std::vector<int> rows;          ///< the rows summed of each try made, in order
   std::vector<std::string> read;  ///< the codes the last try read
+  /// tv on the sums, where joint Wiener's read nothing: the rows summed of each
+  /// tv try made, and each value a tv try read, checked against joint Wiener's
+  /// sums (reader::fit_bar_pattern).
+  std::vector<int> tv_rows;
+  struct Checked {
+    std::string text;
+    std::string format;
+    double margin = 0;    ///< fit_bar_pattern()'s worst margin (0 if not judged)
+    std::string problem;  ///< why it was not judged
+    bool kept = false;    ///< judged, and every character held by 1 noise variance or more
+  };
+  std::vector<Checked> tv_checked;
 };
 
 /// \brief tv's kappa for the isotropic tries, in turn: the reading weight, then
@@ -135,6 +147,16 @@ struct WindowRetry {
   /// read); absent: not tried.
   std::optional<IsotropicTry> isotropic;
 };
+
+/// \brief The codes of `found` (read on tv's latent of a window's bar sums)
+/// whose bars `sums` (the frame's latent with joint Wiener's sums where tv's
+/// were: the light's evidence without tv's prior) support: judged by
+/// reader::fit_bar_pattern, every character fitting at least 1 noise variance
+/// better than any other allowed in its place. Formats it cannot judge are
+/// not supported. Each code's verdict is added to `checked`.
+std::vector<reader::DecodedCode> supported_reads(const imaging::Plane& sums,
+                                                 std::vector<reader::DecodedCode> found,
+                                                 std::vector<BarSumsTry::Checked>& checked);
 
 /// \brief What a frame's second pass did.
 struct SecondPass {

@@ -11,6 +11,7 @@
 #include <functional>
 #include <iostream>
 #include <optional>
+#include <random>
 #include <set>
 
 #include "capture/sim_camera.hpp"
@@ -19,6 +20,7 @@
 #include "device/virtual_controller.hpp"
 #include "imaging/bar_sums.hpp"
 #include "imaging/capture_descriptor.hpp"
+#include "sim/scene.hpp"
 
 namespace flutterscan::session {
 namespace {
@@ -451,6 +453,41 @@ TEST(SecondPass, RetriesEveryUnreadLabelAndTheCodeRegionsOffThem) {
 // A code read covers a box on the belt: a window over part of it (a label
 // leaving the view, its code's centre gone past the edge) was read already; a
 // window beside it along the motion, or above or below it, was not.
+TEST(SecondPass, TvsBarSumsReadsCountOnlyWhereJointWienersSumsSupportEveryCharacter) {
+  auto spec = sim::parse_scene("ean13:590123412345");
+  ASSERT_TRUE(spec.ok());
+  spec.value().width = 480;
+  spec.value().height = 240;
+  spec.value().module_px = 2.5;
+  spec.value().print_blur_px = 1.0;
+  auto sharp = sim::render_scene(spec.value());
+  ASSERT_TRUE(sharp.ok()) << sharp.error();
+  const reader::BarcodeReadout readout = reader::read_barcodes(sharp.value());
+  ASSERT_EQ(readout.codes.size(), 1u);
+  // The sums: the label through noise (a tenth of the bars' contrast, rms).
+  imaging::Plane sums = sharp.value();
+  std::mt19937_64 rng(3);
+  std::normal_distribution<float> noise(0.0f, 0.08f);
+  for (float& v : sums.pixels) v += noise(rng);
+  const reader::DecodedCode read = readout.codes.front();
+  reader::DecodedCode misread = read;  // 5901234123457 with its fifth digit 2 -> 9: valid too
+  misread.text = "5901934123450";
+  reader::DecodedCode code128 = read;
+  code128.format = "Code128";
+  std::vector<BarSumsTry::Checked> checked;
+  const std::vector<reader::DecodedCode> kept =
+      supported_reads(sums, {read, misread, code128}, checked);
+  ASSERT_EQ(kept.size(), 1u);
+  EXPECT_EQ(kept.front().text, read.text);
+  ASSERT_EQ(checked.size(), 3u);
+  EXPECT_TRUE(checked[0].kept);
+  EXPECT_GE(checked[0].margin, 1.0);
+  EXPECT_FALSE(checked[1].kept);
+  EXPECT_LT(checked[1].margin, 0.0);
+  EXPECT_FALSE(checked[2].kept);
+  EXPECT_NE(checked[2].problem.find("Code128"), std::string::npos) << checked[2].problem;
+}
+
 TEST(BeltReads, ACodeReadCoversItsWholeBoxOnTheBelt) {
   reader::DecodedCode code;
   code.quality.corners = {{{600, 100}, {800, 100}, {800, 160}, {600, 160}}};
