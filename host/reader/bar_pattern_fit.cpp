@@ -13,6 +13,8 @@
 #include <exception>
 #include <limits>
 #include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 namespace flutterscan::reader {
@@ -32,6 +34,8 @@ constexpr std::array<std::array<int, 4>, 10> kLWidths = {{{3, 2, 1, 1},
                                                           {1, 2, 1, 3},
                                                           {3, 1, 1, 2}}};
 constexpr int kCharacterModules = 7;
+/// The places read_ean13_by_fit() tries, best first.
+constexpr std::size_t kPlacesTried = 5;
 
 using Modules = std::vector<std::uint8_t>;  ///< 1: bar
 
@@ -83,6 +87,19 @@ Modules modules_of(const Layout& layout, const std::string& text) {
     return {};
   }
 }
+
+/// The left half's parities (L or G, 1 for G) of an EAN-13 of each first
+/// digit (ISO/IEC 15420).
+constexpr std::array<std::array<int, 6>, 10> kFirstDigitParities = {{{0, 0, 0, 0, 0, 0},
+                                                                     {0, 0, 1, 0, 1, 1},
+                                                                     {0, 0, 1, 1, 0, 1},
+                                                                     {0, 0, 1, 1, 1, 0},
+                                                                     {0, 1, 0, 0, 1, 1},
+                                                                     {0, 1, 1, 0, 0, 1},
+                                                                     {0, 1, 1, 1, 0, 0},
+                                                                     {0, 1, 0, 1, 0, 1},
+                                                                     {0, 1, 0, 1, 1, 0},
+                                                                     {0, 1, 1, 0, 1, 0}}};
 
 /// The characters allowed at a place: the L widths from a space (left half) or
 /// a bar (right half), and the G widths too where `both_parities`.
@@ -136,34 +153,41 @@ std::vector<double> module_edges(const Geometry& g, std::size_t modules) {
   return edges;
 }
 
-/// The share of bar seen by the sample at `t` (1 px wide) of `modules` between
-/// `edges`, blurred by a Gaussian of `sigma` px.
-class BarShare {
+/// The light of each module at each sample of a profile (samples 1 px wide
+/// at t0 + k), the modules lying between `edges` and blurred by a Gaussian of
+/// `sigma` px: a sample's bar share is the sum of its bar modules' weights.
+class ModuleWeights {
  public:
-  BarShare(const Modules& modules, const std::vector<double>& edges, double sigma)
-      : modules_(modules),
-        edges_(edges),
-        // The 1 px sample's box adds its variance, 1/12 px^2.
-        scale_(std::sqrt(2.0 * (sigma * sigma + 1.0 / 12.0))) {}
-
-  double at(double t) const {
-    // The modules within 4.2 sigma: a module farther adds below 1e-5.
-    const double reach = 3 * scale_;
-    const auto from = std::lower_bound(edges_.begin(), edges_.end(), t - reach);
-    const auto first =
-        static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, from - edges_.begin() - 1));
-    double share = 0;
-    for (std::size_t i = first; i < modules_.size() && edges_[i] <= t + reach; ++i) {
-      if (modules_[i] == 0) continue;
-      share += 0.5 * (std::erf((t - edges_[i]) / scale_) - std::erf((t - edges_[i + 1]) / scale_));
+  ModuleWeights(const std::vector<double>& edges, double sigma, double t0, std::size_t samples) {
+    // The 1 px sample's box adds its variance, 1/12 px^2; modules beyond
+    // 4.2 sigma of a sample add below 1e-5 to it.
+    const double scale = std::sqrt(2.0 * (sigma * sigma + 1.0 / 12.0)), reach = 3 * scale;
+    const std::size_t modules = edges.size() - 1;
+    first_.resize(samples);
+    begin_.resize(samples + 1);
+    for (std::size_t k = 0; k < samples; ++k) {
+      const double t = t0 + static_cast<double>(k);
+      const auto from = std::lower_bound(edges.begin(), edges.end(), t - reach);
+      first_[k] = static_cast<std::size_t>(std::max<std::ptrdiff_t>(0, from - edges.begin() - 1));
+      begin_[k] = weights_.size();
+      for (std::size_t i = first_[k]; i < modules && edges[i] <= t + reach; ++i)
+        weights_.push_back(
+            0.5 * (std::erf((t - edges[i]) / scale) - std::erf((t - edges[i + 1]) / scale)));
     }
-    return share;
+    begin_[samples] = weights_.size();
+  }
+
+  /// Sample k's bar share under `modules`.
+  double share(std::size_t k, const Modules& modules) const {
+    double s = 0;
+    for (std::size_t j = begin_[k]; j < begin_[k + 1]; ++j)
+      if (modules[first_[k] + j - begin_[k]] != 0) s += weights_[j];
+    return s;
   }
 
  private:
-  const Modules& modules_;
-  const std::vector<double>& edges_;
-  double scale_;
+  std::vector<std::size_t> first_, begin_;
+  std::vector<double> weights_;
 };
 
 /// The paper's and the bars' levels along the code: the value at position u
@@ -183,19 +207,26 @@ struct Fit {
   Geometry geometry;
 };
 
-/// Least squares of `profile` (samples at t0 + k, u = (t - origin) / span)
-/// on the levels; residual infinite where the bars come out no darker than the
-/// paper at either end of the code.
-Fit fit_levels(const std::vector<double>& profile, double t0, double span, const BarShare& share) {
+/// A profile: samples every 1 px, sample k at t0 + k px along the code's
+/// line, u = t / span (0 at the corners' first bar).
+struct Profile {
+  std::vector<double> values;
+  double t0 = 0;
+  double span = 1;
+  double u(std::size_t k) const { return (t0 + static_cast<double>(k)) / span; }
+};
+
+/// Least squares of the levels of `modules` seen through `weights`; residual
+/// infinite where the bars come out no darker than the paper at either end.
+Fit fit_levels(const Profile& p, const ModuleWeights& weights, const Modules& modules) {
   cv::Matx44d normal = cv::Matx44d::zeros();
   cv::Vec4d rhs(0, 0, 0, 0);
-  std::vector<cv::Vec4d> rows(profile.size());
-  for (std::size_t k = 0; k < profile.size(); ++k) {
-    const double t = t0 + static_cast<double>(k);
-    const double u = t / span, g = share.at(t);
+  std::vector<cv::Vec4d> rows(p.values.size());
+  for (std::size_t k = 0; k < p.values.size(); ++k) {
+    const double u = p.u(k), g = weights.share(k, modules);
     rows[k] = cv::Vec4d(1, u, -g, -u * g);
     normal += rows[k] * rows[k].t();
-    rhs += profile[k] * rows[k];
+    rhs += p.values[k] * rows[k];
   }
   Fit f;
   cv::Vec4d x;
@@ -203,33 +234,35 @@ Fit fit_levels(const std::vector<double>& profile, double t0, double span, const
   f.levels = {x[0], x[1], x[2], x[3]};
   if (x[2] <= 0 || x[2] + x[3] <= 0) return f;
   f.residual = 0;
-  for (std::size_t k = 0; k < profile.size(); ++k) {
-    const double e = profile[k] - rows[k].dot(x);
+  for (std::size_t k = 0; k < p.values.size(); ++k) {
+    const double e = p.values[k] - rows[k].dot(x);
     f.residual += e * e;
   }
   return f;
 }
 
-/// The best fit of `modules` to `profile`, the symbol's ends searched within
-/// 6 px of `begin` and `end` (where its corners put them; a read's corners
-/// are found on another latent), then its bend and blur, then all finer.
-Fit best_fit(const std::vector<double>& profile, double t0, const Modules& modules, double begin,
-             double end) {
-  const double span = end - begin;
+ModuleWeights weights_of(const Profile& p, const Geometry& g, std::size_t modules) {
+  return ModuleWeights(module_edges(g, modules), g.sigma, p.t0, p.values.size());
+}
+
+/// The best fit of `modules` to `p`, the symbol's ends searched within 6 px
+/// of `g`'s (where its corners put them; a read's corners are found on
+/// another latent), then its bend and blur, then all finer.
+Fit best_fit(const Profile& p, const Modules& modules, Geometry g, double ends_reach = 6) {
   Fit best;
-  auto consider = [&](const Geometry& g) {
-    if (g.sigma <= 0 || g.end - g.begin < static_cast<double>(modules.size()) * 0.5) return;
-    const std::vector<double> edges = module_edges(g, modules.size());
-    Fit f = fit_levels(profile, t0, span, BarShare(modules, edges, g.sigma));
+  auto consider = [&](const Geometry& c) {
+    if (c.sigma <= 0 || c.end - c.begin < static_cast<double>(modules.size()) * 0.5) return;
+    Fit f = fit_levels(p, weights_of(p, c, modules.size()), modules);
     if (f.residual < best.residual) {
-      f.geometry = g;
+      f.geometry = c;
       best = f;
     }
   };
-  for (double db = -6; db <= 6; db += 1)
-    for (double de = -6; de <= 6; de += 1) consider({begin + db, end + de, 0, 1.2});
+  for (double db = -ends_reach; db <= ends_reach; db += 1)
+    for (double de = -ends_reach; de <= ends_reach; de += 1)
+      consider({g.begin + db, g.end + de, g.bend, g.sigma});
   if (!std::isfinite(best.residual)) return best;
-  Geometry g = best.geometry;
+  g = best.geometry;
   for (const double sigma : {0.4, 0.8, 1.2, 1.6, 2.0, 2.5, 3.0, 3.5})
     for (double bend = -0.12; bend <= 0.121; bend += 0.04) consider({g.begin, g.end, bend, sigma});
   g = best.geometry;
@@ -244,21 +277,368 @@ Fit best_fit(const std::vector<double>& profile, double t0, const Modules& modul
   return best;
 }
 
-/// The squared residual of `modules` under `fit` over samples [k0, k1).
-double residual_over(const std::vector<double>& profile, double t0, double span,
-                     const Modules& modules, const std::vector<double>& edges, const Fit& fit,
-                     std::size_t k0, std::size_t k1) {
-  const BarShare share(modules, edges, fit.geometry.sigma);
-  double r = 0;
-  for (std::size_t k = k0; k < k1; ++k) {
-    const double t = t0 + static_cast<double>(k);
-    const double e = profile[k] - fit.levels.value(t / span, share.at(t));
-    r += e * e;
+/// One symbol character under a fit: the squared residual over the samples
+/// its modules reach with it there, and with the best other character the
+/// symbology allows there (and that character).
+struct CharacterChoice {
+  double own = 0;
+  double best_other = std::numeric_limits<double>::infinity();
+  Modules other;
+};
+
+std::vector<CharacterChoice> compare_characters(const Profile& p, const Layout& layout,
+                                                const Modules& modules, const Fit& fit,
+                                                const ModuleWeights& weights) {
+  const std::vector<double> edges = module_edges(fit.geometry, modules.size());
+  const auto n = static_cast<double>(p.values.size());
+  auto residual = [&](const Modules& m, std::size_t k0, std::size_t k1) {
+    double r = 0;
+    for (std::size_t k = k0; k < k1; ++k) {
+      const double e = p.values[k] - fit.levels.value(p.u(k), weights.share(k, m));
+      r += e * e;
+    }
+    return r;
+  };
+  // The samples a character's modules reach: 3 sigma of blur beyond them.
+  const double reach = 3 * std::sqrt(fit.geometry.sigma * fit.geometry.sigma + 1.0 / 12.0) + 1;
+  std::vector<CharacterChoice> out;
+  Modules trial = modules;
+  for (std::size_t i = 0; i < layout.starts.size(); ++i) {
+    const auto first = static_cast<std::size_t>(layout.starts[i]);
+    const bool left = static_cast<int>(i) < layout.left_characters;
+    const double a = edges[first] - reach, b = edges[first + kCharacterModules] + reach;
+    const auto k0 = static_cast<std::size_t>(std::clamp(std::floor(a - p.t0), 0.0, n));
+    const auto k1 = static_cast<std::size_t>(std::clamp(std::ceil(b - p.t0) + 1, 0.0, n));
+    CharacterChoice choice;
+    choice.own = residual(modules, k0, k1);
+    const auto at = static_cast<std::ptrdiff_t>(first);
+    for (const Modules& ch : characters_allowed(!left, left && layout.both_parities)) {
+      if (std::equal(ch.begin(), ch.end(), modules.begin() + at)) continue;
+      std::copy(ch.begin(), ch.end(), trial.begin() + at);
+      const double r = residual(trial, k0, k1);
+      if (r < choice.best_other) {
+        choice.best_other = r;
+        choice.other = ch;
+      }
+    }
+    std::copy(modules.begin() + at, modules.begin() + at + kCharacterModules, trial.begin() + at);
+    out.push_back(std::move(choice));
   }
-  return r;
+  return out;
+}
+
+/// The fit's noise variance per sample (eight parameters fitted).
+double noise_of(const Profile& p, const Fit& fit) {
+  return std::max(fit.residual / (static_cast<double>(p.values.size()) - 8), 1e-12);
+}
+
+/// An EAN-13's modules with every character an L (left) or R (right) 0: the
+/// guards, and characters to start from.
+Modules ean13_start(const Layout& layout) {
+  Modules m(static_cast<std::size_t>(layout.modules), 0);
+  for (const int i : {0, 2, 46, 48, 92, 94}) m[static_cast<std::size_t>(i)] = 1;
+  const Modules left = characters_allowed(false, false)[0],
+                right = characters_allowed(true, false)[0];
+  for (std::size_t i = 0; i < layout.starts.size(); ++i) {
+    const Modules& ch = static_cast<int>(i) < layout.left_characters ? left : right;
+    std::copy(ch.begin(), ch.end(), m.begin() + layout.starts[i]);
+  }
+  return m;
+}
+
+/// The EAN-13 value of `modules` ("" if a character or the parities name no digit).
+std::string ean13_text(const Layout& layout, const Modules& modules) {
+  std::string left, right;
+  std::array<int, 6> parities{};
+  for (std::size_t i = 0; i < layout.starts.size(); ++i) {
+    const bool is_left = static_cast<int>(i) < layout.left_characters;
+    const auto at = modules.begin() + layout.starts[i];
+    bool found = false;
+    for (int d = 0; d < 10 && !found; ++d) {
+      const std::vector<Modules> allowed = characters_allowed(!is_left, false);
+      if (std::equal(allowed[static_cast<std::size_t>(d)].begin(),
+                     allowed[static_cast<std::size_t>(d)].end(), at)) {
+        (is_left ? left : right) += static_cast<char>('0' + d);
+        found = true;
+      } else if (is_left) {
+        const std::vector<Modules> both = characters_allowed(false, true);
+        if (std::equal(both[static_cast<std::size_t>(2 * d + 1)].begin(),
+                       both[static_cast<std::size_t>(2 * d + 1)].end(), at)) {
+          left += static_cast<char>('0' + d);
+          parities[i] = 1;
+          found = true;
+        }
+      }
+    }
+    if (!found) return "";
+  }
+  for (int first = 0; first < 10; ++first)
+    if (kFirstDigitParities[static_cast<std::size_t>(first)] == parities)
+      return static_cast<char>('0' + first) + left + right;
+  return "";
+}
+
+/// The characters of `modules` each replaced by the one that fits best, and
+/// the levels fitted again, in turn until no character changes (at most 4
+/// rounds); `fit` holds the geometry and comes back with the levels.
+Modules settle_characters(const Profile& p, const Layout& layout, Modules modules, Fit& fit) {
+  const ModuleWeights weights = weights_of(p, fit.geometry, modules.size());
+  for (int round = 0; round < 4; ++round) {
+    bool changed = false;
+    const std::vector<CharacterChoice> choices =
+        compare_characters(p, layout, modules, fit, weights);
+    for (std::size_t i = 0; i < choices.size(); ++i)
+      if (choices[i].best_other < choices[i].own) {
+        std::copy(choices[i].other.begin(), choices[i].other.end(),
+                  modules.begin() + layout.starts[i]);
+        changed = true;
+      }
+    const Fit levels = fit_levels(p, weights, modules);
+    if (!std::isfinite(levels.residual)) {
+      fit.residual = levels.residual;
+      return modules;
+    }
+    fit.levels = levels.levels;
+    fit.residual = levels.residual;
+    if (!changed) break;
+  }
+  return modules;
+}
+
+/// Levels to start from: the paper the 90th percentile of the profile between
+/// `begin` and `end`, the bars the 10th.
+Levels starting_levels(const Profile& p, double begin, double end) {
+  std::vector<double> inside;
+  for (std::size_t k = 0; k < p.values.size(); ++k) {
+    const double t = p.t0 + static_cast<double>(k);
+    if (t >= begin && t <= end) inside.push_back(p.values[k]);
+  }
+  if (inside.size() < 10) return {};
+  std::sort(inside.begin(), inside.end());
+  const double paper = inside[inside.size() * 9 / 10], bars = inside[inside.size() / 10];
+  return {paper, 0, std::max(paper - bars, 1e-3), 0};
+}
+
+/// Where an EAN-13 may lie along `samples` between `from` and `to`: the
+/// first bar's edge and the module width (1.2 to 6 px, 1.5% apart; edges 1 px
+/// apart) at which its modules' centres are best explained by the symbol,
+/// each character the allowed one nearest, the levels the guards' (bars) and
+/// the guards' spaces and quiet zones' (5 modules each side, where the samples
+/// reach): the squared residual over the contrast squared, least first. The
+/// `count` best at least 3 modules or 5% of the width apart.
+std::vector<std::pair<double, double>> ean13_places(const Layout& layout,
+                                                    const std::vector<double>& samples, double from,
+                                                    double to, std::size_t count) {
+  const double last = static_cast<double>(samples.size()) - 1;
+  auto at = [&](double x) {
+    const double c = std::clamp(x, 0.0, last - 0.001);
+    const auto i = static_cast<std::size_t>(c);
+    return samples[i] + (samples[i + 1] - samples[i]) * (c - static_cast<double>(i));
+  };
+  const std::vector<Modules> left = characters_allowed(false, true);
+  const std::vector<Modules> right = characters_allowed(true, false);
+  constexpr std::array<int, 6> kGuardBars = {0, 2, 46, 48, 92, 94};
+  constexpr std::array<int, 5> kGuardSpaces = {1, 45, 47, 49, 93};
+  struct Place {
+    double score, begin, module;
+  };
+  std::array<double, 95> centre{};
+  auto score = [&](double begin, double module) {
+    for (std::size_t i = 0; i < centre.size(); ++i)
+      centre[i] = at(begin + (static_cast<double>(i) + 0.5) * module);
+    double dark = 0, light = 0;
+    int n_light = 0;
+    for (const int i : kGuardBars) dark += centre[static_cast<std::size_t>(i)];
+    dark /= kGuardBars.size();
+    for (const int i : kGuardSpaces) {
+      light += centre[static_cast<std::size_t>(i)];
+      ++n_light;
+    }
+    std::array<double, 10> quiet{};
+    int n_quiet = 0;
+    for (int q = 1; q <= 5; ++q)
+      for (const double x : {begin - (q - 0.5) * module, begin + (95 + q - 0.5) * module})
+        if (x >= 0 && x <= last) quiet[static_cast<std::size_t>(n_quiet++)] = at(x);
+    for (int q = 0; q < n_quiet; ++q) light += quiet[static_cast<std::size_t>(q)];
+    light /= n_light + n_quiet;
+    const double contrast = light - dark;
+    if (contrast <= 0) return std::numeric_limits<double>::infinity();
+    auto miss = [&](double v, int bar) {
+      const double e = v - (bar != 0 ? dark : light);
+      return e * e;
+    };
+    double residual = 0;
+    for (const int i : kGuardBars) residual += miss(centre[static_cast<std::size_t>(i)], 1);
+    for (const int i : kGuardSpaces) residual += miss(centre[static_cast<std::size_t>(i)], 0);
+    for (int q = 0; q < n_quiet; ++q) residual += miss(quiet[static_cast<std::size_t>(q)], 0);
+    for (std::size_t c = 0; c < layout.starts.size(); ++c) {
+      const auto first = static_cast<std::size_t>(layout.starts[c]);
+      double best = std::numeric_limits<double>::infinity();
+      for (const Modules& ch : static_cast<int>(c) < layout.left_characters ? left : right) {
+        double r = 0;
+        for (std::size_t j = 0; j < ch.size(); ++j) r += miss(centre[first + j], ch[j]);
+        best = std::min(best, r);
+      }
+      residual += best;
+    }
+    return residual / (contrast * contrast);
+  };
+  // Widths 3% apart and edges 2 px apart, then the best of those again at a
+  // third and half of those steps.
+  std::vector<Place> coarse;
+  for (double module = 1.2; module <= 6.0; module *= 1.03)
+    for (double begin = from; begin + 95 * module <= to; begin += 2)
+      coarse.push_back({score(begin, module), begin, module});
+  const std::size_t refined = std::min(coarse.size(), 8 * count);
+  std::partial_sort(coarse.begin(), coarse.begin() + static_cast<std::ptrdiff_t>(refined),
+                    coarse.end(), [](const Place& a, const Place& b) { return a.score < b.score; });
+  std::vector<Place> places;
+  for (std::size_t i = 0; i < refined; ++i)
+    for (const double m : {0.99, 1.0, 1.01})
+      for (const double db : {-1.0, 0.0, 1.0}) {
+        const double module = coarse[i].module * m, begin = coarse[i].begin + db;
+        if (begin >= from && begin + 95 * module <= to)
+          places.push_back({score(begin, module), begin, module});
+      }
+  std::sort(places.begin(), places.end(),
+            [](const Place& a, const Place& b) { return a.score < b.score; });
+  std::vector<std::pair<double, double>> out;
+  for (const Place& p : places) {
+    if (out.size() >= count) break;
+    const bool near = std::any_of(out.begin(), out.end(), [&](const auto& o) {
+      const double module = (o.second - o.first) / 95;
+      return std::abs(p.begin - o.first) < 3 * module && std::abs(p.module / module - 1) < 0.05;
+    });
+    if (!near) out.emplace_back(p.begin, p.begin + 95 * p.module);
+  }
+  return out;
+}
+
+/// read_ean13_by_fit() of a symbol whose bars seem to begin and end at
+/// `begin` and `end` (within 6 px).
+FittedRead read_between(const std::vector<double>& samples, double begin, double end) {
+  FittedRead out;
+  const Layout layout = *layout_of("EAN-13");
+  const double length = end - begin;
+  if (length < static_cast<double>(layout.modules) || samples.size() < 16) {
+    out.problem = "the bars span less than a pixel per module";
+    return out;
+  }
+  struct Candidate {
+    Modules modules;
+    Fit fit;
+    Profile profile;
+    bool reversed = false;
+  };
+  std::optional<Candidate> best;
+  // The samples from 4 modules and 8 px before the bars seem to begin to as far
+  // after they seem to end, as fit_bar_pattern() takes them.
+  const double margin = 4 * length / layout.modules + 8;
+  const auto from = static_cast<std::size_t>(std::max(0.0, std::floor(begin - margin)));
+  const auto to = static_cast<std::size_t>(
+      std::clamp(std::ceil(end + margin) + 1, 0.0, static_cast<double>(samples.size())));
+  if (to <= from + 16) {
+    out.problem = "the bars lie off the profile";
+    return out;
+  }
+  const std::vector<double> window(samples.begin() + static_cast<std::ptrdiff_t>(from),
+                                   samples.begin() + static_cast<std::ptrdiff_t>(to));
+  for (const bool reversed : {false, true}) {
+    Profile p;
+    p.values = window;
+    double b = begin - static_cast<double>(from);
+    if (reversed) {
+      std::reverse(p.values.begin(), p.values.end());
+      b = static_cast<double>(window.size()) - 1 - (end - static_cast<double>(from));
+    }
+    // t = 0 at the first bar's edge as estimated.
+    p.t0 = -b;
+    p.span = length;
+    Candidate here{ean13_start(layout), {}, p, reversed};
+    // The ends 2 px apart, then 1 px apart around the best.
+    auto search = [&](double step, double reach, const Geometry& around) {
+      for (double db = -reach; db <= reach; db += step)
+        for (double de = -reach; de <= reach; de += step) {
+          Fit fit;
+          fit.geometry = {around.begin + db, around.end + de, 0, 1.2};
+          fit.levels = starting_levels(p, fit.geometry.begin, fit.geometry.end);
+          const Modules m = settle_characters(p, layout, ean13_start(layout), fit);
+          if (fit.residual < here.fit.residual) {
+            here.fit = fit;
+            here.modules = m;
+          }
+        }
+    };
+    search(2, 2, {0, length, 0, 1.2});
+    if (!std::isfinite(here.fit.residual)) continue;
+    search(1, 1, here.fit.geometry);
+    if (!best || here.fit.residual < best->fit.residual) best = here;
+  }
+  if (best) {
+    // The way round that fits better: its levels, ends (within 1 px), bend and
+    // blur fitted to the characters found, and the characters again, twice.
+    for (int round = 0; round < 2; ++round) {
+      Fit refit = best_fit(best->profile, best->modules, best->fit.geometry, 1);
+      if (!std::isfinite(refit.residual)) break;
+      best->modules = settle_characters(best->profile, layout, best->modules, refit);
+      if (!std::isfinite(refit.residual)) break;
+      best->fit = refit;
+    }
+  }
+  if (!best) {
+    out.problem = "no fit with bars darker than spaces";
+    return out;
+  }
+  const std::string text = ean13_text(layout, best->modules);
+  if (text.empty()) {
+    out.problem = "the left half's parities name no first digit";
+    return out;
+  }
+  if (modules_of(layout, text) != best->modules) {
+    out.problem = "the check digit does not hold for " + text;
+    return out;
+  }
+  const double noise = noise_of(best->profile, best->fit);
+  out.worst_margin = std::numeric_limits<double>::infinity();
+  const std::vector<CharacterChoice> choices =
+      compare_characters(best->profile, layout, best->modules, best->fit,
+                         weights_of(best->profile, best->fit.geometry, best->modules.size()));
+  for (std::size_t i = 0; i < choices.size(); ++i) {
+    const double margin_i = (choices[i].best_other - choices[i].own) / noise;
+    if (margin_i < out.worst_margin) {
+      out.worst_margin = margin_i;
+      out.worst_character = static_cast<int>(i);
+    }
+  }
+  // Back from t along the profile read to sample indices.
+  const double last = static_cast<double>(window.size()) - 1;
+  const double b = best->fit.geometry.begin - best->profile.t0,
+               e = best->fit.geometry.end - best->profile.t0;
+  out.begin = static_cast<double>(from) + (best->reversed ? last - b : b);
+  out.end = static_cast<double>(from) + (best->reversed ? last - e : e);
+  if (out.worst_margin < kMinFittedReadMargin) {
+    out.problem = "character " + std::to_string(out.worst_character) + " of " + text +
+                  " keeps a margin of " + std::to_string(out.worst_margin);
+    return out;
+  }
+  out.text = text;
+  return out;
 }
 
 }  // namespace
+
+FittedRead read_ean13_by_fit(const std::vector<double>& samples, double from, double to) {
+  FittedRead out;
+  out.problem = "no place between " + std::to_string(from) + " and " + std::to_string(to) +
+                " holds an EAN-13 of modules 1.2 px or wider";
+  for (const auto& [begin, end] :
+       ean13_places(*layout_of("EAN-13"), samples, from, to, kPlacesTried)) {
+    FittedRead here = read_between(samples, begin, end);
+    if (!here.text.empty()) return here;
+    if (out.text.empty()) out = here;  // the best place's reason
+  }
+  return out;
+}
 
 BarPatternFit fit_bar_pattern(const imaging::Plane& latent, const DecodedCode& code) {
   BarPatternFit out;
@@ -287,57 +667,40 @@ BarPatternFit fit_bar_pattern(const imaging::Plane& latent, const DecodedCode& c
   }
   const double ux = (rx - lx) / span, uy = (ry - ly) / span;
   const double margin = 4 * nominal_module + 8;
-  double t0 = -margin;
-  std::vector<double> profile;
+  Profile profile;
+  profile.span = span;
   for (double t = -margin; t <= span + margin; t += 1) {
     const auto v = sample(latent, lx + t * ux, ly + t * uy);
     if (v) {
-      if (profile.empty()) t0 = t;
-      profile.push_back(*v);
-    } else if (!profile.empty()) {
+      if (profile.values.empty()) profile.t0 = t;
+      profile.values.push_back(*v);
+    } else if (!profile.values.empty()) {
       break;
     }
   }
-  const double last = t0 + static_cast<double>(profile.size()) - 1;
-  if (profile.empty() || t0 > -nominal_module || last < span + nominal_module) {
+  const double last = profile.t0 + static_cast<double>(profile.values.size()) - 1;
+  if (profile.values.empty() || profile.t0 > -nominal_module || last < span + nominal_module) {
     out.problem = "the code's line runs off the latent";
     return out;
   }
-  const Fit fit = best_fit(profile, t0, read, 0, span);
-  const auto n = static_cast<double>(profile.size());
-  if (!std::isfinite(fit.residual) || n < 8) {
+  const Fit fit = best_fit(profile, read, {0, span, 0, 1.2});
+  if (!std::isfinite(fit.residual) || profile.values.size() < 16) {
     out.problem = "no fit with bars darker than spaces";
     return out;
   }
-  const double noise = std::max(fit.residual / (n - 8), 1e-12);  // eight parameters fitted
+  const double noise = noise_of(profile, fit);
   out.judged = true;
   out.contrast = fit.levels.depth0 + fit.levels.depth1 / 2;
   out.blur_px = fit.geometry.sigma;
   out.characters = static_cast<int>(layout->starts.size());
   out.worst_margin = std::numeric_limits<double>::infinity();
-  const std::vector<double> edges = module_edges(fit.geometry, read.size());
-  // The samples a character's modules reach: 3 sigma of blur beyond them.
-  const double reach = 3 * std::sqrt(fit.geometry.sigma * fit.geometry.sigma + 1.0 / 12.0) + 1;
-  for (int i = 0; i < out.characters; ++i) {
-    const auto first = static_cast<std::size_t>(layout->starts[static_cast<std::size_t>(i)]);
-    const bool left = i < layout->left_characters;
-    const double a = edges[first] - reach, b = edges[first + kCharacterModules] + reach;
-    const auto k0 = static_cast<std::size_t>(std::clamp(std::floor(a - t0), 0.0, n));
-    const auto k1 = static_cast<std::size_t>(std::clamp(std::ceil(b - t0) + 1, 0.0, n));
-    const double own = residual_over(profile, t0, span, read, edges, fit, k0, k1);
-    Modules other = read;
-    double best_other = std::numeric_limits<double>::infinity();
-    for (const Modules& ch : characters_allowed(!left, left && layout->both_parities)) {
-      const auto at = read.begin() + static_cast<std::ptrdiff_t>(first);
-      if (std::equal(ch.begin(), ch.end(), at)) continue;
-      std::copy(ch.begin(), ch.end(), other.begin() + static_cast<std::ptrdiff_t>(first));
-      best_other =
-          std::min(best_other, residual_over(profile, t0, span, other, edges, fit, k0, k1));
-    }
-    const double margin_i = (best_other - own) / noise;
+  const std::vector<CharacterChoice> choices = compare_characters(
+      profile, *layout, read, fit, weights_of(profile, fit.geometry, read.size()));
+  for (std::size_t i = 0; i < choices.size(); ++i) {
+    const double margin_i = (choices[i].best_other - choices[i].own) / noise;
     if (margin_i < out.worst_margin) {
       out.worst_margin = margin_i;
-      out.worst_character = i;
+      out.worst_character = static_cast<int>(i);
     }
   }
   return out;

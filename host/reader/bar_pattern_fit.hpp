@@ -12,6 +12,7 @@
 // shows to be others.
 
 #include <string>
+#include <vector>
 
 #include "imaging/image.hpp"
 #include "reader/barcode_reader.hpp"
@@ -40,5 +41,35 @@ struct BarPatternFit {
 /// symbology allows there (an EAN-13's left half: both parities). Other
 /// formats, and codes whose line runs off `latent`, come back not judged.
 BarPatternFit fit_bar_pattern(const imaging::Plane& latent, const DecodedCode& code);
+
+/// \brief What read_ean13_by_fit() read.
+struct FittedRead {
+  std::string text;     ///< the 13 digits; empty: nothing read (see `problem`)
+  std::string problem;  ///< why nothing was read
+  /// The first bar's leading edge and the last bar's trailing edge, px along
+  /// the profile (sample index), in reading order: begin > end where the code
+  /// reads right to left along the profile.
+  double begin = 0, end = 0;
+  int worst_character = -1;  ///< as BarPatternFit's, for the value read
+  double worst_margin = 0;
+};
+
+/// \brief The least margin a value read_ean13_by_fit() reads must keep at
+/// every character (noise variances; a character it chose fits at least as
+/// well as every other, so its margin is never negative: on noise alone the
+/// best and the second best lie close).
+inline constexpr double kMinFittedReadMargin = 6;
+
+/// \brief Reads an EAN-13 from `profile` (one sample per px along a line
+/// across its bars) between samples `from` and `to` by fitting the symbol
+/// itself rather than thresholding the profile. Where it may lie: the first
+/// bar's edge and module width (1.2 to 6 px) whose guards and quiet zones
+/// stand out most (the three best places). At each: the ends searched within
+/// 6 px, either way round, each character the one of the 20 (left half) or
+/// 10 (right half) that fits best, the levels, bend and blur fitted as
+/// fit_bar_pattern() fits them, in turn until they settle. A value counts if
+/// its parities name a first digit, its check digit holds and every character
+/// keeps kMinFittedReadMargin.
+FittedRead read_ean13_by_fit(const std::vector<double>& profile, double from, double to);
 
 }  // namespace flutterscan::reader

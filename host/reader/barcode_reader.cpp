@@ -167,23 +167,6 @@ void to_luminance(const imaging::Plane& latent, int x0, int y0, int x1, int y1, 
   }
 }
 
-/// `code` (its format known) measured on `latent` where a decoder found it
-/// (`corners`), and its centre and extent along x from the corners measured.
-void measure_and_place(DecodedCode& code, const imaging::Plane& latent,
-                       const CodeCorners& corners) {
-  code.quality = measure_code(latent, code.format, corners);
-  double sx = 0, sy = 0;
-  code.min_x = code.max_x = code.quality.corners[0].x;
-  for (const CodePoint& c : code.quality.corners) {
-    sx += c.x;
-    sy += c.y;
-    code.min_x = std::min(code.min_x, c.x);
-    code.max_x = std::max(code.max_x, c.x);
-  }
-  code.centre_x = sx / 4;
-  code.centre_y = sy / 4;
-}
-
 /// The code ZXing read in a window at (offset_x, offset_y) of `latent`, measured on the latent.
 DecodedCode decoded_code(const ZXing::Result& result, int offset_x, int offset_y,
                          const imaging::Plane& latent) {
@@ -662,6 +645,21 @@ std::vector<DecodeWindow> decode_windows(std::span<const LabelRegion> runs, int 
                               : DecodeWindow{top, begin, bottom - top, end - begin});
   }
   return windows;
+}
+
+void measure_and_place(DecodedCode& code, const imaging::Plane& latent,
+                       const CodeCorners& corners) {
+  code.quality = measure_code(latent, code.format, corners);
+  double sx = 0, sy = 0;
+  code.min_x = code.max_x = code.quality.corners[0].x;
+  for (const CodePoint& c : code.quality.corners) {
+    sx += c.x;
+    sy += c.y;
+    code.min_x = std::min(code.min_x, c.x);
+    code.max_x = std::max(code.max_x, c.x);
+  }
+  code.centre_x = sx / 4;
+  code.centre_y = sy / 4;
 }
 
 }  // namespace flutterscan::reader

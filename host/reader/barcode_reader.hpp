@@ -59,8 +59,10 @@ struct DecodedCode {
   double centre_y = 0;
   double min_x = 0, max_x = 0;                       ///< extent along x
   LuminanceView luminance = LuminanceView::kLinear;  ///< the view it was read on
-  /// The decoder that read it: "zxing", or "zbar" (a linear code ZXing read in
-  /// no view of its window: zbar_reader.hpp).
+  /// The decoder that read it: "zxing", "zbar" (a linear code ZXing read in
+  /// no view of its window: zbar_reader.hpp), or "fit" (an EAN-13 the session's
+  /// second pass read on a window's bar sums by fitting the symbol itself:
+  /// bar_pattern_fit.hpp).
   std::string decoder = "zxing";
   /// Where it lies (corners refined on the image for linear codes), its module
   /// size and its indicative print quality (measure_code()).
@@ -114,6 +116,11 @@ void drop_conflicting(std::vector<DecodedCode>& codes);
 /// each inside the other's corners (widened by 4 px): a linear code read on
 /// two latents may be found over different rows of its bars.
 bool same_symbol(const DecodedCode& a, const DecodedCode& b);
+
+/// \brief `code` (its format known) measured on `latent` where a decoder
+/// found it (`corners`), and its centre and extent along x from the corners
+/// measured.
+void measure_and_place(DecodedCode& code, const imaging::Plane& latent, const CodeCorners& corners);
 
 /// \brief A rectangle of the latent image to decode: columns [x, x + width), rows [y, y + height),
 /// read in at most its first `views` luminance views (LuminanceView's order)

@@ -118,6 +118,9 @@ struct BarSumsTry {
     bool kept = false;    ///< judged, and every character held by 1 noise variance or more
   };
   std::vector<Checked> tv_checked;
+  /// Where neither read anything and EAN-13 is read: the sums' EAN-13 read by
+  /// fit (reader::read_ean13_by_fit) at each try, kept or why not.
+  std::vector<Checked> fitted;
 };
 
 /// \brief tv's kappa for the isotropic tries, in turn: the reading weight, then

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <random>
 #include <string>
+#include <vector>
 
 #include "reader/barcode_reader.hpp"
 #include "sim/scene.hpp"
@@ -121,6 +122,50 @@ TEST(BarPatternFit, WhatItCannotJudgeSaysWhy) {
   const BarPatternFit refused = fit_bar_pattern(image, ean);
   EXPECT_FALSE(refused.judged);
   EXPECT_NE(refused.problem.find("writer refuses"), std::string::npos) << refused.problem;
+}
+
+/// Row `y` of `image`.
+std::vector<double> row_of(const imaging::Plane& image, int y) {
+  std::vector<double> r;
+  for (int x = 0; x < image.width; ++x) r.push_back(image.at(x, y));
+  return r;
+}
+
+TEST(ReadEan13ByFit, FindsAndReadsTheValueThroughNoiseEitherWayRound) {
+  const imaging::Plane clean = render("ean13:590123412345", 2.5, 0.0);
+  const DecodedCode truth = read_one(clean);
+  const int y = static_cast<int>(truth.centre_y);
+  // Where ZXing's corners put the first bar's edge and the last's.
+  const CodeCorners& c = truth.quality.corners;
+  const double first_bar = (c[0].x + c[3].x) / 2, last_bar = (c[1].x + c[2].x) / 2;
+  // One row through noise a seventh of the bars' contrast, rms, searched
+  // from 40 px before the bars to 40 px after them.
+  const std::vector<double> noisy = row_of(render("ean13:590123412345", 2.5, 0.12), y);
+  const FittedRead read = read_ean13_by_fit(noisy, first_bar - 40, last_bar + 40);
+  EXPECT_EQ(read.text, truth.text) << read.problem;
+  EXPECT_GE(read.worst_margin, kMinFittedReadMargin);
+  EXPECT_NEAR(read.begin, first_bar, 1.5);
+  EXPECT_NEAR(read.end, last_bar, 1.5);
+
+  const std::vector<double> mirrored(noisy.rbegin(), noisy.rend());
+  const double last = static_cast<double>(mirrored.size()) - 1;
+  const FittedRead turned =
+      read_ean13_by_fit(mirrored, last - last_bar - 40, last - first_bar + 40);
+  EXPECT_EQ(turned.text, truth.text) << turned.problem;
+  EXPECT_NEAR(turned.begin, last - first_bar, 1.5);  // read right to left
+  EXPECT_NEAR(turned.end, last - last_bar, 1.5);
+}
+
+TEST(ReadEan13ByFit, NoiseAloneReadsNothing) {
+  std::mt19937_64 rng(21);
+  std::normal_distribution<double> normal(0.5, 0.2);
+  for (int draw = 0; draw < 5; ++draw) {
+    std::vector<double> samples(400);
+    for (double& v : samples) v = normal(rng);
+    const FittedRead read = read_ean13_by_fit(samples, 0, 400);
+    EXPECT_TRUE(read.text.empty()) << read.text << " read from noise, margin " << read.worst_margin;
+    EXPECT_FALSE(read.problem.empty());
+  }
 }
 
 }  // namespace
