@@ -12,7 +12,9 @@
 
 #include <benchmark/benchmark.h>
 
+#include <cmath>
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "bench/speed_frame.hpp"
@@ -24,6 +26,8 @@
 #include "imaging/motion_refinement.hpp"
 #include "imaging/richardson_lucy.hpp"
 #include "imaging/total_variation.hpp"
+#include "reader/bar_pattern_fit.hpp"
+#include "sim/scene.hpp"
 #include "sim/speed_profile.hpp"
 
 namespace {
@@ -219,6 +223,34 @@ void RowsAcrossBars(benchmark::State& state) {
   state.counters["columns"] = slope.judged_over.x1 - slope.judged_over.x0;
 }
 
+/// A row `length` samples long across an EAN-13 (the simulator's label,
+/// 2.5 px modules; noise 0.05 rms), read by fit over the whole row: the
+/// second pass's last try on a window's bar sums.
+void ReadEan13ByFit(benchmark::State& state) {
+  auto spec = sim::parse_scene("ean13:590123412345");
+  spec.value().width = static_cast<int>(state.range(0));
+  spec.value().height = 160;
+  spec.value().module_px = 2.5;
+  spec.value().print_blur_px = 1.0;
+  const auto label = sim::render_scene(spec.value());
+  if (!label.ok()) {
+    state.SkipWithError(label.error().c_str());
+    return;
+  }
+  std::vector<double> row;
+  std::uint32_t lcg = 99;
+  for (int x = 0; x < label.value().width; ++x) {
+    lcg = lcg * 1664525u + 1013904223u;
+    const double uniform = (lcg >> 8) * (1.0 / 16777216.0) - 0.5;  // rms 1 / sqrt(12)
+    row.push_back(label.value().at(x, 80) + 0.05 * std::sqrt(12.0) * uniform);
+  }
+  std::string text;
+  for (auto _ : state)
+    text = reader::read_ean13_by_fit(row, 0, static_cast<double>(row.size())).text;
+  if (text != "5901234123457") state.SkipWithError(("read '" + text + "'").c_str());
+  state.counters["samples"] = static_cast<double>(row.size());
+}
+
 }  // namespace
 
 BENCHMARK(JointWienerRgb8)
@@ -273,6 +305,14 @@ BENCHMARK(RowsAcrossBars)
     ->Arg(1)
     ->Unit(benchmark::kMillisecond)
     ->Repetitions(9)
+    ->ReportAggregatesOnly(true)
+    ->UseRealTime();
+BENCHMARK(ReadEan13ByFit)
+    ->Arg(320)
+    ->Arg(640)
+    ->Arg(1280)
+    ->Unit(benchmark::kMillisecond)
+    ->Repetitions(5)
     ->ReportAggregatesOnly(true)
     ->UseRealTime();
 BENCHMARK_MAIN();

@@ -46,6 +46,13 @@ constexpr double kBarSumsTvWeight = 0.15;
 /// (no prior: only the light's evidence) do not support.
 constexpr double kMinFitMargin = 1.0;
 
+/// What reading an EAN-13 by fit on a row of a window's bar sums is expected
+/// to cost: ms, and ms per sample of the row (reader::read_ean13_by_fit;
+/// deblur_bench ReadEan13ByFit, AMD EPYC: 30, 40 and 58 ms on rows of 320,
+/// 640 and 1280 samples, about 26 ms and 0.025 ms a sample; half as much again
+/// for headroom).
+constexpr double kFitMs = 40, kFitMsPerSample = 0.04;
+
 /// A bar slope from which a window is also read turned upright: 0.05 px per
 /// row, 3 degrees (a 40 px tall code 300 px long then drifts 15 px across the rows).
 constexpr double kMinTurnSlope = 0.05;
@@ -536,9 +543,17 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
             if (!found.empty()) paste(tv_composite, found);
             bars.read = take(std::move(found));
           }
+          const double tv_ms = ms_since(t1);
+          own_ms += tv_ms;
+          budget.settle(estimate, tv_ms, pixels);
+          if (!bars.read.empty()) break;
           // Still nothing: an EAN-13 read on joint Wiener's sums by fitting
-          // the symbol itself, where EAN-13 is read.
-          if (bars.read.empty() && reads_ean13) {
+          // the symbol itself, where EAN-13 is read and the budget holds it (its
+          // cost follows the row's length, not the window's pixels: settled
+          // outside tv's cost model).
+          const double fit_estimate = kFitMs + kFitMsPerSample * (c1 - c0);
+          if (reads_ean13 && budget.take(fit_estimate)) {
+            const auto t2 = std::chrono::steady_clock::now();
             const FitOnSums fit = read_sums_by_fit(profile.value().latent, across);
             BarSumsTry::Checked verdict{fit.read.text, "EAN-13", fit.read.worst_margin,
                                         fit.read.problem, !fit.read.text.empty()};
@@ -578,10 +593,10 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
               bars.read = take(one);
             }
             bars.fitted.push_back(std::move(verdict));
+            const double fit_ms = ms_since(t2);
+            own_ms += fit_ms;
+            budget.settle(fit_estimate, fit_ms, 0);
           }
-          const double ms = ms_since(t1);
-          own_ms += ms;
-          budget.settle(estimate, ms, pixels);
           if (!bars.read.empty()) break;
         }
         if (bars.read.empty() && turn != 0) read_again(linear, turn);  // tv's latent, turned
