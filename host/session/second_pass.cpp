@@ -134,6 +134,35 @@ FitOnSums read_sums_by_fit(const imaging::Plane& sums, const std::vector<bool>& 
   return out;
 }
 
+/// The code `fit` read on sums of 2 `half_rows` + 1 rows along `slope`, its
+/// corners (quality.corners, unmeasured) in the crop's coordinates: the bars' ends along the row
+/// read, over the rows its run of sums covers (`height` the crop's), following the bars' slope, in
+/// the symbol's reading order (read right to left, it is upside down). An EAN-13 that starts with 0
+/// is a UPC-A where `upc_a` is read, as ZXing reports it.
+reader::DecodedCode fitted_code(const FitOnSums& fit, const imaging::BarSlope& slope, int half_rows,
+                                int height, bool upc_a) {
+  const double top = std::max(0, fit.first_row - half_rows);
+  const double bottom = std::min(height - 1, fit.last_row + half_rows);
+  const double at_row = slope.at(fit.read.begin, fit.row);
+  auto corner = [&](double x, double y) {
+    return reader::CodePoint{x + at_row * (y - fit.row), y};
+  };
+  const bool upright = fit.read.end > fit.read.begin;
+  const double y_top = upright ? top : bottom, y_bottom = upright ? bottom : top;
+  reader::DecodedCode code;
+  code.quality.corners = {corner(fit.read.begin, y_top), corner(fit.read.end, y_top),
+                          corner(fit.read.end, y_bottom), corner(fit.read.begin, y_bottom)};
+  code.text = fit.read.text;
+  code.format = "EAN-13";
+  if (code.text.front() == '0' && upc_a) {
+    code.format = "UPC-A";
+    code.text.erase(0, 1);
+  }
+  code.symbology_id = "]E0";
+  code.decoder = "fit";
+  return code;
+}
+
 bool inside(const reader::DecodeWindow& w, double x, double y) {
   return x >= w.x && x < w.x + w.width && y >= w.y && y < w.y + w.height;
 }
@@ -558,39 +587,25 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
             BarSumsTry::Checked verdict{fit.read.text, "EAN-13", fit.read.worst_margin,
                                         fit.read.problem, !fit.read.text.empty()};
             if (verdict.kept) {
-              // The code's corners: the bars' ends along the row read, over the
-              // rows the run of sums covers, following the bars' slope.
-              const double top = std::max(0, fit.first_row - half_rows);
-              const double bottom = std::min(sums.height - 1, fit.last_row + half_rows);
-              const double at_row = slope.at(fit.read.begin, fit.row);
-              auto corner = [&](double x, double y) {
-                const auto [cx, cy] =
-                    camera_point<double>(direction, x + c0 + at_row * (y - fit.row), y + r0, along);
-                return reader::CodePoint{cx, cy};
-              };
-              // In the symbol's reading order: read right to left, it is upside down.
-              const bool upright = fit.read.end > fit.read.begin;
-              const double y_top = upright ? top : bottom, y_bottom = upright ? bottom : top;
-              const reader::CodeCorners corners = {
-                  corner(fit.read.begin, y_top), corner(fit.read.end, y_top),
-                  corner(fit.read.end, y_bottom), corner(fit.read.begin, y_bottom)};
-              reader::DecodedCode code;
-              code.text = fit.read.text;
-              code.format = "EAN-13";
-              if (code.text.front() == '0' && reads_upc_a) {  // as ZXing reports it
-                code.format = "UPC-A";
-                code.text.erase(0, 1);
-              }
-              code.symbology_id = "]E0";
-              code.decoder = "fit";
+              reader::DecodedCode code =
+                  fitted_code(fit, slope, half_rows, sums.height, reads_upc_a);
               verdict.text = code.text;
               verdict.format = code.format;
+              // Measured on the sums it was read on, in the camera's coordinates.
+              reader::CodeCorners corners = code.quality.corners;
+              for (reader::CodePoint& p : corners) {
+                const auto [cx, cy] = camera_point<double>(direction, p.x + c0, p.y + r0, along);
+                p = {cx, cy};
+              }
               paste(sums);
               reader::measure_and_place(code, camera, corners);
               paste(patch);
-              const std::vector<reader::DecodedCode> one = {code};
-              paste(sums, one);
-              bars.read = take(one);
+              if (std::none_of(readout.codes.begin(), readout.codes.end(),
+                               [&](const auto& c) { return reader::same_symbol(c, code); })) {
+                const std::vector<reader::DecodedCode> one = {code};
+                paste(sums, one);
+                bars.read = take(one);
+              }
             }
             bars.fitted.push_back(std::move(verdict));
             const double fit_ms = ms_since(t2);
