@@ -420,12 +420,13 @@ Levels starting_levels(const Profile& p, double begin, double end) {
 }
 
 /// Where an EAN-13 may lie along `samples` between `from` and `to`: the
-/// first bar's edge and the module width (1.2 to 6 px, 1.5% apart; edges 1 px
-/// apart) at which its modules' centres are best explained by the symbol,
-/// each character the allowed one nearest, the levels the guards' (bars) and
-/// the guards' spaces and quiet zones' (5 modules each side, where the samples
-/// reach): the squared residual over the contrast squared, least first. The
-/// `count` best at least 3 modules or 5% of the width apart.
+/// first bar's edge and the module width (1.2 to 6 px) at which its modules'
+/// centres are best explained by the symbol, each character the allowed one
+/// nearest, the levels lines along the code through the guards' bars and
+/// through the guards' spaces and quiet zones (5 modules each side, where the
+/// samples reach): the squared residual over the contrast squared, least
+/// first. Widths 3% and edges 2 px apart, the best 8 `count` again at 1% and
+/// 1 px; the `count` best at least 3 modules or 5% of the width apart.
 std::vector<std::pair<double, double>> ean13_places(const Layout& layout,
                                                     const std::vector<double>& samples, double from,
                                                     double to, std::size_t count) {
@@ -443,48 +444,83 @@ std::vector<std::pair<double, double>> ean13_places(const Layout& layout,
     double score, begin, module;
   };
   std::array<double, 95> centre{};
+  // A straight line through points (u, v): its values at u = 0 and 1.
+  struct Line {
+    double n = 0, su = 0, suu = 0, sv = 0, suv = 0;
+    void add(double u, double v) {
+      n += 1;
+      su += u;
+      suu += u * u;
+      sv += v;
+      suv += u * v;
+    }
+    std::pair<double, double> ends() const {
+      const double det = n * suu - su * su;
+      if (det <= 1e-12) return {sv / n, sv / n};
+      const double slope = (n * suv - su * sv) / det, at0 = (sv - slope * su) / n;
+      return {at0, at0 + slope};
+    }
+  };
+  std::array<double, 95> dark{}, light{};
   auto score = [&](double begin, double module) {
     for (std::size_t i = 0; i < centre.size(); ++i)
       centre[i] = at(begin + (static_cast<double>(i) + 0.5) * module);
-    double dark = 0, light = 0;
-    int n_light = 0;
-    for (const int i : kGuardBars) dark += centre[static_cast<std::size_t>(i)];
-    dark /= kGuardBars.size();
-    for (const int i : kGuardSpaces) {
-      light += centre[static_cast<std::size_t>(i)];
-      ++n_light;
-    }
-    std::array<double, 10> quiet{};
+    // The levels, each a line along the code (u = 0 to 1 over its modules):
+    // the bars' through the guards' bars, the paper's through the guards'
+    // spaces and the quiet zones (a label lit unevenly).
+    Line bars, paper;
+    auto u_of = [](double module_index) { return (module_index + 0.5) / 95; };
+    for (const int i : kGuardBars) bars.add(u_of(i), centre[static_cast<std::size_t>(i)]);
+    for (const int i : kGuardSpaces) paper.add(u_of(i), centre[static_cast<std::size_t>(i)]);
+    std::array<std::pair<double, bool>, 10> quiet{};  // the sample, and whether it is on the right
     int n_quiet = 0;
     for (int q = 1; q <= 5; ++q)
-      for (const double x : {begin - (q - 0.5) * module, begin + (95 + q - 0.5) * module})
-        if (x >= 0 && x <= last) quiet[static_cast<std::size_t>(n_quiet++)] = at(x);
-    for (int q = 0; q < n_quiet; ++q) light += quiet[static_cast<std::size_t>(q)];
-    light /= n_light + n_quiet;
-    const double contrast = light - dark;
-    if (contrast <= 0) return std::numeric_limits<double>::infinity();
-    auto miss = [&](double v, int bar) {
-      const double e = v - (bar != 0 ? dark : light);
+      for (const int m : {-q, 94 + q}) {
+        const double x = begin + (m + 0.5) * module;
+        if (x < 0 || x > last) continue;
+        quiet[static_cast<std::size_t>(n_quiet++)] = {at(x), m > 0};
+        paper.add(u_of(m), at(x));
+      }
+    const auto [dark0, dark1] = bars.ends();
+    const auto [light0, light1] = paper.ends();
+    if (light0 <= dark0 || light1 <= dark1) return std::numeric_limits<double>::infinity();
+    for (std::size_t i = 0; i < centre.size(); ++i) {
+      const double u = u_of(static_cast<double>(i));
+      dark[i] = dark0 + (dark1 - dark0) * u;
+      light[i] = light0 + (light1 - light0) * u;
+    }
+    auto miss = [&](std::size_t i, double v, int bar) {
+      const double e = v - (bar != 0 ? dark[i] : light[i]);
       return e * e;
     };
     double residual = 0;
-    for (const int i : kGuardBars) residual += miss(centre[static_cast<std::size_t>(i)], 1);
-    for (const int i : kGuardSpaces) residual += miss(centre[static_cast<std::size_t>(i)], 0);
-    for (int q = 0; q < n_quiet; ++q) residual += miss(quiet[static_cast<std::size_t>(q)], 0);
+    for (const int i : kGuardBars) {
+      const auto k = static_cast<std::size_t>(i);
+      residual += miss(k, centre[k], 1);
+    }
+    for (const int i : kGuardSpaces) {
+      const auto k = static_cast<std::size_t>(i);
+      residual += miss(k, centre[k], 0);
+    }
+    for (int q = 0; q < n_quiet; ++q) {
+      // A quiet zone's sample against the paper at its end of the code.
+      const auto [v, right_side] = quiet[static_cast<std::size_t>(q)];
+      const double e = v - (right_side ? light1 : light0);
+      residual += e * e;
+    }
     for (std::size_t c = 0; c < layout.starts.size(); ++c) {
       const auto first = static_cast<std::size_t>(layout.starts[c]);
       double best = std::numeric_limits<double>::infinity();
       for (const Modules& ch : static_cast<int>(c) < layout.left_characters ? left : right) {
         double r = 0;
-        for (std::size_t j = 0; j < ch.size(); ++j) r += miss(centre[first + j], ch[j]);
+        for (std::size_t j = 0; j < ch.size(); ++j) r += miss(first + j, centre[first + j], ch[j]);
         best = std::min(best, r);
       }
       residual += best;
     }
+    const double contrast = (light0 - dark0 + light1 - dark1) / 2;
     return residual / (contrast * contrast);
   };
-  // Widths 3% apart and edges 2 px apart, then the best of those again at a
-  // third and half of those steps.
   std::vector<Place> coarse;
   for (double module = 1.2; module <= 6.0; module *= 1.03)
     for (double begin = from; begin + 95 * module <= to; begin += 2)
