@@ -34,6 +34,9 @@ constexpr std::array<std::array<int, 4>, 10> kLWidths = {{{3, 2, 1, 1},
                                                           {1, 2, 1, 3},
                                                           {3, 1, 1, 2}}};
 constexpr int kCharacterModules = 7;
+/// An EAN-13's guards: the modules that are bars, and the spaces between them.
+constexpr std::array<int, 6> kGuardBars = {0, 2, 46, 48, 92, 94};
+constexpr std::array<int, 5> kGuardSpaces = {1, 45, 47, 49, 93};
 /// The places read_ean13_by_fit() tries, best first.
 constexpr std::size_t kPlacesTried = 5;
 
@@ -336,7 +339,7 @@ double noise_of(const Profile& p, const Fit& fit) {
 /// guards, and characters to start from.
 Modules ean13_start(const Layout& layout) {
   Modules m(static_cast<std::size_t>(layout.modules), 0);
-  for (const int i : {0, 2, 46, 48, 92, 94}) m[static_cast<std::size_t>(i)] = 1;
+  for (const int i : kGuardBars) m[static_cast<std::size_t>(i)] = 1;
   const Modules left = characters_allowed(false, false)[0],
                 right = characters_allowed(true, false)[0];
   for (std::size_t i = 0; i < layout.starts.size(); ++i) {
@@ -348,33 +351,26 @@ Modules ean13_start(const Layout& layout) {
 
 /// The EAN-13 value of `modules` ("" if a character or the parities name no digit).
 std::string ean13_text(const Layout& layout, const Modules& modules) {
-  std::string left, right;
+  // Digit d's L, G (left half) and R (right half) characters.
+  const std::vector<Modules> left = characters_allowed(false, true);  // L0, G0, L1, G1, ...
+  const std::vector<Modules> right = characters_allowed(true, false);
+  std::string digits;
   std::array<int, 6> parities{};
   for (std::size_t i = 0; i < layout.starts.size(); ++i) {
     const bool is_left = static_cast<int>(i) < layout.left_characters;
     const auto at = modules.begin() + layout.starts[i];
-    bool found = false;
-    for (int d = 0; d < 10 && !found; ++d) {
-      const std::vector<Modules> allowed = characters_allowed(!is_left, false);
-      if (std::equal(allowed[static_cast<std::size_t>(d)].begin(),
-                     allowed[static_cast<std::size_t>(d)].end(), at)) {
-        (is_left ? left : right) += static_cast<char>('0' + d);
-        found = true;
-      } else if (is_left) {
-        const std::vector<Modules> both = characters_allowed(false, true);
-        if (std::equal(both[static_cast<std::size_t>(2 * d + 1)].begin(),
-                       both[static_cast<std::size_t>(2 * d + 1)].end(), at)) {
-          left += static_cast<char>('0' + d);
-          parities[i] = 1;
-          found = true;
-        }
-      }
-    }
-    if (!found) return "";
+    const std::vector<Modules>& allowed = is_left ? left : right;
+    const auto found = std::find_if(allowed.begin(), allowed.end(), [&](const Modules& ch) {
+      return std::equal(ch.begin(), ch.end(), at);
+    });
+    if (found == allowed.end()) return "";
+    const auto index = static_cast<std::size_t>(found - allowed.begin());
+    digits += static_cast<char>('0' + (is_left ? index / 2 : index));
+    if (is_left) parities[i] = static_cast<int>(index % 2);
   }
   for (int first = 0; first < 10; ++first)
     if (kFirstDigitParities[static_cast<std::size_t>(first)] == parities)
-      return static_cast<char>('0' + first) + left + right;
+      return static_cast<char>('0' + first) + digits;
   return "";
 }
 
@@ -438,8 +434,6 @@ std::vector<std::pair<double, double>> ean13_places(const Layout& layout,
   };
   const std::vector<Modules> left = characters_allowed(false, true);
   const std::vector<Modules> right = characters_allowed(true, false);
-  constexpr std::array<int, 6> kGuardBars = {0, 2, 46, 48, 92, 94};
-  constexpr std::array<int, 5> kGuardSpaces = {1, 45, 47, 49, 93};
   struct Place {
     double score, begin, module;
   };
