@@ -113,9 +113,11 @@ struct BarSumsTry {
   struct Checked {
     std::string text;
     std::string format;
-    double margin = 0;    ///< fit_bar_pattern()'s worst margin (0 if not judged)
-    std::string problem;  ///< why it was not judged
-    bool kept = false;    ///< judged, and every character held by 1 noise variance or more
+    double margin = 0;    ///< the worst character's margin, noise variances (0 if not judged)
+    std::string problem;  ///< why it was not judged, or (the fit) why nothing was read
+    /// The value counts: tv's, judged and every character held by 1 noise
+    /// variance or more; the fit's, read (reader::kMinFittedReadMargin).
+    bool kept = false;
   };
   std::vector<Checked> tv_checked;
   /// Where neither read anything and EAN-13 is read: the sums' EAN-13 read by
