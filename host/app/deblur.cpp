@@ -54,6 +54,7 @@ struct DeblurFlags {
   std::string output;
   bool decode = false;
   std::string decode_area = "frame";  ///< --decode-area: labels or frame (reader_options.hpp)
+  std::string tries = session::kDefaultSecondPassTries;  ///< --tries: the cascade's second pass's
   bool json = false;
   std::string truth;  ///< ground truth (reflectance x 65535) to score against
   std::string flat;   ///< flat-field file (calibrate flat)
@@ -193,6 +194,9 @@ void run(const DeblurFlags& f) {
     reader_options.area = *area;
   else
     throw UsageError("--decode-area must be labels or frame, not '" + f.decode_area + "'");
+  std::string tries_problem;
+  const auto tries = session::parse_second_pass_tries(f.tries, tries_problem);
+  if (!tries) throw UsageError("--tries: " + tries_problem);
   const auto bayer_mode = imaging::bayer_mode_from_name(f.bayer_mode);
   if (!bayer_mode)
     throw UsageError("--bayer-mode must be raw or demosaic, not '" + f.bayer_mode + "'");
@@ -312,7 +316,7 @@ void run(const DeblurFlags& f) {
     if (!backdrop.ok()) throw UsageError("'" + f.input + "': " + backdrop.error());
     cascade_readout =
         session::read_with_cascade({motion_frame.value(), model, motion_latent, &deblurred.latent},
-                                   backdrop.value().latent, reader_options, second_pass);
+                                   backdrop.value().latent, reader_options, *tries, second_pass);
     cascade_ms = elapsed_ms(start);
   }
 
@@ -333,10 +337,10 @@ void run(const DeblurFlags& f) {
     ssim_index = imaging::ssim(truth, latent, region);
   }
 
-  std::vector<std::string> decoded;
+  reader::BarcodeReadout decoded;
   double decode_ms = 0;
   if (f.decode && cascade_readout) {
-    decoded = reader::code_texts(*cascade_readout);
+    decoded = std::move(*cascade_readout);
   } else if (f.decode) {
     start = std::chrono::steady_clock::now();
     const std::vector<reader::LabelRegion> paper =
@@ -344,8 +348,7 @@ void run(const DeblurFlags& f) {
             ? reader::regions_to_read(reader::find_paper_runs(motion_latent),
                                       reader::find_code_regions(motion_latent))
             : std::vector<reader::LabelRegion>{};
-    decoded = reader::code_texts(
-        reader::read_codes(deblurred.latent, paper, model.direction, reader_options).readout);
+    decoded = reader::read_codes(deblurred.latent, paper, model.direction, reader_options).readout;
     decode_ms = elapsed_ms(start);
   }
   if (f.json) {
@@ -364,7 +367,23 @@ void run(const DeblurFlags& f) {
     }
     if (f.decode) {
       if (!cascade) report["timings_ms"]["decode"] = decode_ms;  // the cascade's is in "cascade"
-      report["decoded"] = decoded;
+      report["decoded"] = reader::code_texts(decoded);
+      // Each value with the evidence that backs it: the decoder, and the latent it was read on.
+      nlohmann::json codes = nlohmann::json::array();
+      for (const reader::DecodedCode& code : decoded.codes)
+        codes.push_back({{"text", code.text},
+                         {"format", code.format},
+                         {"decoder", code.decoder},
+                         {"pass", code.pass},
+                         {"evidence", code.evidence}});
+      report["codes"] = std::move(codes);
+      nlohmann::json unconfirmed = nlohmann::json::array();
+      for (const reader::DecodedCode& code : decoded.unconfirmed)
+        unconfirmed.push_back({{"text", code.text},
+                               {"format", code.format},
+                               {"decoder", code.decoder},
+                               {"pass", code.pass}});
+      report["unconfirmed"] = std::move(unconfirmed);
     }
     if (!f.truth.empty()) report["truth"] = {{"psnr_db", psnr_db}, {"ssim", ssim_index}};
     std::cout << report.dump() << "\n";
@@ -401,8 +420,8 @@ void run(const DeblurFlags& f) {
     std::cout << "against " << f.truth << ": PSNR " << psnr_db << " dB, SSIM " << ssim_index
               << "\n";
   if (f.decode) {
-    if (decoded.empty()) std::cout << "no barcode decoded\n";
-    for (const auto& text : decoded) std::cout << "decoded: " << text << "\n";
+    if (decoded.codes.empty()) std::cout << "no barcode decoded\n";
+    for (const auto& text : reader::code_texts(decoded)) std::cout << "decoded: " << text << "\n";
   }
 }
 
@@ -465,6 +484,12 @@ void add_deblur(CLI::App& app) {
       ->add_option("--decode-area", f->decode_area,
                    "with --decode: frame (the whole result) or labels (the label paper and "
                    "the regions that look like print, as a session reads by default)")
+      ->capture_default_str();
+  command
+      ->add_option("--tries", f->tries,
+                   std::string("the cascade's second-pass tries beyond tv on each window, "
+                               "comma-separated: ") +
+                       session::kSecondPassTryNames + ", or none, or all")
       ->capture_default_str();
   command->add_option("--flat", f->flat,
                       "flat-field file (`calibrate flat`): corrects light that varies across the "

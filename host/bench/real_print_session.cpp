@@ -28,12 +28,19 @@ capture::FrameFormat format(int width, int height, int bit_depth) {
 
 SessionLine::SessionLine(int width, int height, double blur_px, double electrons,
                          reader::DecodeArea area)
+    : SessionLine(width, height, blur_px, electrons, area, session::SecondPassTries{},
+                  session::kMaxSecondPassMs) {}
+
+SessionLine::SessionLine(int width, int height, double blur_px, double electrons,
+                         reader::DecodeArea area, const session::SecondPassTries& tries,
+                         double second_pass_ms)
     : width_(width), height_(height) {
   config_.optics.electrons = electrons;
   config_.processing.decode_area = area;
   config_.optics.electrons_given = true;
   config_.processing.threads_per_worker = 1;
-  config_.processing.second_pass_ms = session::kMaxSecondPassMs;  // offline: every window
+  config_.processing.second_pass_ms = second_pass_ms;
+  config_.processing.second_pass_tries = tries;
   if (auto problem = session::check_config(config_); !problem.empty())
     throw std::runtime_error("session config: " + problem);
   encoder_counts_ = static_cast<int>(std::lround(blur_px / config_.optics.px_per_count));
@@ -43,7 +50,7 @@ SessionLine::SessionLine(int width, int height, double blur_px, double electrons
   model_ = std::move(model.value());
 }
 
-std::vector<std::string> SessionLine::read(const imaging::Image& dn) const {
+std::vector<reader::DecodedCode> SessionLine::read(const imaging::Image& dn) const {
   session::FrameJob job;
   job.event = event(config_, encoder_counts_);
   job.frame.format = format(width_, height_, config_.optics.bit_depth);
@@ -59,15 +66,14 @@ std::vector<std::string> SessionLine::read(const imaging::Image& dn) const {
       }
   session::WorkerShared shared(config_);
   const session::FrameOutcome out = session::process_frame(job, config_, shared, nullptr);
-  std::vector<std::string> texts;
+  std::vector<reader::DecodedCode> codes;
   if (!out.processed) {  // a NO-READ, said
-    std::cerr << "real_print_bench: the session did not process a frame: " << out.log.dump()
-              << "\n";
-    return texts;
+    std::cerr << "the session did not process a frame: " << out.log.dump() << "\n";
+    return codes;
   }
   for (const session::Sighting& s : out.sightings)
-    if (s.decoded) texts.push_back(s.value);
-  return texts;
+    if (s.decoded) codes.push_back(s.code);
+  return codes;
 }
 
 }  // namespace flutterscan::bench

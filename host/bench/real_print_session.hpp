@@ -21,13 +21,18 @@ class SessionLine {
   /// session's default: the label paper). Throws if the config does not check.
   SessionLine(int width, int height, double blur_px, double electrons,
               reader::DecodeArea area = reader::ReaderOptions{}.area);
+  /// \brief The same with the second pass's `tries` and a credit of
+  /// `second_pass_ms` per frame (session::kMaxSecondPassMs: offline, every window).
+  SessionLine(int width, int height, double blur_px, double electrons, reader::DecodeArea area,
+              const session::SecondPassTries& tries, double second_pass_ms);
 
   /// \brief The capture model the session builds for each of these frames:
   /// what a simulated frame must be recorded with.
   const imaging::CaptureModel& model() const { return model_; }
 
-  /// \brief The codes the session reads on `dn` (a frame recorded with model()).
-  std::vector<std::string> read(const imaging::Image& dn) const;
+  /// \brief The codes the session reads on `dn` (a frame recorded with model()),
+  /// each as its sighting reports it (value, format, decoder, pass).
+  std::vector<reader::DecodedCode> read(const imaging::Image& dn) const;
 
  private:
   session::SessionConfig config_;

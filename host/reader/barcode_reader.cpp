@@ -6,6 +6,7 @@
 #include "imaging/frame_conversion.hpp"
 #include "imaging/motion_frame.hpp"
 #include "reader/assertion_guard.hpp"
+#include "reader/read_evidence.hpp"
 #include "reader/zbar_reader.hpp"
 
 #include <ZXing/BarcodeFormat.h>
@@ -230,6 +231,22 @@ bool cut_along_reading(const ZXing::Result& result, int width, int height) {
                  : cut_along_reading(low->y, high->y, height);
 }
 
+/// Whether `code` (read in `window`) is backed: a strong check, or for a
+/// weak-check symbology a second reading (corroboration()); `code.evidence`
+/// says which. A value nothing backs joins `unconfirmed` (once).
+bool backed(DecodedCode& code, const LumWindow& window, const ZXing::DecodeHints& linear_hints,
+            const std::string& symbologies, bool try_rotate,
+            std::vector<DecodedCode>& unconfirmed) {
+  code.evidence = weak_check(code.format)
+                      ? corroboration(code, window, linear_hints, symbologies, try_rotate)
+                      : "check";
+  if (!code.evidence.empty()) return true;
+  if (std::none_of(unconfirmed.begin(), unconfirmed.end(),
+                   [&](const DecodedCode& c) { return same_symbol(c, code); }))
+    unconfirmed.push_back(code);
+  return false;
+}
+
 /// Windows may overlap: a symbol in two of them is one symbol.
 bool already_read(const std::vector<DecodedCode>& codes, const DecodedCode& code) {
   return std::any_of(codes.begin(), codes.end(),
@@ -350,9 +367,12 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
       bool any = false;
       for (const ZXing::Result& result : results) {
         if (!result.isValid() || cut_along_reading(result, x1 - x0, y1 - y0)) continue;
-        any = true;
         DecodedCode code = decoded_code(result, x0, y0, latent);
         code.luminance = luminance;
+        if (!backed(code, {lum, x1 - x0, y1 - y0, x0, y0}, linear_hints, symbologies, try_rotate,
+                    out.unconfirmed))
+          continue;
+        any = true;
         if (!already_read(out.codes, code)) out.codes.push_back(std::move(code));
       }
       if (any) {
@@ -371,7 +391,10 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
                          : cut_along_reading(symbol.min_y, symbol.max_y, y1 - y0))
         continue;
       DecodedCode code = decoded_code(symbol, x0, y0, latent);
-      if (!quiet_zones_clear(code, latent)) continue;
+      if (!quiet_zones_clear(code, latent) ||
+          !backed(code, {lum, x1 - x0, y1 - y0, x0, y0}, linear_hints, symbologies, try_rotate,
+                  out.unconfirmed))
+        continue;
       any = true;
       if (!already_read(out.codes, code)) out.codes.push_back(std::move(code));
     }
@@ -410,16 +433,17 @@ BarcodeReadout read_barcodes_turned(const imaging::Plane& latent, const DecodeWi
   cv::warpAffine(from, to, to_latent, to.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
                  cv::BORDER_REPLICATE);
   BarcodeReadout out = read_barcodes(turned, symbologies, try_rotate);
-  for (DecodedCode& code : out.codes) {
-    back(code.centre_x, code.centre_y);
-    code.min_x = INFINITY;
-    code.max_x = -INFINITY;
-    for (CodePoint& corner : code.quality.corners) {
-      back(corner.x, corner.y);
-      code.min_x = std::min(code.min_x, corner.x);
-      code.max_x = std::max(code.max_x, corner.x);
+  for (auto* codes : {&out.codes, &out.unconfirmed})
+    for (DecodedCode& code : *codes) {
+      back(code.centre_x, code.centre_y);
+      code.min_x = INFINITY;
+      code.max_x = -INFINITY;
+      for (CodePoint& corner : code.quality.corners) {
+        back(corner.x, corner.y);
+        code.min_x = std::min(code.min_x, corner.x);
+        code.max_x = std::max(code.max_x, corner.x);
+      }
     }
-  }
   return out;
 }
 
@@ -506,7 +530,9 @@ void drop_conflicting(std::vector<DecodedCode>& codes) {
   for (std::size_t i = 0; i < codes.size(); ++i)
     for (std::size_t j = i + 1; j < codes.size(); ++j) {
       const DecodedCode &a = codes[i], &b = codes[j];
-      if (a.format != b.format || a.text == b.text || !is_linear_format(a.format)) continue;
+      if (symbology_family(a.format) != symbology_family(b.format) || a.text == b.text ||
+          !is_linear_format(a.format))
+        continue;
       if (over_one_place(a, b)) drop[i] = drop[j] = true;
     }
   std::vector<DecodedCode> kept;

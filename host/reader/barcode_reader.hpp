@@ -64,6 +64,15 @@ struct DecodedCode {
   /// second pass read on a window's bar sums by fitting the symbol itself:
   /// bar_pattern_fit.hpp).
   std::string decoder = "zxing";
+  /// The latent it was read on: "first" (the frame's first pass), or the
+  /// cascade's second-pass try that made it (session/second_pass_tries.hpp:
+  /// "tv", "bar-sums", "tv-on-sums", "fit", "isotropic-tv").
+  std::string pass = "first";
+  /// What backs the value (read_evidence.hpp): "check" (its symbology's own
+  /// check is strong), "halves" (a weak-check symbology read alike on both
+  /// halves of its bars, each on its own), "decoders" (read alike by ZXing and
+  /// zbar), or "fit" (an EAN-13 read by fit, its characters' margins).
+  std::string evidence;
   /// Where it lies (corners refined on the image for linear codes), its module
   /// size and its indicative print quality (measure_code()).
   CodeQuality quality;
@@ -88,6 +97,9 @@ struct BarcodeReadout {
   std::vector<DecodedCode> codes;
   /// Windows not decoded because three quarters of them lie in an earlier window that read a code.
   std::size_t windows_skipped = 0;
+  /// Values of weak-check symbologies a decoder read that no second reading
+  /// backed (read_evidence.hpp): not reported as reads, only logged.
+  std::vector<DecodedCode> unconfirmed;
   /// Non-empty when the decoder failed an internal assertion on this image:
   /// its text. The codes read are then none (the frame is flagged, the session goes on).
   std::string decoder_fault;
@@ -100,7 +112,8 @@ std::vector<std::string> code_texts(const BarcodeReadout& readout);
 std::pair<double, double> corner_rows(const DecodedCode& code);
 
 /// \brief Drops from `codes` each linear code read over one place as another
-/// of its symbology with another value (their boxes, widened by 4 px, meet and
+/// of its symbology family (read_evidence.hpp: EAN-13, EAN-8, UPC-A and UPC-E
+/// are one) with another value (their boxes, widened by 4 px, meet and
 /// share half the shorter one's length along the reading direction): one
 /// symbol cannot be both, so one of them at least is a misread, and which is
 /// not known. read_barcodes() does so with what it reads. Seen on real labels:
@@ -142,7 +155,9 @@ struct DecodeWindow {
 /// from the black level: zbar_reader.hpp; its symbols with quiet_zones_clear()). A
 /// linear symbol that reaches its window's edge along its reading direction is
 /// cut by it and not taken for a read (it can decode to another value that
-/// passes its check). Positions are the latent's. `try_rotate`: also look for
+/// passes its check). A value of a weak-check symbology counts only where a
+/// second reading backs it (read_evidence.hpp; else it goes to `unconfirmed`
+/// and the window is read on in its next view). Positions are the latent's. `try_rotate`: also look for
 /// 1-D codes turned by 90 degrees (about twice the decode time).
 BarcodeReadout read_barcodes(const imaging::Plane& latent,
                              const std::string& symbologies = kDefaultSymbologies,

@@ -327,7 +327,9 @@ nlohmann::json decoded_json(const std::vector<reader::DecodedCode>& codes,
                             {"x", std::lround(code.centre_x)},
                             {"y", std::lround(code.centre_y)},
                             {"view", reader::luminance_view_name(code.luminance)},
-                            {"decoder", code.decoder}};
+                            {"decoder", code.decoder},
+                            {"pass", code.pass},
+                            {"evidence", code.evidence}};
     entry.update(code_record(code));
     const double along = imaging::position_along_motion(direction, code.centre_x, code.centre_y,
                                                         latent.width, latent.height);
@@ -414,8 +416,9 @@ void second_pass(Deblurred& image, Decoded& decoded, const FrameJob& job,
   if (unread.empty()) return;
   const SecondPassFrame frame{image.electrons, image.model, image.motion_latent,
                               image.camera_latent ? &*image.camera_latent : nullptr, job.travel_px};
-  const SecondPass pass = run_second_pass(frame, unread, reader_options(processing),
-                                          shared.second_pass, shared.belt_reads, decoded.readout);
+  const SecondPass pass =
+      run_second_pass(frame, unread, reader_options(processing), processing.second_pass_tries,
+                      shared.second_pass, shared.belt_reads, decoded.readout);
   out.log["second_pass"].update(pass.log(shared.second_pass.credit_ms()));
   if (pass.skipped > 0) flags.push_back("second-pass-budget");
 }
@@ -473,6 +476,17 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config, WorkerSha
   stamp_sightings(job, out.log, model.blur_px, ms_between(t2, t4), out);
   if (out.decode_failed) flags.push_back("no-read");
   out.log["decoded"] = decoded_json(decoded.readout.codes, model.direction, latent, job.travel_px);
+  if (!decoded.readout.unconfirmed.empty()) {
+    nlohmann::json unconfirmed = nlohmann::json::array();
+    for (const reader::DecodedCode& code : decoded.readout.unconfirmed)
+      unconfirmed.push_back({{"text", code.text},
+                             {"format", code.format},
+                             {"x", std::lround(code.centre_x)},
+                             {"y", std::lround(code.centre_y)},
+                             {"decoder", code.decoder},
+                             {"pass", code.pass}});
+    out.log["unconfirmed"] = std::move(unconfirmed);
+  }
   out.log["labels_in_view"] = out.sightings.size();
   out.log["times_ms"] = {{"convert", rounded_ms(t0, t1)},
                          {"deblur", rounded_ms(t1, t2)},

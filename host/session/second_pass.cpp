@@ -160,6 +160,7 @@ reader::DecodedCode fitted_code(const FitOnSums& fit, const imaging::BarSlope& s
   }
   code.symbology_id = "]E0";
   code.decoder = "fit";
+  code.evidence = "fit";
   return code;
 }
 
@@ -372,8 +373,9 @@ std::vector<reader::DecodedCode> supported_reads(const imaging::Plane& sums,
 
 SecondPass run_second_pass(const SecondPassFrame& frame,
                            std::span<const reader::LabelRegion> unread,
-                           const reader::ReaderOptions& options, SecondPassBudget& budget,
-                           BeltReads& reads, reader::BarcodeReadout& readout) {
+                           const reader::ReaderOptions& options, const SecondPassTries& tries,
+                           SecondPassBudget& budget, BeltReads& reads,
+                           reader::BarcodeReadout& readout) {
   SecondPass out;
   const imaging::MotionFrame& electrons = frame.electrons;
   const int along = electrons.along(), lines = electrons.lines();
@@ -456,6 +458,10 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
               ? reader::read_barcodes(camera, symbologies, options.try_rotate, {&retry.window, 1})
               : reader::read_barcodes_turned(camera, retry.window, turn_rad, symbologies,
                                              options.try_rotate);
+      for (reader::DecodedCode& code : again.unconfirmed)
+        if (std::none_of(readout.unconfirmed.begin(), readout.unconfirmed.end(),
+                         [&](const auto& c) { return reader::same_symbol(c, code); }))
+          readout.unconfirmed.push_back(std::move(code));
       held_read = std::all_of(held.begin(), held.end(), [&](const reader::DecodedCode& h) {
         return std::any_of(again.codes.begin(), again.codes.end(),
                            [&](const reader::DecodedCode& c) { return reader::same_symbol(c, h); });
@@ -467,10 +473,11 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
       });
       return std::move(again.codes);
     };
-    // `codes` join the readout. Returns their values.
-    auto take = [&](std::vector<reader::DecodedCode> codes) {
+    // `codes`, read on the latent try `pass` made, join the readout. Returns their values.
+    auto take = [&](std::vector<reader::DecodedCode> codes, const char* pass) {
       std::vector<std::string> texts;
       for (reader::DecodedCode& code : codes) {
+        code.pass = pass;
         texts.push_back(code.text);
         reads.add(belt_box(code, direction, camera_width, camera_height, frame.travel_px));
         readout.codes.push_back(std::move(code));
@@ -478,8 +485,8 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
       retry.read.insert(retry.read.end(), texts.begin(), texts.end());
       return texts;
     };
-    auto read_again = [&](const std::string& symbologies, double turn_rad = 0) {
-      return take(read_window(symbologies, turn_rad));
+    auto read_again = [&](const char* pass, const std::string& symbologies, double turn_rad = 0) {
+      return take(read_window(symbologies, turn_rad), pass);
     };
     // The crop is in the motion frame already (+x); its samples passed the frame's checks.
     const auto cropped = imaging::MotionFrame::make(std::move(crop), imaging::Direction::kPlusX);
@@ -496,7 +503,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
       const imaging::Plane& patch = deblurred.value().latent;
       paste(patch);
       const std::size_t before = readout.codes.size();
-      read_again(options.symbologies);
+      read_again("tv", options.symbologies);
       auto linear_format = [](const reader::DecodedCode& c) {
         return reader::is_linear_format(c.format);
       };
@@ -506,7 +513,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
                       readout.codes.end(), linear_format);
       if (!held_read) {
         paste(first);  // tv's latent loses a code the window read before: it keeps its first
-      } else if (!linear_read && !linear.empty()) {
+      } else if (!linear_read && !linear.empty() && tries.bar_sums) {
         // No linear code: the rows summed along the bars (at 17, then 49 times
         // the light) for one that tv's noise hid.
         BarSumsTry bars;
@@ -550,13 +557,13 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
           paste(patch);
           if (!found.empty()) {
             paste(sums, found);
-            bars.read = take(std::move(found));
+            bars.read = take(std::move(found), "bar-sums");
             break;
           }
           // Nothing read: tv on the same sums (noise that joint Wiener's leaves
           // hides narrow spaces), each value it reads checked against joint
           // Wiener's sums, where the budget holds another tv.
-          if (!budget.take(estimate)) continue;
+          if (!tries.tv_on_sums || !budget.take(estimate)) continue;
           const auto t1 = std::chrono::steady_clock::now();
           const DeblurOut tv_profile =
               deblur_bar_sums(cropped.value(), slope, half_rows, frame.model, tv_sums);
@@ -570,7 +577,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
             found = supported_reads(camera, std::move(found), bars.tv_checked);
             paste(patch);
             if (!found.empty()) paste(tv_composite, found);
-            bars.read = take(std::move(found));
+            bars.read = take(std::move(found), "tv-on-sums");
           }
           const double tv_ms = ms_since(t1);
           own_ms += tv_ms;
@@ -581,7 +588,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
           // cost follows the row's length, not the window's pixels: settled
           // outside tv's cost model).
           const double fit_estimate = kFitMs + kFitMsPerSample * (c1 - c0);
-          if (reads_ean13 && budget.take(fit_estimate)) {
+          if (tries.fit && reads_ean13 && budget.take(fit_estimate)) {
             const auto t2 = std::chrono::steady_clock::now();
             const FitOnSums fit = read_sums_by_fit(profile.value().latent, across);
             BarSumsTry::Checked verdict{fit.read.text, "EAN-13", fit.read.worst_margin,
@@ -604,7 +611,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
                                [&](const auto& c) { return reader::same_symbol(c, code); })) {
                 const std::vector<reader::DecodedCode> one = {code};
                 paste(sums, one);
-                bars.read = take(one);
+                bars.read = take(one, "fit");
               }
             }
             bars.fitted.push_back(std::move(verdict));
@@ -614,7 +621,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
           }
           if (!bars.read.empty()) break;
         }
-        if (bars.read.empty() && turn != 0) read_again(linear, turn);  // tv's latent, turned
+        if (bars.read.empty() && turn != 0) read_again("tv", linear, turn);  // tv's latent, turned
         retry.bar_sums = std::move(bars);
       }
       // Nothing read: tv's prior has the print constant across the motion (bars
@@ -623,7 +630,8 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
       // each of kIsotropicWeights while nothing reads and the budget holds
       // another tv; its latent stays where it reads.
       for (const double weight : kIsotropicWeights) {
-        if (!held.empty() || !retry.read.empty() || !budget.take(estimate)) break;
+        if (!tries.isotropic_tv || !held.empty() || !retry.read.empty() || !budget.take(estimate))
+          break;
         const auto t1 = std::chrono::steady_clock::now();
         tv_isotropic.tv_weight_per_noise = weight;
         const DeblurOut isotropic = imaging::deblur(cropped.value(), frame.model, tv_isotropic);
@@ -631,7 +639,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
         retry.isotropic->weights.push_back(weight);
         if (isotropic.ok()) {
           paste(isotropic.value().latent);
-          retry.isotropic->read = read_again(options.symbologies);
+          retry.isotropic->read = read_again("isotropic-tv", options.symbologies);
           if (retry.isotropic->read.empty()) paste(patch);
         }
         const double ms = ms_since(t1);
@@ -649,7 +657,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
 reader::BarcodeReadout read_with_cascade(const SecondPassFrame& frame,
                                          const imaging::Plane& backdrop,
                                          const reader::ReaderOptions& options,
-                                         nlohmann::json& log) {
+                                         const SecondPassTries& tries, nlohmann::json& log) {
   const imaging::Plane& camera =
       frame.camera_latent != nullptr ? *frame.camera_latent : frame.motion_latent;
   const imaging::Direction direction = frame.electrons.direction();
@@ -667,7 +675,7 @@ reader::BarcodeReadout read_with_cascade(const SecondPassFrame& frame,
   SecondPassBudget budget(kMaxSecondPassMs, 1);
   budget.add_frame(0, 0, 0);
   BeltReads reads;
-  const SecondPass pass = run_second_pass(frame, every, options, budget, reads, readout);
+  const SecondPass pass = run_second_pass(frame, every, options, tries, budget, reads, readout);
   log = pass.log(budget.credit_ms());
   if (backdrop.empty()) return readout;
   // Beyond the windows: the belt, and whatever looked like neither paper nor print.

@@ -23,6 +23,7 @@
 #include "imaging/total_variation.hpp"
 #include "reader/barcode_reader.hpp"
 #include "reader/reader_options.hpp"
+#include "session/second_pass_tries.hpp"
 
 namespace flutterscan::session {
 
@@ -209,11 +210,14 @@ std::vector<reader::LabelRegion> retry_regions(std::span<const reader::LabelRegi
 /// reads and `budget` holds another window, and read for every symbology (its
 /// latent kept only where it reads). A window
 /// whose codes of `readout` (read before it) tv's latent does not read again
-/// keeps the latent it had. The codes found are added to `readout` and to `reads`.
+/// keeps the latent it had. Only the `tries` switched on run beyond tv's. The
+/// codes found, each with the try that read it (DecodedCode::pass), are added
+/// to `readout` and to `reads`.
 SecondPass run_second_pass(const SecondPassFrame& frame,
                            std::span<const reader::LabelRegion> unread,
-                           const reader::ReaderOptions& options, SecondPassBudget& budget,
-                           BeltReads& reads, reader::BarcodeReadout& readout);
+                           const reader::ReaderOptions& options, const SecondPassTries& tries,
+                           SecondPassBudget& budget, BeltReads& reads,
+                           reader::BarcodeReadout& readout);
 
 /// \brief The cascade on one frame outside a line (`flutterscan deblur --method
 /// cascade`): `frame`'s latents (joint Wiener's) read with `options` (the
@@ -223,9 +227,10 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
 /// bar sums') over every window, joint Wiener's only where tv's would lose a
 /// code it read, and `backdrop` (the frame's latent in the motion frame, made
 /// otherwise: tv's on the whole frame) everywhere else, unless it is empty.
-/// The codes of both passes; the second pass's log line in `log`.
+/// The codes of both passes (the second pass's `tries`); the second pass's log line in `log`.
 reader::BarcodeReadout read_with_cascade(const SecondPassFrame& frame,
                                          const imaging::Plane& backdrop,
-                                         const reader::ReaderOptions& options, nlohmann::json& log);
+                                         const reader::ReaderOptions& options,
+                                         const SecondPassTries& tries, nlohmann::json& log);
 
 }  // namespace flutterscan::session

@@ -404,7 +404,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
             {"method", "second_pass_ms", "workers", "threads_per_worker", "queue_depth",
              "max_frames", "max_seconds", "match_tolerance_us", "object_match_px", "choose_model",
              "blur_check_every", "blur_tolerance", "refine_when_behind", "symbologies",
-             "try_rotate", "decode_area"},
+             "try_rotate", "decode_area", "second_pass_tries"},
             origin);
         !p.empty())
       return ConfigResult::failure(p);
@@ -436,6 +436,17 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     r.get("refine_when_behind", c.processing.refine_when_behind);
     r.get("symbologies", c.processing.symbologies);
     r.get("try_rotate", c.processing.try_rotate);
+    std::string tries;
+    r.get("second_pass_tries", tries);
+    if (error.empty() && t->get("second_pass_tries") != nullptr) {
+      std::string problem;
+      const auto parsed = parse_second_pass_tries(tries, problem);
+      if (!parsed)
+        return ConfigResult::failure(
+            origin + ":" + std::to_string(t->get("second_pass_tries")->source().begin.line) +
+            ": processing.second_pass_tries: " + problem);
+      c.processing.second_pass_tries = *parsed;
+    }
     std::string area;
     r.get("decode_area", area);
     if (!area.empty()) {

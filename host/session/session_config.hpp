@@ -16,6 +16,7 @@
 #include "imaging/deblur.hpp"
 #include "reader/barcode_reader.hpp"
 #include "reader/reader_options.hpp"
+#include "session/second_pass_tries.hpp"
 
 namespace flutterscan::session {
 
@@ -77,6 +78,8 @@ struct ProcessingConfig {
   /// The cascade's CPU budget for second passes, ms per frame; < 0 ("auto"):
   /// from the frame rate and the workers, leaving 15% of their time spare.
   double second_pass_ms = -1;
+  /// The cascade's second-pass tries beyond tv on the window (second_pass_tries.hpp).
+  SecondPassTries second_pass_tries;
   int workers = 2;              ///< frames deblurred at once
   int threads_per_worker = 1;   ///< row threads inside one deblur
   std::size_t queue_depth = 4;  ///< frames waiting for a worker; beyond it frames are dropped

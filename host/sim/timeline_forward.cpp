@@ -78,8 +78,15 @@ Result<imaging::Image, std::string> expected_rolling_shutter_electrons(
 }
 
 Result<imaging::Image, std::string> expected_colour_electrons(std::span<const Plane> bands,
-                                                              const imaging::CaptureModel& given,
+                                                              const imaging::CaptureModel& model,
                                                               int supersample) {
+  return expected_colour_electrons_timeline(bands, model, imaging::slot_segments(model),
+                                            supersample);
+}
+
+Result<imaging::Image, std::string> expected_colour_electrons_timeline(
+    std::span<const Plane> bands, const imaging::CaptureModel& given,
+    std::span<const imaging::ExposureSegment> timeline, int supersample) {
   using Out = Result<imaging::Image, std::string>;
   const auto model = rendered_pixels(given);
   if (model.channels != 3 || model.leds != 3)
@@ -88,7 +95,7 @@ Result<imaging::Image, std::string> expected_colour_electrons(std::span<const Pl
   for (const auto& b : bands)
     if (b.width != bands[0].width || b.height != bands[0].height || b.empty())
       return Out::failure("colour scene: the band planes must be non-empty and of equal size");
-  const auto segments = finer(imaging::slot_segments(model), supersample);
+  const auto segments = finer(timeline, supersample);
   std::vector<Plane> moving;
   for (const auto& b : bands) moving.push_back(imaging::to_motion_frame(b, model.direction));
   std::vector<std::vector<double>> led_taps;

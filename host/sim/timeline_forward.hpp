@@ -53,4 +53,13 @@ Result<imaging::Image, std::string> expected_colour_electrons(std::span<const im
                                                               const imaging::CaptureModel& model,
                                                               int supersample = 1);
 
+/// \brief The same when every row sees `segments` (camera pixels of motion):
+/// a belt whose motion departs from the model's constant speed (jitter, a
+/// scene that moves in whole-pixel steps), as expected_electrons_timeline()
+/// gives it for a grey scene. The model's own slot_segments() give
+/// expected_colour_electrons().
+Result<imaging::Image, std::string> expected_colour_electrons_timeline(
+    std::span<const imaging::Plane> bands, const imaging::CaptureModel& model,
+    std::span<const imaging::ExposureSegment> segments, int supersample = 1);
+
 }  // namespace flutterscan::sim

@@ -555,8 +555,22 @@ TEST_F(ImagingCliTest, DeblurWithTheDescriptorDecodesTheLabel) {
     ASSERT_TRUE(objects[0]["decoded"].is_array()) << result;
     EXPECT_EQ(objects[0]["decoded"].size(), 1U) << result;
     EXPECT_EQ(objects[0]["decoded"][0], "FS-0042") << result;
+    // Each value with what backs it: a Code 128's own check, read on the first pass.
+    ASSERT_EQ(objects[0]["codes"].size(), 1U) << result;
+    EXPECT_EQ(objects[0]["codes"][0]["evidence"], "check") << result;
+    EXPECT_EQ(objects[0]["codes"][0]["pass"], "first") << result;
+    EXPECT_EQ(objects[0]["codes"][0]["decoder"], "zxing") << result;
+    EXPECT_TRUE(objects[0]["unconfirmed"].empty()) << result;
     EXPECT_TRUE(is_png(output()));
   }
+  // The cascade's tries by name; an unknown one is bad usage, named.
+  const RunResult none = run({"deblur", frame(), "--descriptor", descriptor(), "--tries", "none",
+                              "--decode", "--json", "-o", output()});
+  ASSERT_EQ(none.exit_code, 0) << none;
+  const RunResult unknown = run({"deblur", frame(), "--descriptor", descriptor(), "--tries",
+                                 "bar-sums,guess", "--decode", "-o", output()});
+  EXPECT_EQ(unknown.exit_code, 2) << unknown;
+  EXPECT_NE(unknown.err.find("'guess' is not a second-pass try"), std::string::npos) << unknown;
 }
 
 TEST_F(ImagingCliTest, DeblurScoresAgainstTheTruth) {

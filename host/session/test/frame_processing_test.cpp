@@ -432,6 +432,27 @@ TEST(SecondPass, CodesComingIntoOrGoingOutOfViewAreLeftForAnotherFrame) {
   for (const std::string& value : whole) EXPECT_EQ(read.count(value), 1u) << value;
 }
 
+TEST(SecondPassTries, NamedOneByOneNoneOrAllAndEachNeedsWhatItWorksOn) {
+  std::string problem;
+  const auto defaults = parse_second_pass_tries(kDefaultSecondPassTries, problem);
+  ASSERT_TRUE(defaults) << problem;
+  EXPECT_EQ(*defaults, SecondPassTries{});
+  EXPECT_EQ(second_pass_tries_name(SecondPassTries{}), kDefaultSecondPassTries);
+  const auto all = parse_second_pass_tries("all", problem);
+  ASSERT_TRUE(all);
+  EXPECT_EQ(second_pass_tries_name(*all), "bar-sums,tv-on-sums,fit,isotropic-tv");
+  const auto none = parse_second_pass_tries(" none ", problem);
+  ASSERT_TRUE(none);
+  EXPECT_EQ(second_pass_tries_name(*none), "none");
+  const auto two = parse_second_pass_tries("isotropic-tv, bar-sums", problem);
+  ASSERT_TRUE(two);
+  EXPECT_TRUE(two->bar_sums && two->isotropic_tv && !two->fit && !two->tv_on_sums);
+  EXPECT_FALSE(parse_second_pass_tries("fit", problem));
+  EXPECT_NE(problem.find("needs bar-sums"), std::string::npos) << problem;
+  EXPECT_FALSE(parse_second_pass_tries("bar-sums,tv", problem));
+  EXPECT_NE(problem.find("'tv' is not a second-pass try"), std::string::npos) << problem;
+}
+
 TEST(SecondPass, RetriesEveryUnreadLabelAndTheCodeRegionsOffThem) {
   const reader::LabelRegion label{100, 300, false, 0, 0};       // rows not measured: every row
   const reader::LabelRegion on_label{150, 250, false, 10, 50};  // inside the label: not again

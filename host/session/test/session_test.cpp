@@ -348,6 +348,25 @@ TEST(SessionConfigFile, ReadsTheAnnotatedExampleAndNamesBadKeys) {
       << bad_area.error();
   EXPECT_TRUE(config.processing.try_rotate);  // the annotated example keeps it on
 
+  // The second pass's tries, by name; an unknown one is refused by name with its line.
+  EXPECT_EQ(config.processing.second_pass_tries, SecondPassTries{});
+  const auto every_try =
+      parse_config("[processing]\nsecond_pass_tries = \"all\"\n", "line3.toml");
+  ASSERT_TRUE(every_try.ok()) << every_try.error();
+  EXPECT_TRUE(every_try.value().processing.second_pass_tries.fit);
+  EXPECT_TRUE(every_try.value().processing.second_pass_tries.tv_on_sums);
+  const auto bad_try =
+      parse_config("[processing]\nworkers = 2\nsecond_pass_tries = \"bar-sums,guess\"\n",
+                   "line3.toml");
+  ASSERT_FALSE(bad_try.ok());
+  EXPECT_NE(bad_try.error().find("line3.toml:3"), std::string::npos) << bad_try.error();
+  EXPECT_NE(bad_try.error().find("'guess' is not a second-pass try"), std::string::npos)
+      << bad_try.error();
+  const auto tries_type = parse_config("[processing]\nsecond_pass_tries = 3\n", "line3.toml");
+  ASSERT_FALSE(tries_type.ok());
+  EXPECT_NE(tries_type.error().find("processing.second_pass_tries"), std::string::npos)
+      << tries_type.error();
+
   // The method: "cascade" (the example's and the default) or one method everywhere; the
   // cascade's budget "auto" or ms per frame within 0..1e6.
   EXPECT_TRUE(config.processing.cascade);

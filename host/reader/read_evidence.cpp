@@ -1,0 +1,101 @@
+// ZXing 1.4 returns UTF-8 std::string from Result::text() only with ZX_USE_UTF8.
+#define ZX_USE_UTF8 1
+
+#include "reader/read_evidence.hpp"
+
+#include <ZXing/ImageView.h>
+#include <ZXing/ReadBarcode.h>
+#include <ZXing/Result.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+#include "reader/assertion_guard.hpp"
+#include "reader/zbar_reader.hpp"
+
+namespace flutterscan::reader {
+namespace {
+
+bool same_value(const std::string& text, const std::string& format, const DecodedCode& code) {
+  return text == code.text && symbology_family(format) == symbology_family(code.format);
+}
+
+/// Whether ZXing (`hints`) reads `code`'s value in `view`.
+bool zxing_reads(const ZXing::ImageView& view, const ZXing::DecodeHints& hints,
+                 const DecodedCode& code) {
+  ZXing::Results results;
+  const std::string fault =
+      run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, hints); });
+  return fault.empty() && std::any_of(results.begin(), results.end(), [&](const auto& r) {
+           return r.isValid() && same_value(r.text(), ZXing::ToString(r.format()), code);
+         });
+}
+
+/// Whether zbar reads `code`'s value in the packed luminance `lum`.
+bool zbar_reads(std::span<const std::uint8_t> lum, int width, int height,
+                const std::string& symbologies, bool try_rotate, const DecodedCode& code) {
+  const std::vector<ZbarSymbol> symbols = zbar_read(lum, width, height, symbologies, try_rotate);
+  return std::any_of(symbols.begin(), symbols.end(),
+                     [&](const ZbarSymbol& s) { return same_value(s.text, s.format, code); });
+}
+
+}  // namespace
+
+bool weak_check(const std::string& format) {
+  static const std::array<std::string, 7> kWeak = {"EAN-13", "EAN-8", "UPC-A", "UPC-E",
+                                                   "ITF",    "Code39", "Codabar"};
+  return std::find(kWeak.begin(), kWeak.end(), format) != kWeak.end();
+}
+
+std::string symbology_family(const std::string& format) {
+  if (format == "EAN-13" || format == "EAN-8" || format == "UPC-A" || format == "UPC-E")
+    return "EAN/UPC";
+  return format;
+}
+
+std::string corroboration(const DecodedCode& code, const LumWindow& window,
+                          const ZXing::DecodeHints& hints, const std::string& symbologies,
+                          bool try_rotate) {
+  // The symbol's centre across its bars, in the window: the halves meet there.
+  const double turn = code.orientation_deg * std::numbers::pi / 180;
+  const bool along_x = std::abs(std::cos(turn)) >= std::abs(std::sin(turn));
+  const int across = along_x ? window.height : window.width;
+  const int cut = static_cast<int>(
+      std::lround(along_x ? code.centre_y - window.y0 : code.centre_x - window.x0));
+  const bool zxing = code.decoder == "zxing";
+  if (cut > 0 && cut < across) {
+    bool both = true;
+    for (const auto& [from, to] : {std::pair{0, cut}, std::pair{cut, across}}) {
+      // The half as packed rows (a half of columns is copied out).
+      std::vector<std::uint8_t> half;
+      const int w = along_x ? window.width : to - from, h = along_x ? to - from : window.height;
+      if (along_x) {
+        const auto first = window.lum.begin() + static_cast<std::ptrdiff_t>(from) * window.width;
+        half.assign(first, first + static_cast<std::ptrdiff_t>(h) * window.width);
+      } else {
+        half.reserve(static_cast<std::size_t>(w) * h);
+        for (int y = 0; y < h; ++y) {
+          const auto row = window.lum.begin() + static_cast<std::ptrdiff_t>(y) * window.width;
+          half.insert(half.end(), row + from, row + to);
+        }
+      }
+      const bool reads =
+          zxing ? zxing_reads(ZXing::ImageView(half.data(), w, h, ZXing::ImageFormat::Lum), hints,
+                              code)
+                : zbar_reads(half, w, h, symbologies, try_rotate, code);
+      if (!reads) {
+        both = false;
+        break;
+      }
+    }
+    if (both) return "halves";
+  }
+  if (zxing && zbar_reads(window.lum, window.width, window.height, symbologies, try_rotate, code))
+    return "decoders";
+  return "";
+}
+
+}  // namespace flutterscan::reader

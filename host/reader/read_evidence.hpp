@@ -1,0 +1,52 @@
+#pragma once
+// What backs a value (docs/algorithms.md, "Evidence for every value"). A
+// symbology whose own check is strong (Code 128's mod-103 character, Code 93's
+// two, the Reed-Solomon codes of QR, Data Matrix, Aztec and PDF417) vouches for
+// its value. One whose check is weak does not: an EAN or UPC check digit
+// catches one digit read wrong but lets one in ten two-digit errors through, and
+// ITF, Code 39 and Codabar carry none that ZXing checks. Their values count
+// only when a second, independent reading agrees: the symbol cut across its
+// bars into two halves, each read on its own, gives the same value in both (the
+// deblur works row by row, so the halves' noise is independent: a misread that
+// noise makes would have to repeat on other noise), or the other decoder reads
+// the same value in the window. Used by read_barcodes() only.
+
+#include <ZXing/DecodeHints.h>
+
+#include <cstdint>
+#include <span>
+#include <string>
+
+#include "reader/barcode_reader.hpp"
+
+namespace flutterscan::reader {
+
+/// \brief Whether `format` (ZXing's name) has only a weak check (EAN-13, EAN-8,
+/// UPC-A, UPC-E, ITF, Code 39, Codabar): its values need a second reading.
+bool weak_check(const std::string& format);
+
+/// \brief The symbology family `format` belongs to: "EAN/UPC" for EAN-13,
+/// EAN-8, UPC-A and UPC-E (one symbol's bars can decode as more than one of
+/// them), else the format itself.
+std::string symbology_family(const std::string& format);
+
+/// \brief A window's luminance as a decoder saw it: `lum` packed rows of
+/// `width` x `height`, its top left at (x0, y0) of the latent.
+struct LumWindow {
+  std::span<const std::uint8_t> lum;
+  int width = 0, height = 0;
+  int x0 = 0, y0 = 0;
+};
+
+/// \brief What backs `code` (a value of a weak-check symbology read by
+/// code.decoder in `window`): "halves" where the window cut in two across the
+/// symbol's bars at its centre reads the same value in each half (by ZXing with
+/// `hints`, or by zbar for a value zbar read), "decoders" where the other
+/// decoder reads it in the window (zbar for a value ZXing read), else empty:
+/// nothing does, and the value is not reported. `symbologies` and `try_rotate`
+/// as read_barcodes() takes them.
+std::string corroboration(const DecodedCode& code, const LumWindow& window,
+                          const ZXing::DecodeHints& hints, const std::string& symbologies,
+                          bool try_rotate);
+
+}  // namespace flutterscan::reader

@@ -1,0 +1,105 @@
+// What backs a value: a weak-check symbology's read counts only where a second
+// reading agrees (read_evidence.hpp).
+#include "reader/read_evidence.hpp"
+
+#include <gtest/gtest.h>
+
+#include <random>
+#include <string>
+#include <vector>
+
+#include "reader/barcode_reader.hpp"
+#include "sim/scene.hpp"
+
+namespace flutterscan::reader {
+namespace {
+
+imaging::Plane rendered(const std::string& scene, int width, int height, double module_px) {
+  auto spec = sim::parse_scene(scene);
+  EXPECT_TRUE(spec.ok()) << spec.error();
+  spec.value().width = width;
+  spec.value().height = height;
+  spec.value().module_px = module_px;
+  auto plane = sim::render_scene(spec.value());
+  EXPECT_TRUE(plane.ok()) << plane.error();
+  return plane.value();
+}
+
+TEST(ReadEvidence, WeakChecksAreTheEanUpcFamilyItfCode39AndCodabar) {
+  for (const char* weak : {"EAN-13", "EAN-8", "UPC-A", "UPC-E", "ITF", "Code39", "Codabar"})
+    EXPECT_TRUE(weak_check(weak)) << weak;
+  for (const char* strong : {"Code128", "Code93", "QRCode", "DataMatrix", "Aztec", "PDF417"})
+    EXPECT_FALSE(weak_check(strong)) << strong;
+  EXPECT_EQ(symbology_family("UPC-E"), symbology_family("EAN-13"));
+  EXPECT_EQ(symbology_family("UPC-A"), symbology_family("EAN-8"));
+  EXPECT_NE(symbology_family("Code39"), symbology_family("EAN-13"));
+}
+
+TEST(ReadEvidence, AnEan13ReadsOnBothHalvesOfItsBarsACode128IsBackedByItsCheck) {
+  const imaging::Plane ean = rendered("ean13:590123412345", 480, 240, 2.5);
+  const BarcodeReadout read = read_barcodes(ean);
+  ASSERT_EQ(read.codes.size(), 1u);
+  EXPECT_EQ(read.codes[0].text, "5901234123457");
+  EXPECT_EQ(read.codes[0].evidence, "halves");
+  EXPECT_TRUE(read.unconfirmed.empty());
+  const BarcodeReadout code128 = read_barcodes(rendered("code128:PARCEL-0042", 480, 240, 2.5));
+  ASSERT_EQ(code128.codes.size(), 1u);
+  EXPECT_EQ(code128.codes[0].evidence, "check");
+}
+
+TEST(ReadEvidence, AValueTheHalvesDoNotReadIsNotBacked) {
+  // The label's bars, and a value they do not encode (its fifth digit 2 -> 9,
+  // the check digit made to pass) said to lie where they are: neither half
+  // nor zbar reads it.
+  const imaging::Plane ean = rendered("ean13:590123412345", 480, 240, 2.5);
+  const BarcodeReadout read = read_barcodes(ean);
+  ASSERT_EQ(read.codes.size(), 1u);
+  DecodedCode misread = read.codes[0];
+  misread.text = "5901934123450";
+  std::vector<std::uint8_t> lum(ean.pixels.size());
+  for (std::size_t i = 0; i < lum.size(); ++i)
+    lum[i] = static_cast<std::uint8_t>(std::clamp(ean.pixels[i], 0.0f, 1.0f) * 255 + 0.5f);
+  ZXing::DecodeHints hints;
+  hints.setFormats(ZXing::BarcodeFormat::LinearCodes).setTryHarder(true);
+  const LumWindow window{lum, ean.width, ean.height, 0, 0};
+  EXPECT_EQ(corroboration(read.codes[0], window, hints, kDefaultSymbologies, true), "halves");
+  EXPECT_EQ(corroboration(misread, window, hints, kDefaultSymbologies, true), "");
+  // Cut across its bars at the symbol's centre: a symbol whose centre is said
+  // to lie off the window has no halves, and zbar alone backs ZXing's value.
+  DecodedCode off = read.codes[0];
+  off.centre_y = -5;
+  EXPECT_EQ(corroboration(off, window, hints, kDefaultSymbologies, true), "decoders");
+}
+
+TEST(ReadEvidence, OneHalfDrownedInNoiseLeavesTheSecondDecoderAsTheOnlyBacking) {
+  // The bottom half of the label drowned in noise: ZXing reads the top half's
+  // rows, the halves do not both read; zbar reads the clean rows too.
+  imaging::Plane ean = rendered("ean13:590123412345", 480, 240, 2.5);
+  std::mt19937_64 rng(7);
+  std::normal_distribution<float> noise(0.0f, 0.8f);
+  for (int y = ean.height / 2; y < ean.height; ++y)
+    for (int x = 0; x < ean.width; ++x) ean.at(x, y) += noise(rng);
+  const BarcodeReadout read = read_barcodes(ean);
+  ASSERT_EQ(read.codes.size(), 1u);
+  EXPECT_EQ(read.codes[0].text, "5901234123457");
+  EXPECT_EQ(read.codes[0].evidence, "decoders");
+}
+
+TEST(ReadEvidence, AnUpcEAndAnEan13OverOnePlaceConflict) {
+  DecodedCode ean;
+  ean.text = "5201815331227";
+  ean.format = "EAN-13";
+  ean.quality.corners = {{{100, 50}, {300, 50}, {300, 120}, {100, 120}}};
+  ean.centre_x = 200;
+  ean.centre_y = 85;
+  DecodedCode upce = ean;
+  upce.text = "12058754";
+  upce.format = "UPC-E";
+  upce.quality.corners = {{{150, 60}, {290, 60}, {290, 110}, {150, 110}}};
+  std::vector<DecodedCode> codes = {ean, upce};
+  drop_conflicting(codes);
+  EXPECT_TRUE(codes.empty());
+}
+
+}  // namespace
+}  // namespace flutterscan::reader
