@@ -104,8 +104,8 @@ struct Subject {
   std::string text;  ///< empty: no code in it (a negative)
   sim::SceneSpec spec;
   bool photo = true;
-  bool original_reads = false;     ///< the reader reads the photo file itself (the ceiling)
-  std::set<std::string> seconds;   ///< other texts the reader reads on the photo file
+  bool original_reads = false;    ///< the reader reads the photo file itself (the ceiling)
+  std::set<std::string> seconds;  ///< other texts the reader reads on the photo file
 };
 
 /// One reported value.
@@ -167,10 +167,10 @@ std::vector<Subject> photo_subjects(const std::string& dir) {
 
 /// Rendered print with no code in it: text of several sizes, on paper with texture.
 std::vector<Subject> rendered_negatives() {
-  const std::vector<std::string> texts = {
-      "SHIP TO: 4410 RIVERSIDE DR 98052 REF 00713", "111 000 111 000 1111 0000 11 00 1",
-      "LOT 2026-11-29 EXP 2027-05 BATCH 88213 QTY 24",
-      "IIII lllll IIIII 11111 lllll IIII ||||| 1111"};
+  const std::vector<std::string> texts = {"SHIP TO: 4410 RIVERSIDE DR 98052 REF 00713",
+                                          "111 000 111 000 1111 0000 11 00 1",
+                                          "LOT 2026-11-29 EXP 2027-05 BATCH 88213 QTY 24",
+                                          "IIII lllll IIIII 11111 lllll IIII ||||| 1111"};
   std::vector<Subject> out;
   int n = 0;
   for (const std::string& text : texts)
@@ -262,8 +262,7 @@ std::optional<imaging::Image> kept_frame(const fs::path& path) {
 }
 
 /// `flutterscan deblur --decode`'s reading of a frame (its picture beyond the windows aside).
-std::vector<reader::DecodedCode> cascade_read(const imaging::Image& dn,
-                                              imaging::CaptureModel model,
+std::vector<reader::DecodedCode> cascade_read(const imaging::Image& dn, imaging::CaptureModel model,
                                               const session::SecondPassTries& tries) {
   auto frame = imaging::MotionFrame::make(imaging::dn_to_electrons(dn, model), model.direction);
   if (!frame.ok()) throw std::runtime_error(frame.error());
@@ -368,8 +367,10 @@ int run(const Options& o) {
                              reader::whole_frame_options())
               .readout;
       for (const reader::DecodedCode& c : original.codes) {
-        if (c.text == subject.text) subject.original_reads = true;
-        else subject.seconds.insert(c.text);
+        if (c.text == subject.text)
+          subject.original_reads = true;
+        else
+          subject.seconds.insert(c.text);
       }
     }
     for (const double turn : o.turns) {
@@ -386,11 +387,11 @@ int run(const Options& o) {
             for (int seed = 0; seed < o.seeds; ++seed) {
               const bench::SessionLine line(subject.spec.width, subject.spec.height, kBlurPx,
                                             electrons);
-              const std::uint64_t noise_seed = std::hash<std::string>{}(subject.name + scene +
-                                                                        motion) +
-                                               static_cast<std::uint64_t>(electrons) +
-                                               static_cast<std::uint64_t>(seed) * 0x9E3779B97F4A7C15ULL +
-                                               static_cast<std::uint64_t>(turn * 1000);
+              const std::uint64_t noise_seed =
+                  std::hash<std::string>{}(subject.name + scene + motion) +
+                  static_cast<std::uint64_t>(electrons) +
+                  static_cast<std::uint64_t>(seed) * 0x9E3779B97F4A7C15ULL +
+                  static_cast<std::uint64_t>(turn * 1000);
               std::ostringstream key;
               key << subject.name << "-" << scene << "-" << electrons << "-" << motion << "-"
                   << seed << "-" << turn << ".raw";
@@ -412,16 +413,22 @@ int run(const Options& o) {
                   const auto t0 = std::chrono::steady_clock::now();
                   std::vector<reader::DecodedCode> codes;
                   if (path != "cascade") {
-                    const bench::SessionLine session(subject.spec.width, subject.spec.height,
-                                                     kBlurPx, electrons,
-                                                     reader::ReaderOptions{}.area, tries,
-                                                     second_pass_credit_ms(path));
+                    const bench::SessionLine session(
+                        subject.spec.width, subject.spec.height, kBlurPx, electrons,
+                        reader::ReaderOptions{}.area, tries, second_pass_credit_ms(path));
                     codes = session.read(*dn);
                   } else {
                     codes = cascade_read(*dn, line.model(), tries);
                   }
-                  FrameRun run{subject.name, scene, motion, path, tries_name, electrons,
-                               !subject.text.empty(), false, subject.original_reads};
+                  FrameRun run{subject.name,
+                               scene,
+                               motion,
+                               path,
+                               tries_name,
+                               electrons,
+                               !subject.text.empty(),
+                               false,
+                               subject.original_reads};
                   run.ms = std::chrono::duration<double, std::milli>(
                                std::chrono::steady_clock::now() - t0)
                                .count();
@@ -439,7 +446,8 @@ int run(const Options& o) {
                       verdict = "misread";
                     run.read_right |= verdict == "right";
                     if (verdict == "misread" || verdict == "unexpected")
-                      std::cerr << "\n" << verdict << ": " << path << " " << tries_name << " "
+                      std::cerr << "\n"
+                                << verdict << ": " << path << " " << tries_name << " "
                                 << subject.name << " " << scene << " " << electrons << " e- "
                                 << motion << " seed " << seed << ": " << code.text << " ("
                                 << code.format << ", " << code.decoder << ", " << code.pass
@@ -496,11 +504,12 @@ int run(const Options& o) {
         if (r.positive) positive_subjects.insert(r.subject);
       std::cout << "| " << path << " | " << tries_name << " | " << positives << " | " << right
                 << " | " << ceiling_read << " / " << ceiling << " | " << rate(misreads, reads)
-                << " | " << rate(static_cast<int>(misread_photos.size()),
-                                 static_cast<int>(positive_subjects.size()))
-                << " | " << negatives << " | " << rate(unexpected, negatives) << " | "
-                << std::fixed << std::setprecision(0) << (ms.empty() ? 0 : ms[ms.size() / 2])
-                << std::defaultfloat << " |\n";
+                << " | "
+                << rate(static_cast<int>(misread_photos.size()),
+                        static_cast<int>(positive_subjects.size()))
+                << " | " << negatives << " | " << rate(unexpected, negatives) << " | " << std::fixed
+                << std::setprecision(0) << (ms.empty() ? 0 : ms[ms.size() / 2]) << std::defaultfloat
+                << " |\n";
     }
   // Per try and decoder: what each reported, right and wrong.
   std::cout << "\nBy the latent a value was read on (pass) and its decoder\n\n"
@@ -510,8 +519,8 @@ int run(const Options& o) {
   for (const Report& r : reports) ++by[{r.path, r.tries, r.pass, r.decoder}][r.verdict];
   for (auto& [key, counts] : by)
     std::cout << "| " << key[0] << " | " << key[1] << " | " << key[2] << " | " << key[3] << " | "
-              << counts["right"] << " | " << counts["second"] << " | " << counts["misread"]
-              << " | " << counts["unexpected"] << " |\n";
+              << counts["right"] << " | " << counts["second"] << " | " << counts["misread"] << " | "
+              << counts["unexpected"] << " |\n";
   std::cout << "\nEvery misread and unexpected read\n\n"
                "| path | tries | subject | scene | e- | motion | seed | turn | read | format | "
                "decoder | pass | truth |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";

@@ -9,6 +9,8 @@
 
 #include <string>
 
+#include <utility>
+
 #include "flutterscan/common/result.hpp"
 #include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
@@ -33,6 +35,23 @@ inline int length_along_motion(Direction direction, int width, int height) {
 /// `height` frame, mirrored for -x and -y so that objects move toward larger
 /// values (the column of that pixel in the motion frame).
 double position_along_motion(Direction direction, double x, double y, int width, int height);
+
+/// \brief The camera's (x, y) of motion-frame sample `n` of line `line`, for a
+/// motion frame `along` samples long: the inverse of to_motion_frame's arrangement.
+template <typename T>
+std::pair<T, T> camera_point(Direction direction, T n, T line, int along) {
+  switch (direction) {
+    case Direction::kPlusX:
+      return {n, line};
+    case Direction::kMinusX:
+      return {along - 1 - n, line};
+    case Direction::kPlusY:
+      return {line, n};
+    case Direction::kMinusY:
+      return {line, along - 1 - n};
+  }
+  return {n, line};
+}
 
 /// \brief A camera frame's channels in the motion frame, made once per frame
 /// and checked then (image_checks.hpp: every stage may rely on planes of one

@@ -49,6 +49,11 @@ std::string linear_symbologies(const std::string& symbologies) {
   return linear.empty() ? std::string() : ZXing::ToString(linear);
 }
 
+bool names_symbology(const std::string& symbologies, const std::string& format) {
+  return ZXing::BarcodeFormatsFromString(symbologies)
+      .testFlag(ZXing::BarcodeFormatFromString(format));
+}
+
 namespace {
 
 /// Reflectance 0..1 to sRGB-encoded 8-bit, in kSrgbSteps steps of linear light.

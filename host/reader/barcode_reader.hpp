@@ -42,6 +42,11 @@ inline constexpr int kLuminanceViews = 5;
 /// processing.symbologies gives them); empty if it names none.
 std::string linear_symbologies(const std::string& symbologies);
 
+/// \brief Whether `symbologies` (ZXing's names, comma-separated, as
+/// check_symbologies() passes them) names `format`, as ZXing parses both
+/// ("EAN-13", "EAN13" and "ean13" are one).
+bool names_symbology(const std::string& symbologies, const std::string& format);
+
 /// \brief The view's name in logs: "linear", "srgb", "srgb-from-black", "srgb-to-paper",
 /// "smoothed-from-black".
 std::string luminance_view_name(LuminanceView view);
@@ -157,8 +162,8 @@ struct DecodeWindow {
 /// cut by it and not taken for a read (it can decode to another value that
 /// passes its check). A value of a weak-check symbology counts only where a
 /// second reading backs it (read_evidence.hpp; else it goes to `unconfirmed`
-/// and the window is read on in its next view). Positions are the latent's. `try_rotate`: also look for
-/// 1-D codes turned by 90 degrees (about twice the decode time).
+/// and the window is read on in its next view). Positions are the latent's. `try_rotate`: also look
+/// for 1-D codes turned by 90 degrees (about twice the decode time).
 BarcodeReadout read_barcodes(const imaging::Plane& latent,
                              const std::string& symbologies = kDefaultSymbologies,
                              bool try_rotate = true, std::span<const DecodeWindow> windows = {});

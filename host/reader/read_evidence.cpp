@@ -45,7 +45,7 @@ bool zbar_reads(std::span<const std::uint8_t> lum, int width, int height,
 }  // namespace
 
 bool weak_check(const std::string& format) {
-  static const std::array<std::string, 7> kWeak = {"EAN-13", "EAN-8", "UPC-A", "UPC-E",
+  static const std::array<std::string, 7> kWeak = {"EAN-13", "EAN-8",  "UPC-A",  "UPC-E",
                                                    "ITF",    "Code39", "Codabar"};
   return std::find(kWeak.begin(), kWeak.end(), format) != kWeak.end();
 }

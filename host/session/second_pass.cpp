@@ -78,23 +78,6 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-/// Camera (x, y) of motion-frame sample `n` of line `line` (the inverse of
-/// imaging::to_motion_frame's arrangement), for a motion frame `along` long.
-template <typename T>
-std::pair<T, T> camera_point(imaging::Direction direction, T n, T line, int along) {
-  switch (direction) {
-    case imaging::Direction::kPlusX:
-      return {n, line};
-    case imaging::Direction::kMinusX:
-      return {along - 1 - n, line};
-    case imaging::Direction::kPlusY:
-      return {line, n};
-    case imaging::Direction::kMinusY:
-      return {line, along - 1 - n};
-  }
-  return {n, line};
-}
-
 /// An EAN-13 on a window's bar sums read by fit (reader::read_ean13_by_fit):
 /// along the middle row of the longest run of rows across the bars, over the
 /// whole row (the bars' box, judged in 64 px tiles, cut ean13-2-05 of the
@@ -394,11 +377,8 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
   imaging::DeblurOptions tv_sums = tv;
   tv_sums.tv_weight_per_noise = kBarSumsTvWeight;
   const std::string linear = reader::linear_symbologies(options.symbologies);
-  auto names = [&](const char* format) {
-    return ("," + options.symbologies + ",").find(std::string(",") + format + ",") !=
-           std::string::npos;
-  };
-  const bool reads_ean13 = names("EAN-13"), reads_upc_a = names("UPC-A");
+  const bool reads_ean13 = reader::names_symbology(options.symbologies, "EAN-13"),
+             reads_upc_a = reader::names_symbology(options.symbologies, "UPC-A");
   const imaging::Plane& camera =
       frame.camera_latent != nullptr ? *frame.camera_latent : frame.motion_latent;
   for (const reader::LabelRegion& run : unread) {
@@ -436,7 +416,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
     auto paste = [&](const imaging::Plane& patch, std::span<const reader::DecodedCode> codes = {}) {
       for (int y = r0; y < r1; ++y)
         for (int n = keep0; n < keep1; ++n) {
-          const auto [x, cy] = camera_point(direction, n, y, along);
+          const auto [x, cy] = imaging::camera_point(direction, n, y, along);
           if (!codes.empty() && std::none_of(codes.begin(), codes.end(),
                                              [&](const auto& c) { return on_code_rows(c, cy); }))
             continue;
@@ -601,7 +581,8 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
               // Measured on the sums it was read on, in the camera's coordinates.
               reader::CodeCorners corners = code.quality.corners;
               for (reader::CodePoint& p : corners) {
-                const auto [cx, cy] = camera_point<double>(direction, p.x + c0, p.y + r0, along);
+                const auto [cx, cy] =
+                    imaging::camera_point<double>(direction, p.x + c0, p.y + r0, along);
                 p = {cx, cy};
               }
               paste(sums);
@@ -682,7 +663,7 @@ reader::BarcodeReadout read_with_cascade(const SecondPassFrame& frame,
   const int along = frame.electrons.along();
   for (int y = 0; y < frame.electrons.lines(); ++y)
     for (int n = 0; n < along; ++n) {
-      const auto [x, cy] = camera_point(direction, n, y, along);
+      const auto [x, cy] = imaging::camera_point(direction, n, y, along);
       if (std::any_of(pass.retried.begin(), pass.retried.end(),
                       [&](const WindowRetry& r) { return inside(r.window, x, cy); }))
         continue;

@@ -38,8 +38,8 @@ std::optional<SecondPassTries> parse_second_pass_tries(const std::string& names,
         known = true;
       }
     if (!known) {
-      problem = "'" + name + "' is not a second-pass try (" + kSecondPassTryNames +
-                ", or none, or all)";
+      problem =
+          "'" + name + "' is not a second-pass try (" + kSecondPassTryNames + ", or none, or all)";
       return std::nullopt;
     }
   }

@@ -421,6 +421,14 @@ TEST(BarcodeReader, SymbologyListsAreCheckedByName) {
   EXPECT_NE(check_symbologies(""), "");
 }
 
+TEST(BarcodeReader, ASymbologyIsNamedAsZXingParsesTheList) {
+  EXPECT_TRUE(names_symbology("Code128,EAN-13", "EAN-13"));
+  EXPECT_TRUE(names_symbology("Code128, ean13", "EAN-13"));
+  EXPECT_TRUE(names_symbology("EAN13", "EAN-13"));
+  EXPECT_FALSE(names_symbology("Code128,UPC-A", "EAN-13"));
+  EXPECT_FALSE(names_symbology("EAN-8", "EAN-13"));
+}
+
 TEST(BarcodeReader, TheLinearSymbologiesOfAListAreAListOfTheirOwn) {
   const std::string linear = linear_symbologies("Code128,EAN-13,QRCode,DataMatrix");
   EXPECT_EQ(check_symbologies(linear), "") << linear;  // a list the reader takes

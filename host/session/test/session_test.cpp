@@ -350,14 +350,12 @@ TEST(SessionConfigFile, ReadsTheAnnotatedExampleAndNamesBadKeys) {
 
   // The second pass's tries, by name; an unknown one is refused by name with its line.
   EXPECT_EQ(config.processing.second_pass_tries, SecondPassTries{});
-  const auto every_try =
-      parse_config("[processing]\nsecond_pass_tries = \"all\"\n", "line3.toml");
+  const auto every_try = parse_config("[processing]\nsecond_pass_tries = \"all\"\n", "line3.toml");
   ASSERT_TRUE(every_try.ok()) << every_try.error();
   EXPECT_TRUE(every_try.value().processing.second_pass_tries.fit);
   EXPECT_TRUE(every_try.value().processing.second_pass_tries.tv_on_sums);
-  const auto bad_try =
-      parse_config("[processing]\nworkers = 2\nsecond_pass_tries = \"bar-sums,guess\"\n",
-                   "line3.toml");
+  const auto bad_try = parse_config(
+      "[processing]\nworkers = 2\nsecond_pass_tries = \"bar-sums,guess\"\n", "line3.toml");
   ASSERT_FALSE(bad_try.ok());
   EXPECT_NE(bad_try.error().find("line3.toml:3"), std::string::npos) << bad_try.error();
   EXPECT_NE(bad_try.error().find("'guess' is not a second-pass try"), std::string::npos)
