@@ -537,11 +537,11 @@ int run(const Options& o) {
     csv << "kind,path,tries,subject,scene,electrons,motion,seed,turn,text,format,decoder,pass,"
            "verdict,ms,ceiling\n";
     for (const Report& r : reports)
-      csv << "read," << r.path << "," << r.tries << "," << r.subject << "," << r.scene << ","
+      csv << "read," << r.path << ",\"" << r.tries << "\"," << r.subject << "," << r.scene << ","
           << r.electrons << "," << r.motion << "," << r.seed << "," << r.turn << ",\"" << r.text
           << "\"," << r.format << "," << r.decoder << "," << r.pass << "," << r.verdict << ",,\n";
     for (const FrameRun& r : runs)
-      csv << "frame," << r.path << "," << r.tries << "," << r.subject << "," << r.scene << ","
+      csv << "frame," << r.path << ",\"" << r.tries << "\"," << r.subject << "," << r.scene << ","
           << r.electrons << "," << r.motion << ",,,,,,,"
           << (r.positive ? (r.read_right ? "read" : "no-read") : "negative") << "," << r.ms << ","
           << r.ceiling << "\n";

@@ -300,7 +300,8 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
                              bool try_rotate, std::span<const DecodeWindow> windows) {
   BarcodeReadout out;
   if (latent.empty()) return out;
-  std::vector<std::uint8_t> lum;  // one window at a time
+  std::vector<std::uint8_t> lum;       // one window at a time
+  std::vector<std::uint8_t> zbar_lum;  // the window in zbar's view, made where a read needs it
   ZXing::DecodeHints hints;
   hints.setFormats(ZXing::BarcodeFormatsFromString(symbologies))
       .setTryHarder(true)
@@ -324,6 +325,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
     const int x1 = std::clamp(w.x + w.width, x0, latent.width),
               y1 = std::clamp(w.y + w.height, y0, latent.height);
     if (x1 - x0 < 1 || y1 - y0 < 1) continue;
+    zbar_lum.clear();
     // A window mostly inside one that read a code is there for what that one
     // missed: read again, the same label cost a whole decode (a code region on
     // its label's paper reaches a little past the paper's window). One that
@@ -374,8 +376,11 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
         if (!result.isValid() || cut_along_reading(result, x1 - x0, y1 - y0)) continue;
         DecodedCode code = decoded_code(result, x0, y0, latent);
         code.luminance = luminance;
-        if (!backed(code, {lum, x1 - x0, y1 - y0, x0, y0}, linear_hints, symbologies, try_rotate,
-                    out.unconfirmed))
+        if (weak_check(code.format) && luminance != LuminanceView::kSrgbFromBlack &&
+            zbar_lum.empty())
+          to_luminance(latent, x0, y0, x1, y1, LuminanceView::kSrgbFromBlack, zbar_lum);
+        if (!backed(code, {lum, x1 - x0, y1 - y0, x0, y0, zbar_lum}, linear_hints, symbologies,
+                    try_rotate, out.unconfirmed))
           continue;
         any = true;
         if (!already_read(out.codes, code)) out.codes.push_back(std::move(code));
@@ -397,7 +402,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
         continue;
       DecodedCode code = decoded_code(symbol, x0, y0, latent);
       if (!quiet_zones_clear(code, latent) ||
-          !backed(code, {lum, x1 - x0, y1 - y0, x0, y0}, linear_hints, symbologies, try_rotate,
+          !backed(code, {lum, x1 - x0, y1 - y0, x0, y0, {}}, linear_hints, symbologies, try_rotate,
                   out.unconfirmed))
         continue;
       any = true;

@@ -75,8 +75,8 @@ struct DecodedCode {
   std::string pass = "first";
   /// What backs the value (read_evidence.hpp): "check" (its symbology's own
   /// check is strong), "halves" (a weak-check symbology read alike on both
-  /// halves of its bars, each on its own), "decoders" (read alike by ZXing and
-  /// zbar), or "fit" (an EAN-13 read by fit, its characters' margins).
+  /// halves of its bars, each on its own; for an EAN-13 read by fit, two rows
+  /// of its bar sums that share no row), or "decoders" (read alike by ZXing and zbar).
   std::string evidence;
   /// Where it lies (corners refined on the image for linear codes), its module
   /// size and its indicative print quality (measure_code()).

@@ -93,8 +93,11 @@ std::string corroboration(const DecodedCode& code, const LumWindow& window,
     }
     if (both) return "halves";
   }
-  if (zxing && zbar_reads(window.lum, window.width, window.height, symbologies, try_rotate, code))
-    return "decoders";
+  if (zxing)
+    for (const auto lum : {window.lum, window.zbar_lum})
+      if (!lum.empty() &&
+          zbar_reads(lum, window.width, window.height, symbologies, try_rotate, code))
+        return "decoders";
   return "";
 }
 

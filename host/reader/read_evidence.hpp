@@ -31,18 +31,21 @@ bool weak_check(const std::string& format);
 std::string symbology_family(const std::string& format);
 
 /// \brief A window's luminance as a decoder saw it: `lum` packed rows of
-/// `width` x `height`, its top left at (x0, y0) of the latent.
+/// `width` x `height`, its top left at (x0, y0) of the latent; `zbar_lum` the
+/// same window in the view zbar reads (LuminanceView::kSrgbFromBlack).
 struct LumWindow {
   std::span<const std::uint8_t> lum;
   int width = 0, height = 0;
   int x0 = 0, y0 = 0;
+  std::span<const std::uint8_t> zbar_lum;
 };
 
 /// \brief What backs `code` (a value of a weak-check symbology read by
 /// code.decoder in `window`): "halves" where the window cut in two across the
 /// symbol's bars at its centre reads the same value in each half (by ZXing with
 /// `hints`, or by zbar for a value zbar read), "decoders" where the other
-/// decoder reads it in the window (zbar for a value ZXing read), else empty:
+/// decoder reads it in the window (zbar, in the view ZXing read it in or in
+/// its own, for a value ZXing read), else empty:
 /// nothing does, and the value is not reported. `symbologies` and `try_rotate`
 /// as read_barcodes() takes them.
 std::string corroboration(const DecodedCode& code, const LumWindow& window,

@@ -78,18 +78,20 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
-/// An EAN-13 on a window's bar sums read by fit (reader::read_ean13_by_fit):
-/// along the middle row of the longest run of rows across the bars, over the
-/// whole row (the bars' box, judged in 64 px tiles, cut ean13-2-05 of the
-/// real-print photos 40 px short of its end). `row` and the run's rows say
-/// where.
+/// An EAN-13 on a window's bar sums read by fit (reader::read_ean13_by_fit),
+/// over the whole row (the bars' box, judged in 64 px tiles, cut ean13-2-05 of
+/// the real-print photos 40 px short of its end), on two rows of the longest
+/// run of rows across the bars that sum no row in common (2 `half_rows` + 1
+/// apart): two independent readings, which must agree (a fit has no decoder
+/// to back it otherwise). `row` and the run's rows say where.
 struct FitOnSums {
   reader::FittedRead read;
   int row = 0;
   int first_row = 0, last_row = 0;
 };
 
-FitOnSums read_sums_by_fit(const imaging::Plane& sums, const std::vector<bool>& across) {
+FitOnSums read_sums_by_fit(const imaging::Plane& sums, const std::vector<bool>& across,
+                           int half_rows) {
   FitOnSums out;
   int best = 0;
   for (int y = 0; y < sums.height;) {
@@ -106,14 +108,26 @@ FitOnSums read_sums_by_fit(const imaging::Plane& sums, const std::vector<bool>& 
     }
     y = end;
   }
-  if (best == 0) {
-    out.read.problem = "no row crosses the bars";
+  const int apart = 2 * half_rows + 1;
+  if (best < apart + 1) {
+    out.read.problem = best == 0 ? "no row crosses the bars"
+                                 : "too few rows across the bars for two independent fits";
     return out;
   }
-  out.row = (out.first_row + out.last_row) / 2;
-  std::vector<double> samples;
-  for (int x = 0; x < sums.width; ++x) samples.push_back(sums.at(x, out.row));
-  out.read = reader::read_ean13_by_fit(samples, 0, sums.width);
+  out.row = (out.first_row + out.last_row + 1 - apart) / 2;
+  auto fitted = [&](int row) {
+    std::vector<double> samples;
+    for (int x = 0; x < sums.width; ++x) samples.push_back(sums.at(x, row));
+    return reader::read_ean13_by_fit(samples, 0, sums.width);
+  };
+  out.read = fitted(out.row);
+  if (out.read.text.empty()) return out;
+  const reader::FittedRead other = fitted(out.row + apart);
+  if (other.text != out.read.text) {
+    out.read.problem = "the independent row " + std::to_string(apart) + " rows on read " +
+                       (other.text.empty() ? "nothing (" + other.problem + ")" : other.text);
+    out.read.text.clear();
+  }
   return out;
 }
 
@@ -143,7 +157,7 @@ reader::DecodedCode fitted_code(const FitOnSums& fit, const imaging::BarSlope& s
   }
   code.symbology_id = "]E0";
   code.decoder = "fit";
-  code.evidence = "fit";
+  code.evidence = "halves";
   return code;
 }
 
@@ -567,10 +581,10 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
           // the symbol itself, where EAN-13 is read and the budget holds it (its
           // cost follows the row's length, not the window's pixels: settled
           // outside tv's cost model).
-          const double fit_estimate = kFitMs + kFitMsPerSample * (c1 - c0);
+          const double fit_estimate = 2 * (kFitMs + kFitMsPerSample * (c1 - c0));  // two rows
           if (tries.fit && reads_ean13 && budget.take(fit_estimate)) {
             const auto t2 = std::chrono::steady_clock::now();
-            const FitOnSums fit = read_sums_by_fit(profile.value().latent, across);
+            const FitOnSums fit = read_sums_by_fit(profile.value().latent, across, half_rows);
             BarSumsTry::Checked verdict{fit.read.text, "EAN-13", fit.read.worst_margin,
                                         fit.read.problem, !fit.read.text.empty()};
             if (verdict.kept) {

@@ -117,7 +117,8 @@ struct BarSumsTry {
     double margin = 0;    ///< the worst character's margin, noise variances (0 if not judged)
     std::string problem;  ///< why it was not judged, or (the fit) why nothing was read
     /// The value counts: tv's, judged and every character held by 1 noise
-    /// variance or more; the fit's, read (reader::kMinFittedReadMargin).
+    /// variance or more; the fit's, read alike on two rows of the sums that
+    /// share no row, every character kMinFittedReadMargin clear.
     bool kept = false;
   };
   std::vector<Checked> tv_checked;

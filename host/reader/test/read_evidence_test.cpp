@@ -61,7 +61,7 @@ TEST(ReadEvidence, AValueTheHalvesDoNotReadIsNotBacked) {
     lum[i] = static_cast<std::uint8_t>(std::clamp(ean.pixels[i], 0.0f, 1.0f) * 255 + 0.5f);
   ZXing::DecodeHints hints;
   hints.setFormats(ZXing::BarcodeFormat::LinearCodes).setTryHarder(true);
-  const LumWindow window{lum, ean.width, ean.height, 0, 0};
+  const LumWindow window{lum, ean.width, ean.height, 0, 0, {}};
   EXPECT_EQ(corroboration(read.codes[0], window, hints, kDefaultSymbologies, true), "halves");
   EXPECT_EQ(corroboration(misread, window, hints, kDefaultSymbologies, true), "");
   // Cut across its bars at the symbol's centre: a symbol whose centre is said
