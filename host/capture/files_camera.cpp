@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "capture/backends.hpp"
+#include "imaging/capture_descriptor.hpp"
 
 namespace flutterscan::capture {
 namespace {
@@ -113,6 +114,12 @@ class FilesCamera final : public CameraSource {
       error = "camera " + name() + ": '" + descriptor_path.string() + "' is not a JSON object";
       return false;
     }
+    const auto recorded = imaging::recorded_frame_from_descriptor(descriptor);
+    if (!recorded.ok()) {
+      error = "camera " + name() + ": '" + descriptor_path.string() + "': " + recorded.error();
+      return false;
+    }
+    const imaging::RecordedFrame& r = recorded.value();
     cv::Mat mat = cv::imread(path, cv::IMREAD_UNCHANGED);
     if (mat.empty()) {
       error = "camera " + name() + ": cannot read '" + path + "'";
@@ -125,27 +132,25 @@ class FilesCamera final : public CameraSource {
     }
     if (mat.channels() == 3) cv::cvtColor(mat, mat, cv::COLOR_BGR2RGB);
     const bool wide = mat.depth() == CV_16U;
-    const bool bayer = descriptor.value("bayer", nlohmann::json()).is_string();
     frame.format.width = mat.cols;
     frame.format.height = mat.rows;
     if (mat.channels() == 3)
       frame.format.pixel_format = wide ? PixelFormat::kRgb16 : PixelFormat::kRgb8;
-    else if (bayer)
+    else if (r.bayer_rggb)
       frame.format.pixel_format = wide ? PixelFormat::kBayerRggb16 : PixelFormat::kBayerRggb8;
     else
       frame.format.pixel_format = wide ? PixelFormat::kMono16 : PixelFormat::kMono8;
-    frame.format.bit_depth = descriptor.value("bit_depth", wide ? 16 : 8);
+    frame.format.bit_depth = r.bit_depth.value_or(wide ? 16 : 8);
     frame.format.row_bytes = mat.cols * mat.elemSize();
     frame.data.resize(frame.format.row_bytes * static_cast<std::size_t>(mat.rows));
     for (int y = 0; y < mat.rows; ++y)
       std::copy(mat.ptr<std::uint8_t>(y), mat.ptr<std::uint8_t>(y) + frame.format.row_bytes,
                 frame.data.data() + frame.format.row_bytes * static_cast<std::size_t>(y));
-    const nlohmann::json capture = descriptor.value("capture", nlohmann::json::object());
-    frame.sequence = capture.value("sequence", static_cast<std::uint64_t>(index));
+    frame.sequence = r.sequence.value_or(index);
     frame.timestamp_ns =
-        capture.value("timestamp_ns", static_cast<std::int64_t>(index) * kDefaultFramePeriodNs);
-    frame.truth = capture.value("truth", std::vector<std::string>{});
-    frame.truth_in_view = capture.value("truth_in_view", std::vector<std::string>{});
+        r.timestamp_ns.value_or(static_cast<std::int64_t>(index) * kDefaultFramePeriodNs);
+    frame.truth = r.truth;
+    frame.truth_in_view = r.truth_in_view;
     frame.host_arrival_ns = steady_now_ns();
     frame.descriptor_json = descriptor.dump();
     return true;
