@@ -9,6 +9,7 @@
 #include <fstream>
 
 #include "capture/backends.hpp"
+#include "capture/host_clock.hpp"
 #include "imaging/capture_descriptor.hpp"
 
 namespace flutterscan::capture {
@@ -21,12 +22,6 @@ constexpr std::int64_t kDefaultFramePeriodNs = 33'333'333;
 bool is_image(const fs::path& path) {
   const std::string ext = path.extension().string();
   return ext == ".png" || ext == ".tif" || ext == ".tiff";
-}
-
-std::int64_t steady_now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
 }
 
 class FilesCamera final : public CameraSource {
@@ -151,7 +146,7 @@ class FilesCamera final : public CameraSource {
         r.timestamp_ns.value_or(static_cast<std::int64_t>(index) * kDefaultFramePeriodNs);
     frame.truth = r.truth;
     frame.truth_in_view = r.truth_in_view;
-    frame.host_arrival_ns = steady_now_ns();
+    frame.host_arrival_ns = host_now_ns();
     frame.descriptor_json = descriptor.dump();
     return true;
   }
