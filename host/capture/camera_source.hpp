@@ -135,6 +135,9 @@ struct CameraCounters {
   /// plus frames the backend discarded itself (incomplete buffers).
   std::uint64_t frames_dropped = 0;
   std::uint64_t incomplete_frames = 0;  ///< part of frames_dropped: buffers that arrived broken
+  /// Host time spent making the frames delivered, ms: the sim's rendering (on its
+  /// render threads); 0 for a camera, whose frames the host only receives.
+  double making_ms = 0;
 };
 
 /// \brief What the frame waiter got.

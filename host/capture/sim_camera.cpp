@@ -215,6 +215,7 @@ class SimCamera final : public CameraSource {
     frame = std::move(rendered.frame);
     frame.host_arrival_ns = host_now_ns();
     ++counters_.frames_delivered;
+    counters_.making_ms += rendered.making_ms;
     return FrameWait::kFrame;
   }
 
@@ -245,6 +246,7 @@ class SimCamera final : public CameraSource {
   struct Rendered {
     Frame frame;
     std::string error;
+    double making_ms = 0;  ///< host time it took: rendered, or copied from the ring
   };
 
   /// The camera's timestamp of controller time `controller_us` (its offset and drift).
@@ -356,23 +358,28 @@ class SimCamera final : public CameraSource {
     return out;
   }
 
-  /// `job` from the ring (ring mode), else rendered.
+  /// `job`'s frame copied from the ring (ring mode).
+  Rendered copy_from_ring(const RenderJob& job) const {
+    Rendered out;
+    out.frame = frame_of(job);
+    const std::size_t slot = job.sequence % ring_.size();
+    const Frame& stored = ring_[slot];
+    const std::size_t frame_bytes = ring_samples_.size() / ring_.size();
+    const auto from = ring_samples_.begin() + static_cast<std::ptrdiff_t>(slot * frame_bytes);
+    out.frame.data.assign(from, from + static_cast<std::ptrdiff_t>(frame_bytes));
+    out.frame.truth = stored.truth;
+    out.frame.truth_in_view = stored.truth_in_view;
+    out.frame.truth_labels = stored.truth_labels;
+    out.frame.descriptor_json = stored.descriptor_json;
+    return out;
+  }
+
+  /// `job` from the ring (ring mode), else rendered; timed (making_ms).
   Rendered render_job(const RenderJob& job) {
-    if (!ring_.empty()) {
-      Rendered out;
-      out.frame = frame_of(job);
-      const std::size_t slot = job.sequence % ring_.size();
-      const Frame& stored = ring_[slot];
-      const std::size_t frame_bytes = ring_samples_.size() / ring_.size();
-      const auto from = ring_samples_.begin() + static_cast<std::ptrdiff_t>(slot * frame_bytes);
-      out.frame.data.assign(from, from + static_cast<std::ptrdiff_t>(frame_bytes));
-      out.frame.truth = stored.truth;
-      out.frame.truth_in_view = stored.truth_in_view;
-      out.frame.truth_labels = stored.truth_labels;
-      out.frame.descriptor_json = stored.descriptor_json;
-      return out;
-    }
-    return render_new(job);
+    const std::int64_t start = host_now_ns();
+    Rendered out = ring_.empty() ? render_new(job) : copy_from_ring(job);
+    out.making_ms = static_cast<double>(host_now_ns() - start) * 1e-6;
+    return out;
   }
 
   imaging::CaptureModel model_for(const Lighting& light, double blur) const {
