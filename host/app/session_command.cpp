@@ -89,7 +89,15 @@ void run_session_command(session::SessionConfig config, bool progress,
             << format_number(100 * s.value("mean_decode_rate_per_object", 0.0), 1) << "%\n"
             << "speed    " << format_number(s.value("fps", 0.0), 1) << " fps; latency p50 "
             << format_number(s.value("latency_ms_p50", 0.0), 1) << " ms, p99 "
-            << format_number(s.value("latency_ms_p99", 0.0), 1) << " ms\n";
+            << format_number(s.value("latency_ms_p99", 0.0), 1) << " ms\n"
+            << "capacity " << format_number(s.value("capacity_fps", 0.0), 1) << " fps ("
+            << config.processing.workers << " workers, "
+            << format_number(s.value("frame_stage_ms_mean", 0.0), 1) << " ms of stages a frame)";
+  if (s.contains("camera_making_ms_mean"))
+    std::cout << "; the simulated camera renders a frame in "
+              << format_number(s["camera_making_ms_mean"].get<double>(), 1)
+              << " ms on the same cores";
+  std::cout << "\n";
   if (s.contains("cascade")) {
     const auto& c = s["cascade"];
     std::cout << "cascade  " << c.value("windows_second_pass", 0)

@@ -6,6 +6,7 @@
 #include <cstring>
 
 #include "capture/backends.hpp"
+#include "capture/host_clock.hpp"
 
 namespace flutterscan::capture {
 namespace {
@@ -48,12 +49,6 @@ bool has_feature(ArvCamera* camera, const char* feature) {
   const bool available = arv_camera_is_feature_available(camera, feature, &error);
   g_clear_error(&error);
   return available;
-}
-
-std::int64_t steady_now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
 }
 
 class AravisCamera final : public CameraSource {
@@ -212,7 +207,7 @@ class AravisCamera final : public CameraSource {
       }
       frame.sequence = frame_id;
       frame.timestamp_ns = static_cast<std::int64_t>(arv_buffer_get_timestamp(buffer));
-      frame.host_arrival_ns = steady_now_ns();
+      frame.host_arrival_ns = host_now_ns();
       frame.format.width = arv_buffer_get_image_width(buffer);
       frame.format.height = arv_buffer_get_image_height(buffer);
       frame.format.pixel_format = m->format;

@@ -1,6 +1,6 @@
 #pragma once
 // The built-in camera backends. Each backend's source file defines its
-// function; camera_backends() registers the ones compiled in (the CMake
+// function; camera_backends() lists the ones compiled in (the CMake
 // definitions FLUTTERSCAN_HAVE_V4L2, FLUTTERSCAN_HAVE_ARAVIS,
 // FLUTTERSCAN_HAVE_LIBCAMERA say which).
 

@@ -1,8 +1,6 @@
 #include "capture/camera_source.hpp"
 
-#include <algorithm>
 #include <array>
-#include <mutex>
 #include <utility>
 
 #include "capture/backends.hpp"
@@ -28,48 +26,24 @@ constexpr std::array<PixelFormatEntry, 9> kPixelFormats{{
     {PixelFormat::kMjpeg, "mjpeg", 0},
 }};
 
-struct Registry {
-  std::mutex mutex;
-  std::vector<CameraBackend> backends;
-  bool builtins_registered = false;
-};
-
-Registry& registry() {
-  static Registry instance;
-  return instance;
-}
-
-void add_locked(Registry& reg, CameraBackend backend) {
-  auto same = std::find_if(reg.backends.begin(), reg.backends.end(),
-                           [&](const CameraBackend& b) { return b.scheme == backend.scheme; });
-  if (same != reg.backends.end()) {
-    *same = std::move(backend);
-  } else {
-    reg.backends.push_back(std::move(backend));
-  }
-}
-
-void register_builtins_locked(Registry& reg) {
-  if (reg.builtins_registered) return;
-  reg.builtins_registered = true;
-  std::vector<CameraBackend> builtins;
+/// The backends compiled in (backends.hpp), made on first use.
+const std::vector<CameraBackend>& builtin_backends() {
+  static const std::vector<CameraBackend> backends = [] {
+    std::vector<CameraBackend> all;
 #ifdef FLUTTERSCAN_HAVE_V4L2
-  builtins.push_back(v4l2_camera_backend());
+    all.push_back(v4l2_camera_backend());
 #endif
 #ifdef FLUTTERSCAN_HAVE_ARAVIS
-  builtins.push_back(aravis_camera_backend());
+    all.push_back(aravis_camera_backend());
 #endif
 #ifdef FLUTTERSCAN_HAVE_LIBCAMERA
-  builtins.push_back(libcamera_camera_backend());
+    all.push_back(libcamera_camera_backend());
 #endif
-  builtins.push_back(files_camera_backend());
-  builtins.push_back(sim_camera_backend());
-  // Backends registered explicitly before first use win over built-ins.
-  for (auto& backend : builtins) {
-    bool taken = std::any_of(reg.backends.begin(), reg.backends.end(),
-                             [&](const CameraBackend& b) { return b.scheme == backend.scheme; });
-    if (!taken) reg.backends.push_back(std::move(backend));
-  }
+    all.push_back(files_camera_backend());
+    all.push_back(sim_camera_backend());
+    return all;
+  }();
+  return backends;
 }
 
 }  // namespace
@@ -122,17 +96,8 @@ std::optional<TriggerMode> trigger_mode_from_name(const std::string& name) {
   return std::nullopt;
 }
 
-void register_camera_backend(CameraBackend backend) {
-  auto& reg = registry();
-  std::lock_guard lock(reg.mutex);
-  add_locked(reg, std::move(backend));
-}
-
 std::vector<CameraBackend> camera_backends() {
-  auto& reg = registry();
-  std::lock_guard lock(reg.mutex);
-  register_builtins_locked(reg);
-  return reg.backends;
+  return builtin_backends();
 }
 
 std::unique_ptr<CameraSource> make_camera(const std::string& spec, const CameraContext& context,

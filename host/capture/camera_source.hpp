@@ -1,6 +1,6 @@
 #pragma once
 // One interface for every camera the session can read frames from, and a
-// registry of backends by name: "v4l2:/dev/video0", "aravis:NAME",
+// list of backends by name: "v4l2:/dev/video0", "aravis:NAME",
 // "files:DIR", "sim", "libcamera:ID".
 //
 // Life cycle: open() -> configure() (settings read back from the device) ->
@@ -135,6 +135,9 @@ struct CameraCounters {
   /// plus frames the backend discarded itself (incomplete buffers).
   std::uint64_t frames_dropped = 0;
   std::uint64_t incomplete_frames = 0;  ///< part of frames_dropped: buffers that arrived broken
+  /// Host time spent making the frames delivered, ms: the sim's rendering (on its
+  /// render threads); 0 for a camera, whose frames the host only receives.
+  double making_ms = 0;
 };
 
 /// \brief What the frame waiter got.
@@ -201,10 +204,7 @@ struct CameraBackend {
   std::function<std::vector<CameraInfo>()> list;
 };
 
-/// \brief Adds `backend` to the registry (replacing one of the same scheme).
-void register_camera_backend(CameraBackend backend);
-/// \brief Every registered backend, in registration order. The built-in ones
-/// compiled in (backends.hpp) are registered on first use.
+/// \brief Every backend compiled in (backends.hpp): v4l2, aravis, libcamera, files, sim.
 std::vector<CameraBackend> camera_backends();
 /// \brief Makes the camera named by `spec` ("scheme" or "scheme:argument");
 /// null with `error` naming the spec if the scheme is unknown or the backend refuses.

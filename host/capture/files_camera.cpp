@@ -9,6 +9,8 @@
 #include <fstream>
 
 #include "capture/backends.hpp"
+#include "capture/host_clock.hpp"
+#include "imaging/capture_descriptor.hpp"
 
 namespace flutterscan::capture {
 namespace {
@@ -20,12 +22,6 @@ constexpr std::int64_t kDefaultFramePeriodNs = 33'333'333;
 bool is_image(const fs::path& path) {
   const std::string ext = path.extension().string();
   return ext == ".png" || ext == ".tif" || ext == ".tiff";
-}
-
-std::int64_t steady_now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
 }
 
 class FilesCamera final : public CameraSource {
@@ -113,6 +109,12 @@ class FilesCamera final : public CameraSource {
       error = "camera " + name() + ": '" + descriptor_path.string() + "' is not a JSON object";
       return false;
     }
+    const auto recorded = imaging::recorded_frame_from_descriptor(descriptor);
+    if (!recorded.ok()) {
+      error = "camera " + name() + ": '" + descriptor_path.string() + "': " + recorded.error();
+      return false;
+    }
+    const imaging::RecordedFrame& r = recorded.value();
     cv::Mat mat = cv::imread(path, cv::IMREAD_UNCHANGED);
     if (mat.empty()) {
       error = "camera " + name() + ": cannot read '" + path + "'";
@@ -125,28 +127,26 @@ class FilesCamera final : public CameraSource {
     }
     if (mat.channels() == 3) cv::cvtColor(mat, mat, cv::COLOR_BGR2RGB);
     const bool wide = mat.depth() == CV_16U;
-    const bool bayer = descriptor.value("bayer", nlohmann::json()).is_string();
     frame.format.width = mat.cols;
     frame.format.height = mat.rows;
     if (mat.channels() == 3)
       frame.format.pixel_format = wide ? PixelFormat::kRgb16 : PixelFormat::kRgb8;
-    else if (bayer)
+    else if (r.bayer_rggb)
       frame.format.pixel_format = wide ? PixelFormat::kBayerRggb16 : PixelFormat::kBayerRggb8;
     else
       frame.format.pixel_format = wide ? PixelFormat::kMono16 : PixelFormat::kMono8;
-    frame.format.bit_depth = descriptor.value("bit_depth", wide ? 16 : 8);
+    frame.format.bit_depth = r.bit_depth.value_or(wide ? 16 : 8);
     frame.format.row_bytes = mat.cols * mat.elemSize();
     frame.data.resize(frame.format.row_bytes * static_cast<std::size_t>(mat.rows));
     for (int y = 0; y < mat.rows; ++y)
       std::copy(mat.ptr<std::uint8_t>(y), mat.ptr<std::uint8_t>(y) + frame.format.row_bytes,
                 frame.data.data() + frame.format.row_bytes * static_cast<std::size_t>(y));
-    const nlohmann::json capture = descriptor.value("capture", nlohmann::json::object());
-    frame.sequence = capture.value("sequence", static_cast<std::uint64_t>(index));
+    frame.sequence = r.sequence.value_or(index);
     frame.timestamp_ns =
-        capture.value("timestamp_ns", static_cast<std::int64_t>(index) * kDefaultFramePeriodNs);
-    frame.truth = capture.value("truth", std::vector<std::string>{});
-    frame.truth_in_view = capture.value("truth_in_view", std::vector<std::string>{});
-    frame.host_arrival_ns = steady_now_ns();
+        r.timestamp_ns.value_or(static_cast<std::int64_t>(index) * kDefaultFramePeriodNs);
+    frame.truth = r.truth;
+    frame.truth_in_view = r.truth_in_view;
+    frame.host_arrival_ns = host_now_ns();
     frame.descriptor_json = descriptor.dump();
     return true;
   }

@@ -4,8 +4,11 @@
 // beside it (same name, .json; docs/formats.md). Frames play in name order.
 // An image without a descriptor (a ground truth, a fused output) is skipped.
 // A descriptor's optional "capture" object gives the frame's camera sequence
-// number and timestamp (`sequence`, `timestamp_ns`) as a recorded session
-// writes them; without it the frame index and 1/30 s steps stand in.
+// number and timestamp (`sequence`, `timestamp_ns`) and the labels' values
+// (`truth`, `truth_in_view`) as a recorded session writes them; without it the
+// frame index and 1/30 s steps stand in. The descriptor is read by
+// imaging/capture_descriptor.hpp's reader: a field of the wrong type or range
+// refuses the frame, naming the field and the file.
 
 #include <memory>
 #include <string>

@@ -26,15 +26,10 @@
 #include <sstream>
 
 #include "capture/backends.hpp"
+#include "capture/host_clock.hpp"
 
 namespace flutterscan::capture {
 namespace {
-
-std::int64_t steady_now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 /// libcamera allows one CameraManager per process: the listing and every open camera share one,
 /// started on first use and stopped when the last user lets go.
@@ -283,7 +278,7 @@ class LibcameraCamera final : public CameraSource {
       // the buffer's timestamp.
       const auto sensor_ns = request->metadata().get(libcamera::controls::SensorTimestamp);
       frame.timestamp_ns = sensor_ns ? *sensor_ns : static_cast<std::int64_t>(metadata.timestamp);
-      frame.host_arrival_ns = steady_now_ns();
+      frame.host_arrival_ns = host_now_ns();
       frame.format = format_;
       ++counters_.frames_delivered;
       requeue(request);

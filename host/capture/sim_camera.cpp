@@ -16,6 +16,7 @@
 #include <thread>
 
 #include "capture/backends.hpp"
+#include "capture/host_clock.hpp"
 #include "device/virtual_controller.hpp"
 #include "imaging/capture_descriptor.hpp"
 #include "imaging/limits.hpp"
@@ -25,19 +26,11 @@
 namespace flutterscan::capture {
 namespace {
 
-std::int64_t steady_now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-
 std::string ean13_with_check(std::uint64_t index) {
   char digits[13];
   std::snprintf(digits, sizeof digits, "%012llu",
                 static_cast<unsigned long long>(400000000000ULL + index * 7919ULL));
-  int sum = 0;
-  for (int i = 0; i < 12; ++i) sum += (digits[i] - '0') * (i % 2 == 0 ? 1 : 3);
-  return std::string(digits, 12) + static_cast<char>('0' + (10 - sum % 10) % 10);
+  return std::string(digits, 12) + static_cast<char>('0' + sim::ean13_check_digit(digits));
 }
 
 /// The text after the kind: what a decoder should read.
@@ -178,7 +171,7 @@ class SimCamera final : public CameraSource {
     running_ = true;
     if (o_.ring_frames > 0)
       if (auto problem = prerender_ring(); !problem.empty()) return problem;
-    host_start_ns_ = steady_now_ns();
+    host_start_ns_ = host_now_ns();
     return {};
   }
 
@@ -211,7 +204,7 @@ class SimCamera final : public CameraSource {
       const std::int64_t due = host_start_ns_ + static_cast<std::int64_t>(delivered_) *
                                                     static_cast<std::int64_t>(o_.frame_period_us) *
                                                     1000;
-      const std::int64_t wait = due - steady_now_ns();
+      const std::int64_t wait = due - host_now_ns();
       if (wait > 0) std::this_thread::sleep_for(std::chrono::nanoseconds(wait));
     }
     ++delivered_;
@@ -220,8 +213,9 @@ class SimCamera final : public CameraSource {
       return FrameWait::kError;
     }
     frame = std::move(rendered.frame);
-    frame.host_arrival_ns = steady_now_ns();
+    frame.host_arrival_ns = host_now_ns();
     ++counters_.frames_delivered;
+    counters_.making_ms += rendered.making_ms;
     return FrameWait::kFrame;
   }
 
@@ -252,6 +246,7 @@ class SimCamera final : public CameraSource {
   struct Rendered {
     Frame frame;
     std::string error;
+    double making_ms = 0;  ///< host time it took: rendered, or copied from the ring
   };
 
   /// The camera's timestamp of controller time `controller_us` (its offset and drift).
@@ -363,23 +358,28 @@ class SimCamera final : public CameraSource {
     return out;
   }
 
-  /// `job` from the ring (ring mode), else rendered.
+  /// `job`'s frame copied from the ring (ring mode).
+  Rendered copy_from_ring(const RenderJob& job) const {
+    Rendered out;
+    out.frame = frame_of(job);
+    const std::size_t slot = job.sequence % ring_.size();
+    const Frame& stored = ring_[slot];
+    const std::size_t frame_bytes = ring_samples_.size() / ring_.size();
+    const auto from = ring_samples_.begin() + static_cast<std::ptrdiff_t>(slot * frame_bytes);
+    out.frame.data.assign(from, from + static_cast<std::ptrdiff_t>(frame_bytes));
+    out.frame.truth = stored.truth;
+    out.frame.truth_in_view = stored.truth_in_view;
+    out.frame.truth_labels = stored.truth_labels;
+    out.frame.descriptor_json = stored.descriptor_json;
+    return out;
+  }
+
+  /// `job` from the ring (ring mode), else rendered; timed (making_ms).
   Rendered render_job(const RenderJob& job) {
-    if (!ring_.empty()) {
-      Rendered out;
-      out.frame = frame_of(job);
-      const std::size_t slot = job.sequence % ring_.size();
-      const Frame& stored = ring_[slot];
-      const std::size_t frame_bytes = ring_samples_.size() / ring_.size();
-      const auto from = ring_samples_.begin() + static_cast<std::ptrdiff_t>(slot * frame_bytes);
-      out.frame.data.assign(from, from + static_cast<std::ptrdiff_t>(frame_bytes));
-      out.frame.truth = stored.truth;
-      out.frame.truth_in_view = stored.truth_in_view;
-      out.frame.truth_labels = stored.truth_labels;
-      out.frame.descriptor_json = stored.descriptor_json;
-      return out;
-    }
-    return render_new(job);
+    const std::int64_t start = host_now_ns();
+    Rendered out = ring_.empty() ? render_new(job) : copy_from_ring(job);
+    out.making_ms = static_cast<double>(host_now_ns() - start) * 1e-6;
+    return out;
   }
 
   imaging::CaptureModel model_for(const Lighting& light, double blur) const {

@@ -8,16 +8,11 @@
 #include <filesystem>
 
 #include "capture/backends.hpp"
+#include "capture/host_clock.hpp"
 #include "capture/v4l2_camera.hpp"
 
 namespace flutterscan::capture {
 namespace {
-
-std::int64_t steady_now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
 
 /// Backend options as parsed from key=value text.
 struct V4l2Options {
@@ -183,7 +178,7 @@ class V4l2Source final : public CameraSource {
                        format_.row_bytes * static_cast<std::size_t>(format_.height));
     frame.data.assign(got.data.begin(),
                       got.data.begin() + static_cast<std::ptrdiff_t>(image_bytes));
-    frame.host_arrival_ns = steady_now_ns();
+    frame.host_arrival_ns = host_now_ns();
     note_timestamp_kind(got);
     return FrameWait::kFrame;
   }

@@ -141,8 +141,6 @@ class ControllerClient {
   Expected<T> command_with_reply(protocol::Command command, std::span<const std::uint8_t> payload);
   Expected<Done> command_status_only(protocol::Command command,
                                      std::span<const std::uint8_t> payload);
-  Expected<Done> upload_code(std::uint8_t code_id, const LedCode& code, bool one_of_n,
-                             protocol::SetCodeReply* last_reply);
 
   /// GetInfo on a freshly opened transport (direct reads); checks the major.
   Expected<protocol::InfoReply> handshake(Transport& transport);

@@ -30,10 +30,6 @@ void ensure_hid_init() {
 
 }  // namespace
 
-const char* hidapi_backend_name() {
-  return FLUTTERSCAN_HIDAPI_BACKEND;
-}
-
 HidapiTransport::HidapiTransport(hid_device* device, std::string path, std::string serial)
     : device_(device), path_(std::move(path)), serial_(std::move(serial)) {}
 

@@ -36,7 +36,4 @@ class HidapiTransport final : public Transport {
   bool closed_ = false;
 };
 
-/// \brief The hidapi backend this library was built against ("hidraw" or "libusb").
-const char* hidapi_backend_name();
-
 }  // namespace flutterscan::device

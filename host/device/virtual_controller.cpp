@@ -64,7 +64,6 @@ Report VirtualController::handle_locked(std::span<const std::uint8_t> report) {
       reply[3] == static_cast<std::uint8_t>(protocol::Status::kOk))
     reply[protocol::kHeaderSize + offsetof(protocol::InfoReply, protocol_major)] =
         options_.reported_protocol_major;
-  ++requests_handled_;
   poll_locked();
   return reply;
 }
@@ -212,11 +211,6 @@ std::vector<std::uint8_t> VirtualController::flash_page_contents() const {
   std::lock_guard lock(mutex_);
   const auto page = port_->flash_page();
   return {page.begin(), page.end()};
-}
-
-std::uint64_t VirtualController::requests_handled() const {
-  std::lock_guard lock(mutex_);
-  return requests_handled_;
 }
 
 }  // namespace flutterscan::device

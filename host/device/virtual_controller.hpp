@@ -116,8 +116,6 @@ class VirtualController {
   bool in_bootloader() const;
   /// \brief The config flash page now (what SaveConfig wrote).
   std::vector<std::uint8_t> flash_page_contents() const;
-  /// \brief Requests handled (replied to) since construction.
-  std::uint64_t requests_handled() const;
 
  private:
   void boot_locked();
@@ -136,7 +134,6 @@ class VirtualController {
   bool responsive_ = true;
   bool plugged_in_ = true;
   bool in_bootloader_ = false;
-  std::uint64_t requests_handled_ = 0;
 };
 
 }  // namespace flutterscan::device

@@ -5,6 +5,7 @@
 // (the first byte or bytes pick a mode, see each *_fuzz.cpp), plus the inputs of
 // issue 20's reproductions (e.g. optics.px_per_count = 99999999999).
 
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include <cstdio>
@@ -93,6 +94,50 @@ void descriptor_seeds() {
       put("capture_descriptor", "model-" + std::to_string(n),
           with_mode(static_cast<std::uint8_t>(n), imaging::to_descriptor(m).dump()));
       ++n;
+    }
+}
+
+/// files_camera: byte 0 the frames and which one (files_camera_fuzz.cpp), then a
+/// descriptor: a kept frame's as a session writes it, a bare one, a Bayer one, and
+/// one per field the files camera reads and JSON type it must refuse there (each
+/// ended `scan --camera files:` and `replay` with an uncaught exception once).
+void files_camera_seeds() {
+  auto code = LedCode::parse("1241241242142141241421241241241241421241241242142141", 3).value();
+  imaging::CaptureModel m;
+  m.code = code;
+  m.blur_px = 20;
+  m.crosstalk = {0.9, 0.08, 0.01, 0.1, 0.85, 0.12, 0.01, 0.07, 0.88};
+  m.led_electrons = {400, 400, 400};
+  m.ambient_electrons = {10, 10, 10};
+  m.gain = 3;
+  m.black_level = 64;
+  nlohmann::json kept = imaging::to_descriptor(m);
+  kept["capture"] = {{"sequence", 12},
+                     {"timestamp_ns", 400'000'000},
+                     {"exposure_counter", 12},
+                     {"truth", {"4006381333931", "FS-00020"}},
+                     {"truth_in_view", {"4006381333931"}}};
+  for (std::uint8_t mode = 0; mode < 8; ++mode)
+    put("files_camera", "kept-" + std::to_string(mode), with_mode(mode, kept.dump()));
+  const std::string bare = "{}";
+  put("files_camera", "bare", with_mode(1, bare));
+  const std::string bayer = R"({"bayer":"RGGB","bit_depth":10})";
+  put("files_camera", "bayer", with_mode(1, bayer));
+  const std::pair<const char*, nlohmann::json::json_pointer> fields[] = {
+      {"bit-depth", nlohmann::json::json_pointer("/bit_depth")},
+      {"capture", nlohmann::json::json_pointer("/capture")},
+      {"sequence", nlohmann::json::json_pointer("/capture/sequence")},
+      {"timestamp", nlohmann::json::json_pointer("/capture/timestamp_ns")},
+      {"truth", nlohmann::json::json_pointer("/capture/truth")},
+      {"truth-in-view", nlohmann::json::json_pointer("/capture/truth_in_view")}};
+  const std::pair<const char*, nlohmann::json> values[] = {
+      {"string", "x"}, {"null", nullptr}, {"array", {1}}, {"object", {{"a", 1}}}};
+  std::uint8_t mode = 0;
+  for (const auto& [field, pointer] : fields)
+    for (const auto& [type, value] : values) {
+      nlohmann::json wrong = kept;
+      wrong[pointer] = value;
+      put("files_camera", std::string(field) + "-" + type, with_mode(mode++ % 8, wrong.dump()));
     }
 }
 
@@ -297,6 +342,7 @@ int main(int argc, char** argv) {
   root = argv[1];
   session_config_seeds(argv[2]);
   descriptor_seeds();
+  files_camera_seeds();
   frame_seeds();
   firmware_seeds();
   device_seeds();

@@ -1,6 +1,7 @@
 #include "imaging/capture_descriptor.hpp"
 
 #include <cmath>
+#include <limits>
 #include <stdexcept>
 
 namespace flutterscan::imaging {
@@ -32,6 +33,31 @@ int small_integer(double value, const std::string& name) {
 
 int integer_field(const nlohmann::json& object, const char* name) {
   return small_integer(number(object, name), std::string(name));
+}
+
+/// `bit_depth`: a whole number of bits, 1 to 16.
+int bit_depth_field(const nlohmann::json& object) {
+  const int bits = integer_field(object, "bit_depth");
+  if (bits < 1 || bits > 16) throw FieldError("field 'bit_depth' must be 1 to 16");
+  return bits;
+}
+
+/// `bayer`: "RGGB" for a raw mosaic; absent or null for none.
+bool bayer_field(const nlohmann::json& object) {
+  if (!object.contains("bayer") || object.at("bayer").is_null()) return false;
+  if (object.at("bayer") != "RGGB") throw FieldError("field 'bayer' must be \"RGGB\" or null");
+  return true;
+}
+
+/// A list of strings (`name` for the message).
+std::vector<std::string> strings(const nlohmann::json& value, const std::string& name) {
+  if (!value.is_array()) throw FieldError("field '" + name + "' must be an array of strings");
+  std::vector<std::string> out;
+  for (const auto& item : value) {
+    if (!item.is_string()) throw FieldError("field '" + name + "' must hold only strings");
+    out.push_back(item.get<std::string>());
+  }
+  return out;
 }
 
 std::vector<double> numbers(const nlohmann::json& value, const std::string& name) {
@@ -195,12 +221,18 @@ Result<CaptureModel, std::string> from_descriptor(const nlohmann::json& d) {
       m.crosstalk.insert(m.crosstalk.end(), row.begin(), row.end());
     }
     m.led_electrons = numbers(field(d, "led_electrons_per_slot"), "led_electrons_per_slot");
+    if (static_cast<int>(m.led_electrons.size()) != m.leds)
+      throw FieldError("field 'led_electrons_per_slot' needs one entry per LED (" +
+                       std::to_string(m.leds) + ")");
     m.ambient_electrons = numbers(field(d, "ambient_electrons"), "ambient_electrons");
+    if (static_cast<int>(m.ambient_electrons.size()) != m.channels)
+      throw FieldError("field 'ambient_electrons' needs one entry per channel (" +
+                       std::to_string(m.channels) + ")");
     m.black_level = number(d, "black_level_dn");
     m.gain = number(d, "gain_e_per_dn");
     m.read_noise = number(d, "read_noise_e");
     m.full_well = number(d, "full_well_e");
-    m.bit_depth = integer_field(d, "bit_depth");
+    m.bit_depth = bit_depth_field(d);
     const auto& encoding = field(d, "encoding");
     const std::string encoding_text = encoding.is_string() ? encoding.get<std::string>() : "";
     if (encoding_text == "linear")
@@ -212,12 +244,46 @@ Result<CaptureModel, std::string> from_descriptor(const nlohmann::json& d) {
     else
       throw FieldError("field 'encoding' must be \"linear\", \"srgb\" or \"gamma\"");
     if (d.contains("gamma")) m.gamma = number(d, "gamma");
-    if (d.contains("bayer") && !d.at("bayer").is_null()) {
-      if (d.at("bayer") != "RGGB") throw FieldError("field 'bayer' must be \"RGGB\" or null");
-      m.bayer_rggb = true;
-    }
+    m.bayer_rggb = bayer_field(d);
     if (auto problem = capture_model_problem(m); !problem.empty()) throw FieldError(problem);
     return Out::success(m);
+  } catch (const FieldError& e) {
+    return Out::failure(e.what());
+  }
+}
+
+Result<RecordedFrame, std::string> recorded_frame_from_descriptor(const nlohmann::json& d) {
+  using Out = Result<RecordedFrame, std::string>;
+  try {
+    if (!d.is_object()) throw FieldError("a descriptor is a JSON object");
+    RecordedFrame r;
+    if (d.contains("bit_depth")) r.bit_depth = bit_depth_field(d);
+    r.bayer_rggb = bayer_field(d);
+    if (!d.contains("capture")) return Out::success(r);
+    const auto& capture = d.at("capture");
+    if (!capture.is_object()) throw FieldError("field 'capture' must be an object");
+    if (capture.contains("sequence")) {
+      const auto& sequence = capture.at("sequence");
+      // nlohmann reads a non-negative integer as unsigned; a built one may be signed.
+      if (!sequence.is_number_integer() ||
+          (!sequence.is_number_unsigned() && sequence.get<std::int64_t>() < 0))
+        throw FieldError("field 'capture.sequence' must be a whole number >= 0");
+      r.sequence = sequence.get<std::uint64_t>();
+    }
+    if (capture.contains("timestamp_ns")) {
+      const auto& timestamp = capture.at("timestamp_ns");
+      if (!timestamp.is_number_integer() ||
+          (timestamp.is_number_unsigned() &&
+           timestamp.get<std::uint64_t>() > std::numeric_limits<std::int64_t>::max()))
+        throw FieldError(
+            "field 'capture.timestamp_ns' must be a whole number of nanoseconds "
+            "(64-bit signed)");
+      r.timestamp_ns = timestamp.get<std::int64_t>();
+    }
+    if (capture.contains("truth")) r.truth = strings(capture.at("truth"), "capture.truth");
+    if (capture.contains("truth_in_view"))
+      r.truth_in_view = strings(capture.at("truth_in_view"), "capture.truth_in_view");
+    return Out::success(r);
   } catch (const FieldError& e) {
     return Out::failure(e.what());
   }

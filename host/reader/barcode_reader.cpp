@@ -641,13 +641,6 @@ std::vector<LabelRegion> find_paper_runs(const imaging::Plane& latent, double pa
   return regions;
 }
 
-std::vector<LabelRegion> find_label_regions(const imaging::Plane& latent, double paper_threshold,
-                                            double min_fraction, int min_width, int max_gap) {
-  auto regions = find_paper_runs(latent, paper_threshold, min_fraction, min_width, max_gap);
-  std::erase_if(regions, [](const LabelRegion& r) { return r.cut; });  // the rest are wide enough
-  return regions;
-}
-
 std::string decode_area_name(DecodeArea area) {
   return area == DecodeArea::kFrame ? "frame" : "labels";
 }

@@ -246,13 +246,6 @@ std::vector<LabelRegion> find_paper_runs(const imaging::Plane& latent,
                                          double paper_threshold = 0.62, double min_fraction = 0.05,
                                          int min_width = 48, int max_gap = 16);
 
-/// \brief Label regions along x: the paper runs (find_paper_runs) that are not
-/// cut by the frame's edges (a label cut by the frame is not judged).
-std::vector<LabelRegion> find_label_regions(const imaging::Plane& latent,
-                                            double paper_threshold = 0.62,
-                                            double min_fraction = 0.05, int min_width = 48,
-                                            int max_gap = 16);
-
 /// \brief Where the session looks for codes: the whole frame, or the label
 /// paper only (decode_windows()), which is faster and finds the same codes on
 /// labels brighter than the belt.

@@ -73,6 +73,9 @@ void ResultsStage::handle_processed(FrameOutcome& f) {
   f.latency_ms = ms_between(f.arrival_ns, done);
   f.log["latency_ms"] = std::round(f.latency_ms * 100) / 100;
   results_.latency_ms.add(f.latency_ms);
+  if (const auto times = f.log.find("times_ms"); times != f.log.end() && times->is_object())
+    for (const auto& [stage, ms] : times->items())
+      if (ms.is_number()) results_.stage_ms += ms.get<double>();
   if (const auto motion = f.log.find("motion"); motion != f.log.end() && motion->is_object()) {
     if (motion->value("used", false)) {
       results_.refined_minus_encoder_px.add(motion->value("refined_blur_px", 0.0) -

@@ -77,6 +77,7 @@ inline constexpr std::size_t kObjectsListed = 500;
 struct SessionResults {
   ObjectTally objects;
   ValueDistribution latency_ms;  ///< per processed frame: arrival to result
+  double stage_ms = 0;           ///< the processed frames' stage times (`times_ms`), summed
   RateTimeline processed;        ///< processed frames over the session
   std::vector<Preview> previews;
   std::set<std::string> truth_seen;     ///< sim: labels whole in some frame

@@ -2,16 +2,15 @@
 // The host clock every session stage stamps with (steady_clock, nanoseconds),
 // the clock of capture::Frame::host_arrival_ns.
 
-#include <chrono>
 #include <cstdint>
+
+#include "capture/host_clock.hpp"
 
 namespace flutterscan::session {
 
-/// \brief Now on the host's steady clock, nanoseconds.
+/// \brief Now on the host's steady clock, nanoseconds (capture::host_now_ns).
 inline std::int64_t now_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
+  return capture::host_now_ns();
 }
 
 /// \brief Milliseconds from `from_ns` to `to_ns`.

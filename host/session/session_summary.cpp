@@ -24,6 +24,7 @@ SessionCounts count_session(const Pipeline& pipeline, const MatchingStage& match
   counts.events_received = inbox.received();
   counts.events_missing_by_counter = inbox.missing();
   counts.camera_frames_lost = camera.frames_dropped;
+  counts.camera_making_ms = camera.making_ms;
   counts.clocks = matching.clocks();
   counts.stopped_by = capture_end.stopped_by;
   counts.capture_error = capture_end.error;
@@ -77,6 +78,17 @@ nlohmann::json session_summary(const SessionConfig& config, const SessionCounts&
   s["fps"] = duration_s > 0 ? std::round(counts.frames_processed / duration_s * 10) / 10 : 0.0;
   s["latency_ms_p50"] = std::round(results.latency_ms.percentile(50) * 10) / 10;
   s["latency_ms_p99"] = std::round(results.latency_ms.percentile(99) * 10) / 10;
+  // The pipeline's own capacity, whatever the camera delivered: frames a second its
+  // workers could process at the stage times its frames took.
+  const double stage_ms =
+      counts.frames_processed == 0 ? 0.0 : results.stage_ms / counts.frames_processed;
+  s["frame_stage_ms_mean"] = std::round(stage_ms * 10) / 10;
+  s["capacity_fps"] =
+      stage_ms > 0 ? std::round(config.processing.workers * 1000.0 / stage_ms * 10) / 10 : 0.0;
+  // What a simulated camera cost the same host to make each frame (rendering).
+  if (counts.camera_making_ms > 0 && counts.frames_captured > 0)
+    s["camera_making_ms_mean"] =
+        std::round(counts.camera_making_ms / counts.frames_captured * 10) / 10;
   // Motion refinement (processing.blur_tolerance): how far the frames moved the encoder's blur.
   const auto& delta = results.refined_minus_encoder_px;
   const auto px = [](double v) { return std::round(v * 1000) / 1000; };

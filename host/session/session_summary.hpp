@@ -39,6 +39,7 @@ struct SessionCounts {
   std::uint64_t events_received = 0;
   std::uint64_t events_missing_by_counter = 0;
   std::uint64_t camera_frames_lost = 0;
+  double camera_making_ms = 0;  ///< host time the camera spent making its frames (the sim's)
   ClockRelation clocks;
   std::string stopped_by;
   std::string capture_error;

@@ -104,13 +104,6 @@ std::size_t first_unprintable(const std::string& text) {
   return std::string::npos;
 }
 
-/// EAN-13 check digit of the first 12 digits: weights 1, 3, 1, 3, ... from the left.
-int ean13_check_digit(const std::string& digits) {
-  int sum = 0;
-  for (std::size_t i = 0; i < 12; ++i) sum += (digits[i] - '0') * (i % 2 == 0 ? 1 : 3);
-  return (10 - sum % 10) % 10;
-}
-
 /// Problem with `content` for a scene of `kind` (empty if none).
 std::string content_problem(SceneKind kind, const std::string& content) {
   const std::string name(scene_kind_name(kind));
@@ -651,6 +644,12 @@ Result<SymbolPlacement, std::string> symbol_placement(const SceneSpec& spec) {
   p.modules = layout.value().grid.cols;
   p.symbology_id = id;
   return PlacementResult::success(std::move(p));
+}
+
+int ean13_check_digit(std::string_view digits) {
+  int sum = 0;
+  for (std::size_t i = 0; i < 12; ++i) sum += (digits[i] - '0') * (i % 2 == 0 ? 1 : 3);
+  return (10 - sum % 10) % 10;
 }
 
 }  // namespace flutterscan::sim

@@ -75,6 +75,10 @@ struct SceneSpec {
 /// "datamatrix", "text", "image", "flat", "photo").
 std::string_view scene_kind_name(SceneKind kind);
 
+/// \brief The EAN-13 check digit of the first 12 of `digits` (decimal digits, at
+/// least 12): weights 1, 3, 1, 3, ... from the left.
+int ean13_check_digit(std::string_view digits);
+
 /// \brief Parses "KIND:CONTENT" (code128:TEXT, ean13:DIGITS, qr:TEXT,
 /// datamatrix:TEXT, text:WORDS, image:PATH, flat:REFLECTANCE, photo:PATH) into a spec with
 /// default size and

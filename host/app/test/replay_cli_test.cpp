@@ -265,6 +265,87 @@ TEST_F(ReplayCli, BadInputExitsTwoNamingWhatIsMissing) {
   }
 }
 
+// A kept frame's descriptor with a field of any JSON type, through both readers of a
+// session's frames (`replay` and `scan --camera files:`): exit 0, 1 or 2, never a
+// signal; a field that is read is refused, naming it and the file. Every field of
+// the first kept frame's descriptor (those the files camera reads through both
+// commands, the capture model's through replay, which reads the model), and a few
+// on the last kept frame (refused by next_frame, not open).
+TEST_F(ReplayCli, ADescriptorFieldOfAnyTypeExitsZeroOneOrTwoNamingIt) {
+  const std::vector<std::string> frames = kept_frames(copy_);
+  const json original = json::parse(read_text(copy_ / "frames" / (frames.front() + ".json")));
+  ASSERT_TRUE(original.contains("capture")) << original.dump();
+  // The fields the files camera reads, and the session's other capture fields (the
+  // labels' values are written only for a frame with labels: added where absent).
+  std::vector<std::string> camera_fields = {"bit_depth", "bayer", "capture"};
+  json capture = original["capture"];
+  capture.emplace("truth", json::array());
+  capture.emplace("truth_in_view", json::array());
+  for (const auto& [key, value] : capture.items()) camera_fields.push_back("capture." + key);
+  std::vector<std::string> model_fields;
+  for (const auto& [key, value] : original.items())
+    if (key != "bit_depth" && key != "bayer" && key != "capture") model_fields.push_back(key);
+  ASSERT_GT(model_fields.size(), 15u) << original.dump();
+  // A string, null, an array, an object, and for the files camera's fields (whole
+  // numbers, strings or lists) a negative fraction.
+  const std::vector<json> values = {"x", nullptr, json::array({1}), json{{"a", 1}}, -1.5};
+
+  struct Run {
+    std::string frame, field;
+    json value;
+    bool scan;
+    bool refused;  ///< the value is one the reader must refuse
+  };
+  std::vector<Run> runs;
+  for (const json& value : values) {
+    for (const std::string& field : camera_fields) {
+      // Not read by either command: the exposure counter (logged, not replayed).
+      const bool read = field != "capture.exposure_counter";
+      const bool valid = (field == "bayer" && value.is_null()) ||
+                         (field == "capture" && value.is_object());  // unknown fields ignored
+      for (const bool scan : {false, true})
+        runs.push_back({frames.front(), field, value, scan, read && !valid});
+    }
+    if (!value.is_number())
+      for (const std::string& field : model_fields)
+        runs.push_back({frames.front(), field, value, false, true});
+  }
+  for (const char* field : {"bit_depth", "capture.sequence", "capture.truth"})
+    for (const bool scan : {false, true}) runs.push_back({frames.back(), field, "x", scan, true});
+
+  for (const Run& run : runs) {
+    const fs::path folder = scratch_ / "mutated";
+    fs::remove_all(folder);
+    fs::copy(copy_, folder, fs::copy_options::recursive);
+    const fs::path descriptor = folder / "frames" / (run.frame + ".json");
+    json d = json::parse(read_text(descriptor));
+    std::string pointer = "/" + run.field;
+    std::replace(pointer.begin(), pointer.end(), '.', '/');
+    d[json::json_pointer(pointer)] = run.value;
+    std::ofstream(descriptor) << d.dump(2);
+    const std::string what = std::string(run.scan ? "scan" : "replay") + ", " + run.frame + " " +
+                             run.field + " = " + run.value.dump();
+    const Ran r = run.scan
+                      ? flutterscan({"scan", "--camera", "files:" + (folder / "frames").string(),
+                                     "--out", (scratch_ / "scans").string(), "--no-progress"},
+                                    scratch_)
+                      : replay({folder.string()});
+    EXPECT_TRUE(r.exit == 0 || r.exit == 1 || r.exit == 2) << what << ": exit " << r.exit << "\n"
+                                                           << r.err;
+    if (run.refused) {
+      EXPECT_NE(r.exit, 0) << what << ": " << r.out;
+    }
+    if (r.exit == 1 || r.exit == 2) {
+      // The field by its last name ('sequence' in capture.sequence) and the frame's
+      // files (fNNNNNNNN.json, or .png where replay compares the frame's optics).
+      const std::string name = run.field.substr(run.field.rfind('.') + 1);
+      EXPECT_NE(r.err.find(name), std::string::npos) << what << ": " << r.err;
+      const std::string stem = (folder / "frames" / run.frame).string() + ".";
+      EXPECT_NE(r.err.find(stem), std::string::npos) << what << ": " << r.err;
+    }
+  }
+}
+
 TEST_F(ReplayCli, OpticsOtherThanTheDefaultsNeedTheSessionsConfig) {
   const std::string first = kept_frames(copy_).front();
   const fs::path descriptor = copy_ / "frames" / (first + ".json");

@@ -145,6 +145,7 @@ TEST(SimCamera, LostFramesAdvanceTheSequenceAndAreCounted) {
   EXPECT_EQ(camera->counters().frames_delivered, delivered);
   EXPECT_GT(camera->counters().frames_dropped, 0u);
   EXPECT_EQ(camera->counters().frames_delivered + camera->counters().frames_dropped, 40u);
+  EXPECT_GT(camera->counters().making_ms, 0.0);  // the host's rendering, timed
   // Every exposure, delivered or lost, has its event.
   EXPECT_EQ(events, 40);
   EXPECT_GE(camera->counters().frames_dropped, gaps);

@@ -191,7 +191,50 @@ TEST(CaptureDescriptor, BadFieldsAreNamed) {
   d = to_descriptor(seed_capture(52));
   d["pixel_model"] = "gaussian";
   EXPECT_NE(from_descriptor(d).error().find("band-limited"), std::string::npos);
+  d = to_descriptor(seed_capture(52));
+  d["led_electrons_per_slot"] = {400.0};
+  EXPECT_EQ(from_descriptor(d).error(),
+            "field 'led_electrons_per_slot' needs one entry per LED (3)");
+  d = to_descriptor(seed_capture(52));
+  d["ambient_electrons"] = {0.0};
+  EXPECT_EQ(from_descriptor(d).error(),
+            "field 'ambient_electrons' needs one entry per channel (3)");
+  d = to_descriptor(seed_capture(52));
+  d["bit_depth"] = 17;
+  EXPECT_EQ(from_descriptor(d).error(), "field 'bit_depth' must be 1 to 16");
   EXPECT_FALSE(from_descriptor(nlohmann::json::array()).ok());
+}
+
+// What the files camera takes of a descriptor: every field optional, checked as
+// from_descriptor checks the ones they share, the capture object's by its path.
+TEST(CaptureDescriptor, RecordedFrameFieldsAreOptionalAndChecked) {
+  auto d = to_descriptor(seed_capture(52));
+  d["capture"] = {{"sequence", 9}, {"timestamp_ns", -5}, {"truth", {"A", "B"}}};
+  const auto read = recorded_frame_from_descriptor(d);
+  ASSERT_TRUE(read.ok()) << read.error();
+  EXPECT_EQ(read.value().bit_depth, 12);
+  EXPECT_FALSE(read.value().bayer_rggb);
+  EXPECT_EQ(read.value().sequence, 9u);
+  EXPECT_EQ(read.value().timestamp_ns, -5);
+  EXPECT_EQ(read.value().truth, (std::vector<std::string>{"A", "B"}));
+  EXPECT_TRUE(read.value().truth_in_view.empty());
+  const auto bare = recorded_frame_from_descriptor(nlohmann::json::object());
+  ASSERT_TRUE(bare.ok()) << bare.error();
+  EXPECT_FALSE(bare.value().bit_depth || bare.value().sequence || bare.value().timestamp_ns);
+  const std::pair<const char*, std::string> refused[] = {
+      {R"({"bit_depth": 0})", "field 'bit_depth' must be 1 to 16"},
+      {R"({"bayer": "BGGR"})", "field 'bayer' must be \"RGGB\" or null"},
+      {R"({"capture": []})", "field 'capture' must be an object"},
+      {R"({"capture": {"sequence": -1}})", "field 'capture.sequence' must be a whole number >= 0"},
+      {R"({"capture": {"timestamp_ns": 1.5}})",
+       "field 'capture.timestamp_ns' must be a whole number of nanoseconds (64-bit signed)"},
+      {R"({"capture": {"truth_in_view": ["A", 1]}})",
+       "field 'capture.truth_in_view' must hold only strings"}};
+  for (const auto& [text, message] : refused) {
+    const auto r = recorded_frame_from_descriptor(nlohmann::json::parse(text));
+    ASSERT_FALSE(r.ok()) << text;
+    EXPECT_EQ(r.error(), message) << text;
+  }
 }
 
 TEST(MotionFrame, EveryDirectionRoundTrips) {

@@ -10,6 +10,7 @@
 #include "imaging/frame_conversion.hpp"
 #include "imaging/metrics.hpp"
 #include "imaging/model_guards.hpp"
+#include "imaging/test/label_capture.hpp"
 #include "reader/barcode_reader.hpp"
 #include "session/model_fit.hpp"
 #include "sim/colour_scene.hpp"
@@ -21,17 +22,8 @@ namespace flutterscan::session {
 namespace {
 
 imaging::CaptureModel capture(double blur_px = 52, double electrons = 3000) {
-  imaging::CaptureModel m;
-  m.code = LedCode::parse("4242221144411121214241142422112112214412414144224412", 3).value();
-  m.blur_px = blur_px;
-  m.led_electrons = imaging::budgeted_led_electrons(m.code, electrons, 3);
-  m.crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
-  m.read_noise = 4;
-  m.full_well = 12000;
-  m.bit_depth = 12;
-  m.gain = 12000.0 / 4095.0;
-  m.black_level = 64;
-  return m;
+  return test_fixtures::label_capture(
+      {.blur_px = blur_px, .electrons = electrons, .black_level = 64});
 }
 
 sim::SceneSpec code128() {

@@ -21,6 +21,7 @@ FrameOutcome processed(std::uint64_t index, double travel_px, double position_px
   o.travel_px = travel_px;
   o.arrival_ns = 1;
   o.log = {{"index", index}, {"model", {{"chosen", "global"}}}, {"flags", nlohmann::json::array()}};
+  o.log["times_ms"] = {{"convert", 1.5}, {"deblur", 10.0}, {"decode", 4.0}};
   Sighting s;
   s.position_px = position_px;
   s.decoded = !value.empty();
@@ -91,6 +92,7 @@ TEST(ResultsStage, OutcomesAreHandledInCaptureOrderAndObjectsPublishedOnce) {
   const SessionResults& r = stage.results();
   EXPECT_EQ(pipeline.frames_processed, 3u);
   EXPECT_EQ(r.latency_ms.count(), 3u);
+  EXPECT_DOUBLE_EQ(r.stage_ms, 3 * 15.5);  // the processed frames' stage times, not the dropped
   EXPECT_EQ(r.objects.objects, 1u);
   EXPECT_EQ(r.objects.read, 1u);
   ASSERT_EQ(r.objects.latest.size(), 1u);

@@ -146,6 +146,34 @@ std::string headless(const std::string& browser, const fs::path& profile) {
          profile.string();
 }
 
+// The demo's summary says the pipeline's own capacity (its workers at its frames'
+// stage times) beside what the simulated camera cost the host to render a frame:
+// the end-to-end speed is the camera's, which a newcomer must not take for the
+// pipeline's.
+TEST(DemoCli, TheSummarySaysThePipelinesCapacityBesideTheSimulatedCamerasCost) {
+  const ScratchFolder scratch("demo_capacity");
+  const fs::path& out = scratch.path();
+  const pid_t pid = spawn({"demo", "--frames", "12", "--out", out.string(), "--no-progress"}, out);
+  ASSERT_EQ(wait_exit(pid), 0) << read_text(out / "stderr.txt");
+  const auto summary = nlohmann::json::parse(read_text(only_session(out) / "summary.json"));
+  const double capacity = summary["capacity_fps"].get<double>();
+  const double stage_ms = summary["frame_stage_ms_mean"].get<double>();
+  const double camera_ms = summary["camera_making_ms_mean"].get<double>();
+  EXPECT_GT(stage_ms, 0.0);
+  EXPECT_GT(camera_ms, 0.0);
+  // Two workers (the demo's) at the mean stage time, within the figures' rounding.
+  EXPECT_NEAR(capacity, 2 * 1000.0 / stage_ms, 0.01 * capacity + 0.2);
+  // The workers were never asked for more than they could do.
+  EXPECT_GE(capacity, summary["fps"].get<double>());
+  const std::string text = read_text(out / "stdout.txt");
+  char expected[160];
+  std::snprintf(expected, sizeof expected,
+                "\ncapacity %.1f fps (2 workers, %.1f ms of stages a frame); the simulated "
+                "camera renders a frame in %.1f ms on the same cores\n",
+                capacity, stage_ms, camera_ms);
+  EXPECT_NE(text.find(expected), std::string::npos) << expected << "\n" << text;
+}
+
 TEST(SessionReport, LoadsInHeadlessChromiumWithoutConsoleErrors) {
   std::string output;
   const std::string browser = chromium_or_skip();

@@ -26,6 +26,7 @@ TEST(SessionSummary, CountsWhatEachStageCounted) {
   const EventInbox inbox;
   capture::CameraCounters camera;
   camera.frames_dropped = 3;
+  camera.making_ms = 420;
   CaptureEnd end;
   end.stopped_by = "signal";
   end.error = "camera went away";
@@ -40,6 +41,7 @@ TEST(SessionSummary, CountsWhatEachStageCounted) {
   EXPECT_EQ(counts.frames_without_event, 0u);
   EXPECT_EQ(counts.events_received, 0u);
   EXPECT_EQ(counts.camera_frames_lost, 3u);
+  EXPECT_EQ(counts.camera_making_ms, 420);
   EXPECT_EQ(counts.stopped_by, "signal");
   EXPECT_EQ(counts.capture_error, "camera went away");
   EXPECT_EQ(counts.lines_sent, 0u);
@@ -67,6 +69,8 @@ TEST(SessionSummary, ReportsTheStagesCountsAndJudgesTheGroundTruth) {
   for (auto o : {object("A", 4, 4), object("", 2, 0), object("Z", 2, 1)})
     results.objects.add(o, true);
   for (double ms : {10, 20, 30}) results.latency_ms.add(ms);
+  results.stage_ms = 8 * 25;  // 8 frames processed, 25 ms of stages each
+  counts.camera_making_ms = 10 * 300;
   results.truth_seen = {"A", "B"};
   results.truth_in_view = {"A", "B", "C"};
   results.models_chosen["global"] = 8;
@@ -77,6 +81,12 @@ TEST(SessionSummary, ReportsTheStagesCountsAndJudgesTheGroundTruth) {
   EXPECT_EQ(s["frames_dropped"], 1);
   EXPECT_EQ(s["frames_without_event"], 1);
   EXPECT_EQ(s["fps"], 4.0);
+  // The pipeline's capacity: 2 workers (the default) at 25 ms a frame; the camera's cost
+  // per frame captured.
+  EXPECT_EQ(config.processing.workers, 2);
+  EXPECT_EQ(s["frame_stage_ms_mean"], 25.0);
+  EXPECT_EQ(s["capacity_fps"], 80.0);
+  EXPECT_EQ(s["camera_making_ms_mean"], 300.0);
   EXPECT_EQ(s["objects"], 3);
   EXPECT_EQ(s["objects_read"], 2);
   EXPECT_DOUBLE_EQ(s["object_read_rate"].get<double>(), 2.0 / 3.0);
@@ -92,6 +102,19 @@ TEST(SessionSummary, ReportsTheStagesCountsAndJudgesTheGroundTruth) {
   EXPECT_EQ(s["object_results"].size(), 3u);
   EXPECT_EQ(s["object_results_omitted"], 0);
   EXPECT_FALSE(s.contains("save_error"));
+}
+
+// A camera the host only receives frames from has no making cost to report, and
+// with nothing processed there is no capacity to measure.
+TEST(SessionSummary, NoCameraCostForARealCameraAndNoCapacityWithoutFrames) {
+  SessionConfig config;
+  SessionCounts counts;
+  counts.frames_captured = 5;
+  const SessionResults results;
+  const nlohmann::json s = session_summary(config, counts, results);
+  EXPECT_FALSE(s.contains("camera_making_ms_mean"));
+  EXPECT_EQ(s["capacity_fps"], 0.0);
+  EXPECT_EQ(s["frame_stage_ms_mean"], 0.0);
 }
 
 TEST(SessionSummary, TheReportCountsWholeSecondsOnly) {

@@ -8,6 +8,7 @@
 #include "imaging/flat_field.hpp"
 #include "imaging/frame_conversion.hpp"
 #include "imaging/metrics.hpp"
+#include "imaging/test/label_capture.hpp"
 #include "sim/forward_model.hpp"
 #include "sim/scene.hpp"
 
@@ -18,20 +19,13 @@ using imaging::CaptureModel;
 using imaging::Image;
 using imaging::Plane;
 
-constexpr const char* kFoundMse = "4242221144411121214241142422112112214412414144224412";
+using test_fixtures::kFoundMse;
 
 CaptureModel capture(const std::string& code, double electrons) {
-  CaptureModel m;
-  m.code = LedCode::parse(code, 3).value();
-  m.blur_px = code.size() == 52 && code[0] == '4' ? 52 : 1;
-  m.led_electrons = imaging::budgeted_led_electrons(m.code, electrons, 3);
-  m.crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
-  m.read_noise = 4;
-  m.full_well = 12000;
-  m.bit_depth = 12;
-  m.gain = 12000.0 / 4095.0;
-  m.black_level = 64;
-  return m;
+  return test_fixtures::label_capture({.code = code.c_str(),
+                                       .blur_px = code.size() == 52 && code[0] == '4' ? 52.0 : 1.0,
+                                       .electrons = electrons,
+                                       .black_level = 64});
 }
 
 /// LED k's relative illumination at (x, y): linear ramps with median 1, different per LED.

@@ -7,6 +7,7 @@
 #include "imaging/frame_conversion.hpp"
 #include "imaging/model_choice.hpp"
 #include "imaging/motion_frame.hpp"
+#include "imaging/test/label_capture.hpp"
 #include "sim/colour_scene.hpp"
 #include "sim/forward_model.hpp"
 #include "sim/timeline_forward.hpp"
@@ -15,17 +16,7 @@ namespace flutterscan::sim {
 namespace {
 
 imaging::CaptureModel label_capture() {
-  imaging::CaptureModel m;
-  m.code = LedCode::parse("4242221144411121214241142422112112214412414144224412", 3).value();
-  m.blur_px = 52;
-  m.led_electrons = imaging::budgeted_led_electrons(m.code, 3000, 3);
-  m.crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
-  m.read_noise = 4;
-  m.full_well = 12000;
-  m.bit_depth = 12;
-  m.gain = 12000.0 / 4095.0;
-  m.black_level = 64;
-  return m;
+  return test_fixtures::label_capture({.black_level = 64});
 }
 
 SceneSpec code128() {

@@ -18,6 +18,7 @@
 #include "imaging/frame_conversion.hpp"
 #include "imaging/metrics.hpp"
 #include "imaging/motion_frame.hpp"
+#include "imaging/test/label_capture.hpp"
 #include "sim/forward_model.hpp"
 #include "sim/pixel_integration.hpp"
 #include "sim/scene.hpp"
@@ -31,16 +32,7 @@ using imaging::CaptureModel;
 using imaging::Direction;
 
 CaptureModel triplet_capture(double blur_px, double electrons) {
-  CaptureModel m;
-  m.code = LedCode::parse("4242221144411121214241142422112112214412414144224412", 3).value();
-  m.blur_px = blur_px;
-  m.led_electrons = imaging::budgeted_led_electrons(m.code, electrons, 3);
-  m.crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
-  m.read_noise = 4;
-  m.full_well = 12000;
-  m.bit_depth = 12;
-  m.gain = 12000.0 / 4095.0;
-  return m;
+  return test_fixtures::label_capture({.blur_px = blur_px, .electrons = electrons});
 }
 
 imaging::Plane fine_label(SceneKind kind, const char* content, double module_px = 3) {

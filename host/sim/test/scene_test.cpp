@@ -329,6 +329,14 @@ TEST(ParseScene, NamesTheProblem) {
   expect_error("code128:caf\xc3\xa9", "printable ASCII");
 }
 
+// The sim camera's EAN-13 labels and the scene parser share this check digit.
+TEST(Scene, Ean13CheckDigitWeighsTheFirstTwelveDigits) {
+  EXPECT_EQ(ean13_check_digit("400638133393"), 1);
+  EXPECT_EQ(ean13_check_digit("4006381333931"), 1);  // the 13th is not read
+  EXPECT_EQ(ean13_check_digit("978020137962"), 4);
+  EXPECT_EQ(ean13_check_digit("000000000000"), 0);
+}
+
 }  // namespace
 }  // namespace flutterscan::sim
 

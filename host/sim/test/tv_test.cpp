@@ -11,6 +11,7 @@
 #include "imaging/frame_conversion.hpp"
 #include "imaging/metrics.hpp"
 #include "imaging/motion_frame.hpp"
+#include "imaging/test/label_capture.hpp"
 #include "sim/forward_model.hpp"
 #include "sim/scene.hpp"
 
@@ -30,17 +31,8 @@ constexpr const char* kSeedMaxMin = "2212441414112412441224111241244244242212442
 /// per channel, cap 3, 52 px blur, crosstalk, 4 e- read noise, 12 bits over a 12000 e- well.
 CaptureModel label_capture(Direction direction = Direction::kPlusX, const char* code = kSeedMaxMin,
                            double electrons = 3000) {
-  CaptureModel m;
-  m.code = LedCode::parse(code, 3).value();
-  m.blur_px = 52;
-  m.direction = direction;
-  m.led_electrons = imaging::budgeted_led_electrons(m.code, electrons, 3);
-  m.crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
-  m.read_noise = 4;
-  m.full_well = 12000;
-  m.bit_depth = 12;
-  m.gain = 12000.0 / 4095.0;
-  return m;
+  return test_fixtures::label_capture(
+      {.code = code, .electrons = electrons, .direction = direction});
 }
 
 /// A Code 128 label, rows along +x.
