@@ -728,8 +728,10 @@ class MotionSearch {
     }
     for (std::size_t k = 0; k < n; ++k) {
       double* column = aj.data() + k * rows;
-      for (const auto& [i, v] : jacobian[k]) {
-        const double* row = a.data() + i * rows;
+      for (const auto& entry : jacobian[k]) {
+        // Named copies: clang 14 refuses a structured binding inside an OpenMP simd loop.
+        const double* row = a.data() + entry.first * rows;
+        const double v = entry.second;
 #pragma omp simd
         for (std::size_t r = 0; r < rows; ++r) column[r] += v * row[r];
       }

@@ -147,6 +147,11 @@ struct DecodeWindow {
   int x = 0, y = 0, width = 0, height = 0;
   int views = kLuminanceViews;
   bool second_decoder = true;
+  /// The latent's rows were deblurred each on its own (joint Wiener), so the
+  /// halves of a symbol carry independent noise and may back its value
+  /// (read_evidence.hpp); false on a latent whose prior ties rows together
+  /// (tv's), where only a second decoder does.
+  bool independent_rows = true;
 };
 
 /// \brief Every barcode of the named symbologies (check_symbologies() passed)

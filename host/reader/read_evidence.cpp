@@ -58,7 +58,7 @@ std::string symbology_family(const std::string& format) {
 
 std::string corroboration(const DecodedCode& code, const LumWindow& window,
                           const ZXing::DecodeHints& hints, const std::string& symbologies,
-                          bool try_rotate) {
+                          bool try_rotate, bool independent_rows) {
   // The symbol's centre across its bars, in the window: the halves meet there.
   const double turn = code.orientation_deg * std::numbers::pi / 180;
   const bool along_x = std::abs(std::cos(turn)) >= std::abs(std::sin(turn));
@@ -66,7 +66,7 @@ std::string corroboration(const DecodedCode& code, const LumWindow& window,
   const int cut = static_cast<int>(
       std::lround(along_x ? code.centre_y - window.y0 : code.centre_x - window.x0));
   const bool zxing = code.decoder == "zxing";
-  if (cut > 0 && cut < across) {
+  if (independent_rows && cut > 0 && cut < across) {
     bool both = true;
     for (const auto& [from, to] : {std::pair{0, cut}, std::pair{cut, across}}) {
       // The half as packed rows (a half of columns is copied out).

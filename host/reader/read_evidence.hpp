@@ -46,10 +46,11 @@ struct LumWindow {
 /// `hints`, or by zbar for a value zbar read), "decoders" where the other
 /// decoder reads it in the window (zbar, in the view ZXing read it in or in
 /// its own, for a value ZXing read), else empty:
-/// nothing does, and the value is not reported. `symbologies` and `try_rotate`
-/// as read_barcodes() takes them.
+/// nothing does, and the value is not reported. The halves count only where
+/// `independent_rows` (DecodeWindow's). `symbologies` and `try_rotate` as
+/// read_barcodes() takes them.
 std::string corroboration(const DecodedCode& code, const LumWindow& window,
                           const ZXing::DecodeHints& hints, const std::string& symbologies,
-                          bool try_rotate);
+                          bool try_rotate, bool independent_rows = true);
 
 }  // namespace flutterscan::reader

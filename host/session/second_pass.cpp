@@ -445,12 +445,16 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
     for (const reader::DecodedCode& c : readout.codes)
       if (inside(retry.window, c.centre_x, c.centre_y)) held.push_back(c);
     bool held_read = held.empty();  // all of them read again by the last read_again()
-    // Reads the window on the latents as pasted: the codes not in the readout.
-    auto read_window = [&](const std::string& symbologies, double turn_rad = 0) {
+    // Reads the window on the latents as pasted, made by try `pass`: the codes
+    // not in the readout. Joint Wiener's sums deblur each row on its own; tv's
+    // prior ties rows together (reader::DecodeWindow::independent_rows).
+    auto read_window = [&](const char* pass, const std::string& symbologies, double turn_rad = 0) {
+      reader::DecodeWindow window = retry.window;
+      window.independent_rows = std::string(pass) == "bar-sums";
       reader::BarcodeReadout again =
           turn_rad == 0
-              ? reader::read_barcodes(camera, symbologies, options.try_rotate, {&retry.window, 1})
-              : reader::read_barcodes_turned(camera, retry.window, turn_rad, symbologies,
+              ? reader::read_barcodes(camera, symbologies, options.try_rotate, {&window, 1})
+              : reader::read_barcodes_turned(camera, window, turn_rad, symbologies,
                                              options.try_rotate);
       for (reader::DecodedCode& code : again.unconfirmed)
         if (std::none_of(readout.unconfirmed.begin(), readout.unconfirmed.end(),
@@ -480,7 +484,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
       return texts;
     };
     auto read_again = [&](const char* pass, const std::string& symbologies, double turn_rad = 0) {
-      return take(read_window(symbologies, turn_rad), pass);
+      return take(read_window(pass, symbologies, turn_rad), pass);
     };
     // The crop is in the motion frame already (+x); its samples passed the frame's checks.
     const auto cropped = imaging::MotionFrame::make(std::move(crop), imaging::Direction::kPlusX);
@@ -542,8 +546,8 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
           };
           const imaging::Plane sums = over_rows_across(profile.value().latent);
           paste(sums);
-          std::vector<reader::DecodedCode> found = read_window(linear);
-          if (found.empty() && turn != 0) found = read_window(linear, turn);
+          std::vector<reader::DecodedCode> found = read_window("bar-sums", linear);
+          if (found.empty() && turn != 0) found = read_window("bar-sums", linear, turn);
           // The frame shows tv's latent, and the sums' over the rows of the codes
           // they read only: the sums smear whatever else the window holds (a
           // matrix code above or below that tv or the first pass read, text)
@@ -565,8 +569,8 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
           if (tv_profile.ok()) {
             const imaging::Plane tv_composite = over_rows_across(tv_profile.value().latent);
             paste(tv_composite);
-            found = read_window(linear);
-            if (found.empty() && turn != 0) found = read_window(linear, turn);
+            found = read_window("tv-on-sums", linear);
+            if (found.empty() && turn != 0) found = read_window("tv-on-sums", linear, turn);
             paste(sums);
             found = supported_reads(camera, std::move(found), bars.tv_checked);
             paste(patch);

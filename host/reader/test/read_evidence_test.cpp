@@ -47,6 +47,18 @@ TEST(ReadEvidence, AnEan13ReadsOnBothHalvesOfItsBarsACode128IsBackedByItsCheck) 
   EXPECT_EQ(code128.codes[0].evidence, "check");
 }
 
+TEST(ReadEvidence, OnALatentWhosePriorTiesRowsTogetherOnlyASecondDecoderBacksAValue) {
+  const imaging::Plane ean = rendered("ean13:590123412345", 480, 240, 2.5);
+  DecodeWindow window{0, 0, ean.width, ean.height};
+  window.independent_rows = false;
+  const BarcodeReadout read = read_barcodes(ean, kDefaultSymbologies, true, {&window, 1});
+  ASSERT_EQ(read.codes.size(), 1u);
+  EXPECT_EQ(read.codes[0].evidence, "decoders");
+  const BarcodeReadout turned = read_barcodes_turned(ean, window, 0.01, kDefaultSymbologies, true);
+  ASSERT_EQ(turned.codes.size(), 1u);
+  EXPECT_EQ(turned.codes[0].evidence, "decoders");
+}
+
 TEST(ReadEvidence, AValueTheHalvesDoNotReadIsNotBacked) {
   // The label's bars, and a value they do not encode (its fifth digit 2 -> 9,
   // the check digit made to pass) said to lie where they are: neither half
