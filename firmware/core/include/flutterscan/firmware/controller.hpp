@@ -14,12 +14,19 @@
 // refuses stays dark and its event carries kEventGuardHit. Its history (when
 // the last lit exposure started, when it ended, each LED's run at its end) is
 // the LEDs' and outlives Arm, Disarm, faults and mode or code changes; a self
-// test is an exposure like any other. Only a power-on reset starts it empty;
-// after a watchdog or software reset the duty period counts from boot.
+// test is an exposure like any other. Every boot, whatever the reset cause,
+// starts it full: the duty period counts from boot and every LED counts as
+// having been on up to its on-time ceiling until boot (the LEDs have their own
+// supply, so a reset of the MCU does not cool them). Only a board that
+// declares its LEDs powered with the MCU (BoardConfig::leds_powered_with_mcu)
+// starts empty after a power-on reset.
 // The invariant (docs/hardware.md, "Thermal guard"): for any two lit
 // exposures (self tests included) starting at a < b with none between, each
-// LED's on-time in the one starting at b is at most its duty cap times b - a,
-// and no LED stays on longer than its max_on_time, across exposures too.
+// LED's energy (on-time x brightness) in the one starting at b is at most its
+// duty cap times b - a, and no LED has a joined run (runs less than the
+// board's minimum off-time apart are one run) longer than its max_on_time,
+// across exposures too. The guard limits never exceed the board's compiled
+// ceiling (BoardConfig::ceiling), nor does the brightness.
 //
 // On the MCU the Port callbacks run in interrupt context and the command
 // methods in the main loop: the stm32f4 port must mask the strobe, frame and
@@ -85,9 +92,10 @@ class Controller final : public PortListener {
   protocol::Status set_timing(const protocol::SetTimingRequest& r);
   /// \brief SetMode (idle only).
   protocol::Status set_mode(const protocol::SetModeRequest& r);
-  /// \brief SetBrightness (any state; applied at once).
+  /// \brief SetBrightness: at or below the ceiling's current; raising it while
+  /// armed only if the armed code stays within the guard, never while LEDs play.
   protocol::Status set_brightness(const protocol::SetBrightnessRequest& r);
-  /// \brief SetGuard (idle only).
+  /// \brief SetGuard (idle only; at or below the ceiling).
   protocol::Status set_guard(const protocol::SetGuardRequest& r);
   /// \brief Arm: checks code, timing and guard, then waits for triggers or starts frames.
   protocol::Status arm();
@@ -126,6 +134,7 @@ class Controller final : public PortListener {
     std::array<std::uint32_t, kMaxSlotWords> words{};
     std::uint16_t word_count = 0;
     std::uint8_t code_id = protocol::kNoCode;
+    LedCode code;
     LedOnStats stats;
   };
 
@@ -147,8 +156,10 @@ class Controller final : public PortListener {
   bool uses_frame_timer() const { return settings_.mode.sync != protocol::SyncMode::kSlave; }
   /// Fills `table` for stored code `code_id` (which must be present).
   void build_table(SlotTable& table, std::uint8_t code_id) const;
-  /// kOk if code `code_id` may run with the current timing (frame period, guard).
-  protocol::Status check_code_runnable(std::uint8_t code_id) const;
+  /// kOk if code `code_id` may run with the current timing (frame period, guard)
+  /// at brightness `brightness`.
+  protocol::Status check_code_runnable(
+      std::uint8_t code_id, const std::array<std::uint16_t, kMaxLeds>& brightness) const;
   void begin_exposure(std::uint64_t time_us);
   /// Pre-arms the next exposure's table if the guard accepts it from now on
   /// (withdrawing a different one first); nothing unless armed and idle between exposures.
@@ -157,17 +168,14 @@ class Controller final : public PortListener {
   bool withdraw_prearm();
   /// Records the pre-armed table an edge started as the exposure in progress.
   void adopt_prearm(const PrearmStart& start);
-  /// The guard's verdict on `stats` at `slot_time_us` for an exposure whose
-  /// LEDs light at `start_us`, given the history of lit exposures.
-  GuardVerdict guard_verdict(const LedOnStats& stats, std::uint32_t slot_time_us,
-                             std::uint64_t start_us) const;
-  /// Records a lit exposure (or self test) starting at `start_us` in the guard's history.
-  void record_lit_exposure(const LedOnStats& stats, std::uint64_t start_us,
+  /// The guard's verdict on `code` (whose stats are `stats`) at `slot_time_us`
+  /// for an exposure whose LEDs light at `start_us`, given the history of lit exposures.
+  GuardVerdict guard_verdict(const LedCode& code, const LedOnStats& stats,
+                             std::uint32_t slot_time_us, std::uint64_t start_us) const;
+  /// Records a lit exposure (or self test) of `code` starting at `start_us` in the guard's history.
+  void record_lit_exposure(const LedCode& code, std::uint64_t start_us,
                            std::uint32_t slot_time_us);
   std::uint32_t slot_time_for_next_exposure(int code_length, std::uint16_t& flags) const;
-  /// Records the exposure just started (lit) for the next one's seam check.
-  void note_lit_exposure(const LedOnStats& stats, std::uint64_t start_us,
-                         std::uint32_t slot_time_us, bool joins_previous);
   void queue_event(const protocol::ExposureEvent& event);
   void stop_sequencing();
   void all_leds_off();
@@ -203,14 +211,17 @@ class Controller final : public PortListener {
   std::uint32_t exposure_slot_time_us_ = 0;
   std::uint16_t exposure_flags_ = 0;
   std::uint32_t exposure_pulse_width_us_ = 0;
-  bool have_previous_start_ = false;
+  /// No lit exposure since a power-on reset of a board whose LEDs are powered with the MCU.
+  bool cold_ = false;
   std::uint64_t previous_start_us_ = 0;  ///< start of the last lit exposure (the guard's period)
-  // The last exposure that lit its LEDs (a refused one stays dark): when its
-  // all-off word lands, and per LED how long the LED had been on, without a
-  // gap, at that moment. An exposure starting then joins its runs to these.
-  bool have_lit_exposure_ = false;
-  std::uint64_t lit_end_us_ = 0;
-  std::array<std::uint64_t, kMaxLeds> lit_trailing_on_us_{};
+  // Per LED, its last joined run (a refused exposure stays dark): when it
+  // ended and how long it was. A lit slot starting less than the minimum
+  // off-time after that end joins it (the gap counts as on). Boot sets every
+  // LED's run to its on-time limit, ending at boot.
+  std::array<std::uint64_t, kMaxLeds> run_end_us_{};
+  std::array<std::uint64_t, kMaxLeds> run_us_{};
+  std::array<bool, kMaxLeds> has_run_{};  ///< false: the LED has not lit since a cold boot
+  std::uint64_t lit_end_us_ = 0;    ///< when the last lit exposure's all-off word lands
   std::uint64_t lit_start_us_ = 0;  ///< start of the last lit exposure
   /// The self test's table (its own, so a self test never writes a code's table).
   std::array<std::uint32_t, kMaxLeds + 1> self_test_words_{};
