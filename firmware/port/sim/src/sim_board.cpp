@@ -227,6 +227,9 @@ Enumeration SimBoard::enumerate(std::uint8_t address) {
     return true;
   };
   std::vector<std::uint8_t> scratch;
+  // The hub debounces the connection for 100 ms before the first reset (USB
+  // 2.0 7.1.7.3); the device runs meanwhile.
+  run_for(kAttachDebounceUs);
   // hub_port_init: reset, 64-byte device descriptor read at address 0, reset, SET_ADDRESS.
   bus_reset();
   step("GET_DESCRIPTOR(device, 64) at address 0", 0x80, kGetDescriptor,

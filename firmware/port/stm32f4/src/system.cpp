@@ -5,6 +5,7 @@
 
 #include <cstring>
 
+#include "flutterscan/firmware/flash.hpp"
 #include "flutterscan/firmware/stm32f4/registers.hpp"
 #include "flutterscan/firmware/stm32f4/stm32f4_board.hpp"
 
@@ -120,7 +121,7 @@ PortStatus flash_erase_sector(int sector) {
 
 PortStatus flash_program(std::uint32_t address, std::span<const std::uint8_t> data) {
   if (data.empty()) return PortStatus::kOk;
-  if (address % 4 != 0 || flash_sector_of(address) < 1 ||
+  if (address % kFlashProgramAlignment != 0 || flash_sector_of(address) < 1 ||
       flash_sector_of(address + static_cast<std::uint32_t>(data.size()) - 1) < 1)
     return PortStatus::kError;
   if (!flash_wait_idle() || !flash_unlock()) return PortStatus::kError;

@@ -86,8 +86,14 @@ class DfuMode final : public UsbFunction {
   void start_download();
   /// Estimated ms to erase and program the pending block.
   std::uint32_t block_poll_ms() const;
-  /// Erases, programs and verifies the pending block.
+  /// Erases, programs and verifies the pending block: whole words only, the
+  /// bytes after its last word boundary kept for the next block (or the manifest).
   void write_block();
+  /// Programs `data` at `address` (word-aligned) and reads it back; false
+  /// (dfuERROR: errPROG or errVERIFY) if either fails.
+  bool program_verified(std::uint32_t address, std::span<const std::uint8_t> data);
+  /// Programs the bytes kept after the last word boundary, padded with 0xFF.
+  bool flush_partial_word();
   void manifest();
   std::uint32_t upload_size();
 
@@ -112,6 +118,10 @@ class DfuMode final : public UsbFunction {
   std::uint32_t upload_offset_ = 0;   ///< bytes sent by this upload so far
   std::size_t pending_length_ = 0;
   std::array<std::uint8_t, kDfuTransferSize> block_{};
+  /// Downloaded bytes after the last word boundary, not yet programmed (the
+  /// flash programs whole words at aligned addresses, kFlashProgramAlignment).
+  std::array<std::uint8_t, kFlashProgramAlignment> partial_word_{};
+  std::size_t partial_length_ = 0;
 };
 
 }  // namespace flutterscan::firmware::usb

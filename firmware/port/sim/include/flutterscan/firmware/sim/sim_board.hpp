@@ -82,6 +82,9 @@ struct SimBoardConfig {
   }
 };
 
+/// \brief How long a hub debounces a new connection before resetting it (USB 2.0 7.1.7.3).
+inline constexpr std::uint64_t kAttachDebounceUs = 100'000;
+
 /// \brief What the host learned by enumerating the device.
 struct Enumeration {
   bool ok = false;
@@ -146,7 +149,8 @@ class SimBoard {
   void bus_reset();
   /// \brief Whether IN or OUT endpoint `address` is halted (usbdevfs: EPIPE).
   bool endpoint_halted(std::uint8_t address) const { return usb_->endpoint_halted(address); }
-  /// \brief Enumerates the device as Linux does at plug-in, leaving it configured at `address`.
+  /// \brief Enumerates the device as Linux does at plug-in (after the hub's
+  /// kAttachDebounceUs of virtual time), leaving it configured at `address`.
   Enumeration enumerate(std::uint8_t address = 2);
 
   // Identity for the umockdev sysfs record --------------------------------------
