@@ -9,8 +9,9 @@
 // reset flags cleared with RMVF and handed over in the record) and the image passes
 // check_boot_image (header, CRC, load address, vector table at 0x200, SP, PC);
 // otherwise the C runtime starts and bootloader_main() serves DFU. The jump
-// leaves the chip as reset left it, except VTOR and MSP (GPIOB's clock and
-// PB2's pull-down, used to read the pin, are put back to their reset values).
+// leaves the chip as reset left it, except VTOR, MSP and the independent
+// watchdog, started with kBootWatchdogTimeoutMs (GPIOB's clock and PB2's
+// pull-down, used to read the pin, are put back to their reset values).
 
 #include <cstdint>
 #include <cstring>
@@ -21,6 +22,7 @@
 #include "flutterscan/firmware/cortex_m/c_runtime.hpp"
 #include "flutterscan/firmware/stm32f4/registers.hpp"
 #include "flutterscan/firmware/stm32f4/stm32f4_board.hpp"
+#include "flutterscan/firmware/stm32f4/system.hpp"
 #include "sector0_protection.hpp"
 
 extern "C" {
@@ -144,7 +146,12 @@ void Reset_Handler() {
   record = fw::make_boot_record(decision.unconfirmed_starts, decision.watchdog_resets,
                                 csr & stm::reg::rcc::kCsrResetFlags);
   std::memcpy(reinterpret_cast<void*>(stm::kBootRecordAddress), &record, sizeof record);
-  if (decision.target == fw::BootTarget::kApplication) start_application();
+  if (decision.target == fw::BootTarget::kApplication) {
+    // Whatever the image does from its first instruction on (hang, fault,
+    // never feed it), the watchdog resets it, and decide_boot counts it.
+    (void)stm::start_independent_watchdog(stm::kBootWatchdogTimeoutMs);
+    start_application();
+  }
 
   stm::reg::set_bits(stm::reg::scb::kCpacr, stm::reg::scb::kCpacrFpuFullAccess);
   asm volatile("dsb\n\tisb" ::: "memory");

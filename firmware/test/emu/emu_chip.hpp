@@ -95,6 +95,10 @@ inline constexpr int kIrqOtgFs = 67;
 class Chip {
  public:
   static constexpr std::uint64_t kCpuHz = 168'000'000;
+  /// The LSI clocking the IWDG, nominal (RM0090 5.2.5: 17-47 kHz).
+  static constexpr std::uint64_t kLsiHz = 32'000;
+  /// Thumb `b .` (branch to itself).
+  static constexpr std::uint32_t kBranchToSelf = 0xE7FE;
   static constexpr std::uint64_t kCyclesPerUs = kCpuHz / 1'000'000;
 
   Chip();
@@ -127,6 +131,8 @@ class Chip {
   std::uint64_t cycles() const { return cycles_; }
   /// System resets requested through AIRCR so far.
   int system_resets() const { return system_resets_; }
+  /// The cycles at which the independent watchdog reset the chip, in order.
+  const std::vector<std::uint64_t>& watchdog_resets() const { return watchdog_resets_; }
   std::uint32_t reg(int r);
   OtgFs& otg_fs() { return otg_; }
   /// A modelled peripheral register's value (as stored; no side effects).
@@ -192,7 +198,9 @@ class Chip {
   bool take_exception(int exception);
   std::uint32_t exception_priority(int exception) const;
   void systick_store(std::uint32_t address, std::uint32_t value);
-  void system_reset();
+  void iwdg_store(std::uint32_t offset, std::uint32_t value);
+  /// A system reset: AIRCR's SYSRESETREQ, or the watchdog's (`by_watchdog`).
+  void system_reset(bool by_watchdog = false);
   static std::uint32_t flash_sector_base(int sector);
   void flash_control(std::uint32_t value);
   static void flash_store(uc_engine*, uc_mem_type, std::uint64_t address, int size,
@@ -233,6 +241,12 @@ class Chip {
   bool sleeping_ = false;
   bool reset_requested_ = false;
   int system_resets_ = 0;
+  // IWDG (RM0090 21.3): the cycle its counter reaches 0 while started; PR and
+  // RLR writable after the 0x5555 key; the resets it made.
+  std::uint64_t iwdg_zero_ = kNever;
+  bool iwdg_unlocked_ = false;
+  bool iwdg_expired_ = false;
+  std::vector<std::uint64_t> watchdog_resets_;
   OtgFs otg_;
   // NVIC (96 device interrupts).
   std::uint32_t nvic_enabled_[3] = {0, 0, 0};

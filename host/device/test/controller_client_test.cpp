@@ -171,10 +171,15 @@ TEST_F(ClientTest, SetBrightness) {
 TEST_F(ClientTest, SetGuard) {
   proto::SetGuardRequest guard{};
   guard.max_on_time_us.fill(10'000);
-  guard.max_duty_permille.fill(800);
+  guard.max_duty_permille.fill(400);
   ASSERT_TRUE(client->set_guard(guard).ok());
   guard.max_duty_permille[0] = 0;
   expect_rejected(client->set_guard(guard), proto::Status::kOutOfRange, "SetGuard refused");
+  // Above the product board's compiled ceiling (50 %): refused, by name.
+  guard.max_duty_permille.fill(800);
+  expect_rejected(client->set_guard(guard), proto::Status::kAboveCeiling,
+                  "SetGuard refused by the controller: above the LED ceiling compiled into the "
+                  "firmware (status 14)");
 }
 
 // SaveConfig erases a flash sector (up to 2 s) before it can answer: the
