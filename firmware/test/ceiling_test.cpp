@@ -85,6 +85,32 @@ TEST(Ceiling, RunsAFewMicrosecondsApartAreOneRunForTheOnTimeLimit) {
   EXPECT_LE(longest_joined_run_us(rig.port.led_transitions(), 0, kLedMinOffTimeUs), 10'000u);
 }
 
+// Fuzz finding (firmware/fuzz/crashes/prearm-join-grows-with-a-later-start):
+// the controller pre-arms a table the guard accepts for a start "now",
+// assuming acceptance only grows with a later start. With joined runs it does
+// not: a start later within the minimum off-time joins a longer gap. Frames
+// 3050 us apart, LED 0 lit 0-2 ms of each 3 ms exposure: judged right after an
+// exposure the join was 2 + 0 + 2 ms, but the frame came 1050 us later: 5050 us
+// against a 5000 us limit.
+TEST(Ceiling, APrearmedTableIsJudgedForTheLatestStartThatStillJoins) {
+  Rig rig(product_like_board());
+  rig.port.run_until(1'000'000);
+  ASSERT_EQ(rig.send(Command::kSetGuard, guard(5'000, 500)).status(), Status::kOk);
+  ASSERT_EQ(rig.upload(0, "100124", 3), Status::kOk);
+  ASSERT_EQ(rig.select(0), Status::kOk);
+  ASSERT_EQ(rig.set_timing(500, 3'050), Status::kOk);
+  ASSERT_EQ(rig.set_mode(proto::SyncMode::kFreeRun), Status::kOk);
+  rig.port.clear_led_transitions();
+  ASSERT_EQ(rig.arm(), Status::kOk);
+  for (int i = 0; i < 40; ++i) {
+    rig.port.run_for(1'000);
+    rig.controller().poll();  // the main loop re-decides the pre-arm
+  }
+  ASSERT_EQ(rig.disarm(), Status::kOk);
+  EXPECT_GE(rig.port.led_transitions().size(), 4u);  // it did light
+  EXPECT_LE(longest_joined_run_us(rig.port.led_transitions(), 0, kLedMinOffTimeUs), 5'000u);
+}
+
 // The library's one-of-3 codes at the default timing (100 us slots) still arm
 // and play under the product's ceiling and default guard with the minimum
 // off-time joining their runs.

@@ -502,7 +502,8 @@ void Controller::update_prearm() {
   std::uint16_t flags = 0;
   const std::uint32_t slot_time = slot_time_for_next_exposure(table.stats.length, flags);
   const bool accepted =
-      guard_verdict(table.code, table.stats, slot_time, port_.now_us()).status == GuardStatus::kOk;
+      guard_verdict(table.code, table.stats, slot_time, port_.now_us(), true).status ==
+      GuardStatus::kOk;
   if (accepted && prearm_.active && prearm_.table == index && prearm_.slot_time_us == slot_time)
     return;
   if (withdraw_prearm()) return;  // an edge started it: now exposing
@@ -546,7 +547,8 @@ void Controller::adopt_prearm(const PrearmStart& start) {
 }
 
 GuardVerdict Controller::guard_verdict(const LedCode& code, const LedOnStats& stats,
-                                       std::uint32_t slot_time_us, std::uint64_t start_us) const {
+                                       std::uint32_t slot_time_us, std::uint64_t start_us,
+                                       bool any_later_start) const {
   // The period since the last lit exposure began (or since boot): one the
   // guard refused lit nothing, so it neither starts a period nor ends the
   // last lit exposure. Cold LEDs (a board powering them with the MCU, after a
@@ -572,7 +574,9 @@ GuardVerdict Controller::guard_verdict(const LedCode& code, const LedOnStats& st
     const std::uint64_t first_on = start_us + runs.first_on_us;
     const std::uint64_t gap = first_on > run_end_us_[k] ? first_on - run_end_us_[k] : 0;
     if (has_run_[k] && gap < min_off) {
-      const std::uint64_t joined = run_us_[k] + gap + runs.first_run_us;
+      // A pre-armed table may start later, up to a gap of min_off - 1 that still joins.
+      const std::uint64_t joined_gap = any_later_start ? min_off - 1 : gap;
+      const std::uint64_t joined = run_us_[k] + joined_gap + runs.first_run_us;
       if (joined > limits.max_on_time_us[k])
         return {GuardStatus::kOnTimeTooLong, led, joined, limits.max_on_time_us[k]};
     }

@@ -35,9 +35,10 @@
 // Pre-arming (issue 15, finding 3): the port can start a table on the trigger
 // edge in hardware, before any callback. The controller pre-arms only the
 // table of the next exposure, at its slot time, once the guard accepts it for
-// a start at the moment of pre-arming; acceptance only grows with a later
-// start (longer period, no seam), so whatever edge starts it, the guard said
-// yes before any LED lit. A pre-armed table that an edge started is always
+// every start from the moment of pre-arming on: the duty only improves with a
+// later start, and a join with an LED's last run is judged at the longest gap
+// that still joins, so whatever edge starts it, the guard said yes before any
+// LED lit. A pre-armed table that an edge started is always
 // adopted as a lit exposure, also when SelectCode or Disarm withdraws it too
 // late. Otherwise the edge's callback decides and starts the table in software
 // (late by the interrupt latency, never early). The controller re-decides the
@@ -169,9 +170,13 @@ class Controller final : public PortListener {
   /// Records the pre-armed table an edge started as the exposure in progress.
   void adopt_prearm(const PrearmStart& start);
   /// The guard's verdict on `code` (whose stats are `stats`) at `slot_time_us`
-  /// for an exposure whose LEDs light at `start_us`, given the history of lit exposures.
+  /// for an exposure whose LEDs light at `start_us`, given the history of lit
+  /// exposures; with `any_later_start`, for every start from `start_us` on
+  /// (a pre-arm): a later start still within the minimum off-time of an LED's
+  /// last run joins a longer gap, so the join is judged at the longest gap that joins.
   GuardVerdict guard_verdict(const LedCode& code, const LedOnStats& stats,
-                             std::uint32_t slot_time_us, std::uint64_t start_us) const;
+                             std::uint32_t slot_time_us, std::uint64_t start_us,
+                             bool any_later_start = false) const;
   /// Records a lit exposure (or self test) of `code` starting at `start_us` in the guard's history.
   void record_lit_exposure(const LedCode& code, std::uint64_t start_us,
                            std::uint32_t slot_time_us);
