@@ -193,6 +193,19 @@ TEST(Ceiling, ASavedConfigurationAboveTheCeilingIsTightenedWhenLoaded) {
   }
 }
 
+// Fuzz finding (crashes/default-brightness-above-the-ceiling): the factory
+// settings had full brightness whatever the ceiling's current.
+TEST(Ceiling, FactorySettingsAreWithinTheCeiling) {
+  BoardConfig board = product_like_board();
+  board.ceiling.max_current_permille = {700, 600, 500, 400};
+  board.ceiling.max_duty_permille = {300, 300, 300, 300};
+  Rig rig(board);
+  const ControllerSettings& s = rig.controller().settings();
+  EXPECT_EQ(s.brightness_permille, (std::array<std::uint16_t, kMaxLeds>{700, 600, 500, 400}));
+  EXPECT_EQ(s.guard.max_duty_permille[0], 300u);
+  EXPECT_EQ(rig.port.led_brightness(0), 700u);
+}
+
 // Defect 3: brightness above the ceiling's current is refused; the duty cap
 // is energy, so more current while armed must fit the armed code, and the
 // current cannot rise under a table that plays.

@@ -21,7 +21,9 @@ bool all_zero(const std::array<std::uint8_t, 2>& bytes) {
 ControllerSettings default_settings(const BoardConfig& board) {
   ControllerSettings settings;
   settings.guard = board.default_guard;
-  return settings;
+  // Full brightness and the default guard, but never above the ceiling (a
+  // board whose LEDs take less than the driver's full-scale current).
+  return tighten_to_ceiling(settings, board.ceiling);
 }
 
 Status check_timing(const TimingSettings& timing) {

@@ -90,7 +90,7 @@ struct ControllerSettings {
 };
 
 /// \brief Factory settings for `board`: no codes, 100 us slots, slave mode, full
-/// brightness, the board's default guard.
+/// brightness and the board's default guard, each lowered to its ceiling.
 ControllerSettings default_settings(const BoardConfig& board);
 
 /// \brief SetTiming's arguments as settings; kOutOfRange on any bad field or reserved byte.
