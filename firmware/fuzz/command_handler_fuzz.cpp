@@ -70,6 +70,7 @@
 #include "flutterscan/firmware/controller.hpp"
 #include "flutterscan/firmware/sim/sim_board.hpp"
 #include "flutterscan/firmware/sim/sim_flash.hpp"
+#include "flutterscan/firmware/sim/sim_security_floor.hpp"
 #include "flutterscan/firmware/sim/sim_port.hpp"
 #include "flutterscan/firmware/sim/sim_usb_controller.hpp"
 #include "flutterscan/firmware/usb/application_usb.hpp"
@@ -635,9 +636,10 @@ class Harness {
   }
   struct DfuDevice {
     fw::sim::SimFlash& flash = dfu_flash();
+    fw::sim::SimSecurityFloor floor;
     fw::sim::SimUsbController usb;
-    fw::usb::BootloaderUsb boot{usb,         flash,    kDfuFlash, flutterscan::kStm32f405AppRegion,
-                                kBootDevice, kUniqueId};
+    fw::usb::BootloaderUsb boot{usb,       flash,       floor, kDfuFlash,
+                                flutterscan::kStm32f405AppRegion, kBootDevice, kUniqueId};
     DfuDevice() {
       usb.attach(&boot);
       usb.bus_reset();

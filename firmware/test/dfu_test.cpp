@@ -12,6 +12,7 @@
 
 #include "flutterscan/firmware/boot_decision.hpp"
 #include "flutterscan/firmware/sim/sim_flash.hpp"
+#include "flutterscan/firmware/sim/sim_security_floor.hpp"
 #include "flutterscan/firmware/sim/sim_usb_controller.hpp"
 #include "flutterscan/firmware/usb/bootloader_usb.hpp"
 #include "usb_test_host.hpp"
@@ -412,7 +413,9 @@ class DfuLeavingTest : public ::testing::Test {
   static constexpr auto kDevice = usb::bootloader_device_descriptor(0x0100);
   sim::SimFlash flash_;
   sim::SimUsbController usb_;
-  usb::BootloaderUsb boot_{usb_, flash_, kStm32f405Flash, kStm32f405AppRegion, kDevice, kUniqueId};
+  sim::SimSecurityFloor floor_;
+  usb::BootloaderUsb boot_{usb_,    flash_,  floor_,   kStm32f405Flash, kStm32f405AppRegion,
+                           kDevice, kUniqueId};
 };
 
 TEST_F(DfuLeavingTest, NoDownloadAfterDetach) {

@@ -179,8 +179,11 @@ void Chip::system_reset(bool by_watchdog) {
   iwdg_expired_ = false;
   const std::uint32_t optcr = regs_.at(kFlashOptcr);
   const std::uint32_t csr_flags = regs_.at(kRccBase + 0x74) & 0xFF000000u;
+  std::vector<std::uint32_t> otp;  // non-volatile, like the option bytes
+  for (std::uint32_t a = kOtpBase; a < kOtpBase + kOtpSize; a += 4) otp.push_back(regs_.at(a));
   regs_.clear();
   model_registers();
+  for (std::uint32_t i = 0; i < otp.size(); ++i) regs_[kOtpBase + 4 * i] = otp[i];
   regs_[kFlashOptcr] = optcr | kOptcrOptLock;
   regs_[kRccBase + 0x74] = (regs_.at(kRccBase + 0x74) & 0x00FFFFFFu) | csr_flags |
                            (by_watchdog ? 1u << 29 : 1u << 28) | 1u << 26;
@@ -705,6 +708,8 @@ void Chip::model_registers() {
   regs_[kScsBase + 0xD00] = 0x410FC241;  // CPUID: Cortex-M4 r0p1
   regs_[kScsBase + kScbCpacr] = 0;
   // The 96-bit unique ID (RM0090 39.1), read-only.
+  // OTP (RM0090 3.8), erased; programmed through the flash interface (store).
+  for (std::uint32_t a = kOtpBase; a < kOtpBase + kOtpSize; a += 4) regs_[a] = 0xFFFFFFFFu;
   regs_[kUniqueIdPage + 0xA10] = 0x00470031;
   regs_[kUniqueIdPage + 0xA14] = 0x31385119;
   regs_[kUniqueIdPage + 0xA18] = 0x32363734;
@@ -791,6 +796,22 @@ void Chip::store(std::uint32_t address, std::uint32_t value) {
   const std::uint32_t base = address & ~0x3FFu;
   if (base == kIwdgBase) {
     iwdg_store(offset, value);
+    return;
+  }
+  if (address >= kOtpBase && address < kOtpBase + kOtpSize) {
+    // RM0090 3.8: OTP is programmed like main flash (PG, x32 here) and never erased.
+    const std::uint32_t cr = regs_.at(kFlashCr);
+    const std::uint32_t old = regs_.at(address);
+    if ((cr & kCrLock) != 0 || (cr & kCrPg) == 0 || flash_busy_reads_ > 0 || (old & value) != value) {
+      char b[96];
+      std::snprintf(b, sizeof b, "OTP program of 0x%08x over 0x%08x at 0x%08x (no PG or not erased)",
+                    value, old, address);
+      fail(b);
+      return;
+    }
+    regs_[address] = value;
+    ++otp_programs_;
+    flash_busy_reads_ = 1;
     return;
   }
   if (address == kRccBase + 0x74 && (value & (1u << 24)) != 0) {  // CSR.RMVF

@@ -80,6 +80,9 @@ inline constexpr std::uint32_t kDma2Base = 0x40026400;
 inline constexpr std::uint32_t kIwdgBase = 0x40003000;
 inline constexpr std::uint32_t kDbgmcuBase = 0xE0042000;
 inline constexpr std::uint32_t kUniqueIdPage = 0x1FFF7000;
+/// OTP area (RM0090 3.8): 16 blocks of 32 bytes, then 16 lock bytes; erased 0xFF.
+inline constexpr std::uint32_t kOtpBase = 0x1FFF7800;
+inline constexpr std::uint32_t kOtpSize = 528;
 inline constexpr std::uint32_t kScsBase = 0xE000E000;
 inline constexpr std::uint32_t kScbVtor = 0xD08;
 inline constexpr std::uint32_t kScbCpacr = 0xD88;
@@ -152,6 +155,8 @@ class Chip {
   const std::vector<int>& flash_erases() const { return flash_erases_; }
   /// Words programmed through the flash interface.
   int flash_programs() const { return flash_programs_; }
+  /// Words programmed into the OTP area through the flash interface.
+  int otp_programs() const { return otp_programs_; }
   /// Option-byte programming operations (OPTSTRT) seen.
   int option_programs() const { return option_programs_; }
   /// Sets the option bytes the chip comes out of reset with (FLASH_OPTCR).
@@ -256,6 +261,7 @@ class Chip {
   int flash_key_step_ = 0;
   std::vector<int> flash_erases_;
   int flash_programs_ = 0;
+  int otp_programs_ = 0;
   int flash_busy_reads_ = 0;
   int option_programs_ = 0;
   std::vector<PinWrite> gpioc_writes_;

@@ -121,7 +121,7 @@ TEST_F(DeviceCli, InfoDescribesTheVirtualController) {
   const auto r = run(sim({"device", "info"}));
   ASSERT_EQ(r.exit_code, 0) << r;
   EXPECT_TRUE(contains(r.out, "virtual controller")) << r;
-  EXPECT_TRUE(contains(r.out, "protocol    1.0")) << r;
+  EXPECT_TRUE(contains(r.out, "protocol    1.1")) << r;
   EXPECT_TRUE(contains(r.out, "3 LEDs, 8 code slots")) << r;
   EXPECT_TRUE(contains(r.out, "slave-sync")) << r;
 }

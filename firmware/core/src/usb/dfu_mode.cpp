@@ -14,13 +14,17 @@ bool is_request(const SetupPacket& setup, std::uint8_t request_type) {
 
 }  // namespace
 
-DfuMode::DfuMode(Flash& flash, const FlashLayout& layout, const AppRegion& region,
-                 std::uint8_t interface_number)
-    : flash_(flash), layout_(layout), region_(region), interface_number_(interface_number) {}
+DfuMode::DfuMode(Flash& flash, SecurityFloor& floor, const FlashLayout& layout,
+                 const AppRegion& region, std::uint8_t interface_number)
+    : flash_(flash),
+      floor_(floor),
+      layout_(layout),
+      region_(region),
+      interface_number_(interface_number) {}
 
 bool DfuMode::application_valid() {
   const auto image = flash_.read(region_.load_address, region_.max_size);
-  return check_boot_image(image, region_) == BootImageCheck::kOk;
+  return check_boot_image(image, region_, floor_.floor()) == BootImageCheck::kOk;
 }
 
 ControlReply DfuMode::fail(DfuStatus status) {
@@ -322,8 +326,13 @@ void DfuMode::manifest() {
   last_check_ = check_image(image, region_.board_id, region_.max_size);
   // Also what the bootloader's jump needs (load address, vector table, SP, PC):
   // an image the bootloader would not start is refused here, not after a reset.
-  if (last_check_ != ImageCheck::kOk || check_boot_image(image, region_) != BootImageCheck::kOk) {
+  if (last_check_ != ImageCheck::kOk) {
     fail(DfuStatus::kErrFirmware);
+    return;
+  }
+  const BootImageCheck boot = check_boot_image(image, region_, floor_.floor());
+  if (boot != BootImageCheck::kOk) {
+    fail(boot == BootImageCheck::kRolledBack ? DfuStatus::kErrVendor : DfuStatus::kErrFirmware);
     return;
   }
   manifest_done_ = true;

@@ -148,6 +148,27 @@ PortStatus flash_program(std::uint32_t address, std::span<const std::uint8_t> da
   return ok ? PortStatus::kOk : PortStatus::kError;
 }
 
+PortStatus otp_program(std::uint32_t address, std::span<const std::uint32_t> words) {
+  constexpr std::uint32_t kOtpBase = 0x1FFF7800;
+  constexpr std::uint32_t kOtpDataBytes = 512;
+  if (address % 4 != 0 || address < kOtpBase ||
+      address + 4 * words.size() > kOtpBase + kOtpDataBytes)
+    return PortStatus::kError;
+  if (!flash_wait_idle() || !flash_unlock()) return PortStatus::kError;
+  reg::at(reg::flash::kSr) = reg::flash::kSrErrors | reg::flash::kSrEop;
+  reg::at(reg::flash::kCr) = reg::flash::kCrPg | reg::flash::kCrPsizeX32;
+  bool ok = true;
+  for (std::size_t i = 0; ok && i < words.size(); ++i) {
+    reg::at(address + 4 * static_cast<std::uint32_t>(i)) = words[i];
+    ok = flash_wait_idle() && (reg::at(reg::flash::kSr) & reg::flash::kSrErrors) == 0;
+  }
+  reg::clear_bits(reg::flash::kCr, reg::flash::kCrPg);
+  flash_lock();
+  for (std::size_t i = 0; ok && i < words.size(); ++i)
+    ok = reg::at(address + 4 * static_cast<std::uint32_t>(i)) == words[i];
+  return ok ? PortStatus::kOk : PortStatus::kError;
+}
+
 // ---------------------------------------------------------------------------
 
 bool start_independent_watchdog(std::uint32_t timeout_ms) {
