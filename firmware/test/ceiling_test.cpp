@@ -207,8 +207,8 @@ TEST(Ceiling, FactorySettingsAreWithinTheCeiling) {
 }
 
 // Defect 3: brightness above the ceiling's current is refused; the duty cap
-// is energy, so more current while armed must fit the armed code, and the
-// current cannot rise under a table that plays.
+// is energy, so Arm judges the code at the current brightness, and the current
+// cannot rise while a code is armed (the guard judged its tables at the old one).
 TEST(Ceiling, BrightnessCountsAsEnergyAndCannotExceedTheCeilingCurrent) {
   BoardConfig board = product_like_board();
   board.ceiling.max_current_permille = {700, 700, 700, 700};
@@ -228,16 +228,22 @@ TEST(Ceiling, BrightnessCountsAsEnergyAndCannotExceedTheCeilingCurrent) {
   ASSERT_EQ(rig.set_mode(proto::SyncMode::kFreeRun), Status::kOk);
   ASSERT_EQ(rig.arm(), Status::kOk);
   rig.port.run_for(41'500);  // between two exposures
-  bright.permille = {700, 350, 350, 0};  // 700 x 1 ms / 4 ms = 175 per mille: fits 350
+  bright.permille = {700, 350, 350, 0};  // more current while armed: refused
+  EXPECT_EQ(rig.send(Command::kSetBrightness, bright).status(), Status::kBadState);
+  EXPECT_EQ(rig.port.led_brightness(0), 350u);
+  bright.permille = {300, 350, 350, 0};  // less: always
   EXPECT_EQ(rig.send(Command::kSetBrightness, bright).status(), Status::kOk);
+  EXPECT_EQ(rig.port.led_brightness(0), 300u);
   ASSERT_EQ(rig.disarm(), Status::kOk);
+  // 1 ms lit every 1.5 ms: 67 % of the time; 233 per mille of energy at 350,
+  // 467 at 700 (the guard's cap is 350).
   ASSERT_EQ(rig.set_timing(1'000, 1'500), Status::kOk);
+  bright.permille = {700, 350, 350, 0};
+  ASSERT_EQ(rig.send(Command::kSetBrightness, bright).status(), Status::kOk);
+  EXPECT_EQ(rig.arm(), Status::kGuardLimit);
   bright.permille = {350, 350, 350, 0};
   ASSERT_EQ(rig.send(Command::kSetBrightness, bright).status(), Status::kOk);
-  ASSERT_EQ(rig.arm(), Status::kOk);  // 350 x 1 / 1.5 = 234 per mille
-  bright.permille = {700, 350, 350, 0};  // 467 per mille: over 350
-  EXPECT_EQ(rig.send(Command::kSetBrightness, bright).status(), Status::kGuardLimit);
-  EXPECT_EQ(rig.port.led_brightness(0), 350u);
+  EXPECT_EQ(rig.arm(), Status::kOk);
 }
 
 }  // namespace

@@ -138,8 +138,7 @@ Result<protocol::SetCodeReply, Status> Controller::set_code_chunk(
   return Out::success({upload_.received, 0, 0});
 }
 
-Status Controller::check_code_runnable(
-    std::uint8_t code_id, const std::array<std::uint16_t, kMaxLeds>& brightness) const {
+Status Controller::check_code_runnable(std::uint8_t code_id) const {
   const LedCode& code = settings_.codes[code_id].code;
   const TimingSettings& timing = settings_.timing;
   const std::uint32_t duration = exposure_duration_us(code.length(), timing.slot_time_us);
@@ -147,7 +146,7 @@ Status Controller::check_code_runnable(
     return Status::kTimingConflict;
   const std::uint64_t period = uses_frame_timer() ? timing.frame_period_us : 0;
   const GuardVerdict verdict = check_led_guard(led_on_stats(code), timing.slot_time_us, period,
-                                               settings_.guard, brightness);
+                                               settings_.guard, settings_.brightness_permille);
   if (verdict.status != GuardStatus::kOk) return Status::kGuardLimit;
   // Joined runs within the exposure (across exposures the guard judges each
   // one as it starts).
@@ -170,7 +169,7 @@ Result<protocol::SelectCodeReply, Status> Controller::select_code(
     settings_.selected_code = r.code_id;
     return Out::success({r.code_id, protocol::kNoCode, {}});
   }
-  const Status runnable = check_code_runnable(r.code_id, settings_.brightness_permille);
+  const Status runnable = check_code_runnable(r.code_id);
   if (runnable != Status::kOk) return Out::failure(runnable);
   settings_.selected_code = r.code_id;
   // The pre-armed table is the old choice: withdraw it (an edge that already
@@ -223,22 +222,13 @@ Status Controller::set_brightness(const protocol::SetBrightnessRequest& r) {
     const auto k = static_cast<std::size_t>(led);
     if (r.permille[k] > settings_.brightness_permille[k]) raises = true;
   }
-  if (raises && is_armed()) {
-    // The guard judged the pre-armed table (and the one playing) at the old
-    // current: more current needs a new verdict, and none for a table playing.
-    withdraw_prearm();
-    if (state_ == ControllerState::kExposing) return Status::kBadState;
-    const Status runnable = check_code_runnable(
-        tables_[static_cast<std::size_t>(playing_table_)].code_id, r.permille);
-    if (runnable != Status::kOk) {
-      update_prearm();
-      return runnable;
-    }
-  }
+  // The guard judged the tables playing and pre-armed at the current they
+  // had: more current only where nothing is armed or playing (Arm judges the
+  // code at it); less current is always within what was judged.
+  if (raises && is_armed()) return Status::kBadState;
   if (raises && self_test_running_) return Status::kBusy;
   settings_.brightness_permille = r.permille;
   apply_brightness();
-  update_prearm();
   return Status::kOk;
 }
 
@@ -262,7 +252,7 @@ Status Controller::arm() {
   if (self_test_running_) return Status::kBusy;
   const std::uint8_t id = settings_.selected_code;
   if (id >= protocol::kMaxCodes || !settings_.codes[id].present) return Status::kNoSuchCode;
-  const Status runnable = check_code_runnable(id, settings_.brightness_permille);
+  const Status runnable = check_code_runnable(id);
   if (runnable != Status::kOk) return runnable;
   // The frame timer is the one step that can still fail: start it before
   // anything changes (its ticks are ignored until the state is armed; on the

@@ -93,8 +93,8 @@ class Controller final : public PortListener {
   protocol::Status set_timing(const protocol::SetTimingRequest& r);
   /// \brief SetMode (idle only).
   protocol::Status set_mode(const protocol::SetModeRequest& r);
-  /// \brief SetBrightness: at or below the ceiling's current; raising it while
-  /// armed only if the armed code stays within the guard, never while LEDs play.
+  /// \brief SetBrightness: at or below the ceiling's current; lowering in any
+  /// state, raising only while nothing is armed or playing.
   protocol::Status set_brightness(const protocol::SetBrightnessRequest& r);
   /// \brief SetGuard (idle only; at or below the ceiling).
   protocol::Status set_guard(const protocol::SetGuardRequest& r);
@@ -158,9 +158,8 @@ class Controller final : public PortListener {
   /// Fills `table` for stored code `code_id` (which must be present).
   void build_table(SlotTable& table, std::uint8_t code_id) const;
   /// kOk if code `code_id` may run with the current timing (frame period, guard)
-  /// at brightness `brightness`.
-  protocol::Status check_code_runnable(
-      std::uint8_t code_id, const std::array<std::uint16_t, kMaxLeds>& brightness) const;
+  /// and brightness.
+  protocol::Status check_code_runnable(std::uint8_t code_id) const;
   void begin_exposure(std::uint64_t time_us);
   /// Pre-arms the next exposure's table if the guard accepts it from now on
   /// (withdrawing a different one first); nothing unless armed and idle between exposures.
