@@ -1159,7 +1159,6 @@ class Harness {
     bool ever_off = false;
     std::uint64_t off_at_us = 0;      // the last off transition
     std::uint64_t prev_since_us = 0;  // start of the run that ended then
-    std::uint32_t prev_limit_us = 0;
   };
 
   void check_run(int led, std::uint64_t start_us, std::uint64_t end_us,
@@ -1192,12 +1191,14 @@ class Harness {
           r.ever_off = true;
           r.off_at_us = w.time_us;
           r.prev_since_us = r.since_us;
-          r.prev_limit_us = r.limit_us;
         } else if (!r.on && on) {
-          // Off for less than the minimum off-time: one run (the die did not cool).
+          // Off for less than the minimum off-time: one run (the die did not
+          // cool), judged by the guard in force when it lights again: the host
+          // may relax the guard in the gap (within the ceiling, which
+          // check_run applies to every run), as the controller judges it.
           if (r.ever_off && w.time_us - r.off_at_us < board_.ceiling.min_off_time_us) {
             r.since_us = r.prev_since_us;
-            r.limit_us = std::min(r.prev_limit_us, limits[k]);
+            r.limit_us = limits[k];
           } else {
             r.since_us = w.time_us;
             r.limit_us = limits[k];
