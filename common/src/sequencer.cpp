@@ -97,7 +97,8 @@ LedOnStats led_on_stats(const LedCode& code) {
 }
 
 GuardVerdict check_led_guard(const LedOnStats& stats, std::uint32_t slot_time_us,
-                             std::uint64_t period_us, const GuardLimits& limits) {
+                             std::uint64_t period_us, const GuardLimits& limits,
+                             const std::array<std::uint16_t, kMaxLeds>& current_permille) {
   const std::uint64_t duration_us = static_cast<std::uint64_t>(stats.length) * slot_time_us;
   const bool back_to_back = period_us != 0 && period_us <= duration_us;
   for (int led = 0; led < stats.leds; ++led) {
@@ -113,25 +114,11 @@ GuardVerdict check_led_guard(const LedOnStats& stats, std::uint32_t slot_time_us
   if (effective_period_us == 0) return {};
   for (int led = 0; led < stats.leds; ++led) {
     const auto k = static_cast<std::size_t>(led);
-    const std::uint64_t on_us = static_cast<std::uint64_t>(stats.on_slots[k]) * slot_time_us;
-    const std::uint64_t duty_permille =
-        (on_us * 1000 + effective_period_us - 1) / effective_period_us;
+    const std::uint64_t energy =
+        static_cast<std::uint64_t>(stats.on_slots[k]) * slot_time_us * current_permille[k];
+    const std::uint64_t duty_permille = (energy + effective_period_us - 1) / effective_period_us;
     if (duty_permille > limits.max_duty_permille[k])
       return {GuardStatus::kDutyTooHigh, led, duty_permille, limits.max_duty_permille[k]};
-  }
-  return {};
-}
-
-GuardVerdict check_led_guard_seam(const std::array<std::uint64_t, kMaxLeds>& previous_on_us,
-                                  const LedOnStats& next, std::uint32_t slot_time_us,
-                                  const GuardLimits& limits) {
-  for (int led = 0; led < next.leds; ++led) {
-    const auto k = static_cast<std::size_t>(led);
-    if (next.leading_run_slots[k] == 0) continue;  // the LED turns off at the seam
-    const std::uint64_t on_time_us =
-        previous_on_us[k] + static_cast<std::uint64_t>(next.leading_run_slots[k]) * slot_time_us;
-    if (on_time_us > limits.max_on_time_us[k])
-      return {GuardStatus::kOnTimeTooLong, led, on_time_us, limits.max_on_time_us[k]};
   }
   return {};
 }

@@ -16,15 +16,21 @@
 //   a pre-armed table starts on its edge in hardware and the controller hears
 //   of it an interrupt latency later, or after the main loop's interrupt lock,
 //   which every request holds);
-// - no LED stays on longer than the thermal guard's max_on_time_us (a run that
-//   ends and restarts in the same microsecond counts as one run);
+// - the compiled ceiling (BoardConfig::ceiling): the guard in force never
+//   exceeds its on-time and duty, the brightness never its current;
+// - no LED has a joined run longer than the thermal guard's max_on_time_us
+//   (nor the ceiling's): runs less than the ceiling's min_off_time_us apart
+//   are one run, the gap counted as on, across exposures, self tests and
+//   reboots of every kind (the LED record is the port's, which a reboot keeps);
 // - the duty cap (docs/hardware.md, "Thermal guard"): for every two slot
 //   tables the port started one after the other (exposures and self tests
-//   alike, across Arm, Disarm, mode and code changes and warm reboots), at a
-//   and then b, each LED's on-time from b until the next table starts is at
-//   most its max_duty_permille (in force at b) of b - a. Measured from the
-//   port's record of table starts and LED writes, not the controller's
-//   bookkeeping. Only a power-on reboot starts afresh (the LEDs were cold);
+//   alike, across Arm, Disarm, mode and code changes and reboots), at a
+//   and then b, each LED's energy (on-time x brightness, per mille of full
+//   current) from b until the next table starts is at most its
+//   max_duty_permille (in force at b) of b - a. A reboot, whatever its cause,
+//   counts as a table start that lit nothing (the LEDs keep their heat: the
+//   duty window starts full at boot). Measured from the port's record of
+//   table starts and LED writes, not the controller's bookkeeping;
 // - USB (ops kSetup..kDfuDownload, through the USB device core on a
 //   SimUsbController): every control transfer gets exactly one answer of the
 //   right direction and no more data than wLength; every report on the HID IN
@@ -64,6 +70,7 @@
 #include "flutterscan/firmware/controller.hpp"
 #include "flutterscan/firmware/sim/sim_board.hpp"
 #include "flutterscan/firmware/sim/sim_flash.hpp"
+#include "flutterscan/firmware/sim/sim_security_floor.hpp"
 #include "flutterscan/firmware/sim/sim_port.hpp"
 #include "flutterscan/firmware/sim/sim_usb_controller.hpp"
 #include "flutterscan/firmware/usb/application_usb.hpp"
@@ -158,16 +165,23 @@ fw::BoardConfig board_from(std::uint8_t b) {
   board.firmware_minor = 2;
   board.firmware_patch = 3;
   board.build_id = 0xF022F022;
+  // The default guard is within the ceiling, as on every image.
   switch ((b >> 4) & 3) {
     case 0:
-      break;  // the BoardConfig default
-    case 1:
+      break;  // the BoardConfig defaults: the product's guard and ceiling
+    case 1:  // a ceiling of 1 ms, 100 % at 70 % current, 500 us off joins
+      board.ceiling = {{1'000, 1'000, 1'000, 1'000}, {1'000, 1'000, 1'000, 1'000},
+                       {700, 700, 700, 700}, 500};
       board.default_guard = {{1'000, 1'000, 1'000, 1'000}, {1'000, 1'000, 1'000, 1'000}};
       break;
     case 2:
       board.default_guard = {{10, 10, 10, 10}, {100, 100, 100, 100}};
       break;
-    default:
+    default:  // the protocol's limits as the ceiling; only touching runs join
+      board.ceiling.max_on_time_us.fill(proto::kMaxGuardOnTimeUs);
+      board.ceiling.max_duty_permille.fill(proto::kDutyFullScale);
+      board.ceiling.max_current_permille.fill(proto::kBrightnessFullScale);
+      board.ceiling.min_off_time_us = 1;
       board.default_guard.max_on_time_us.fill(proto::kMaxGuardOnTimeUs);
       board.default_guard.max_duty_permille.fill(proto::kDutyFullScale);
       break;
@@ -408,7 +422,9 @@ class Harness {
         // ends was on under the guard in force before (crashes/reboot-ends-run-
         // under-the-old-guard). LEDs lit after the boot: under both, as for any op.
         observe(before);
-        if (cause == fw::ResetCause::kPowerOn) duty_.have_start = false;
+        // Every kind of boot: the duty window starts full, as if a table that
+        // lit nothing started now (the LEDs have their own supply).
+        duty_start(port_.now_us());
         FUZZ_CHECK(port_.led_mask() == 0);
         break;
       }
@@ -589,7 +605,7 @@ class Harness {
       FUZZ_CHECK(!pending_replies_.empty());
       FUZZ_CHECK(h.command == pending_replies_.front()[0]);
       FUZZ_CHECK(h.sequence == pending_replies_.front()[1]);
-      FUZZ_CHECK(h.status <= static_cast<std::uint8_t>(proto::Status::kHardwareError));
+      FUZZ_CHECK(h.status <= static_cast<std::uint8_t>(proto::Status::kAboveCeiling));
       FUZZ_CHECK(h.payload_length <= proto::kMaxPayloadSize);
       for (std::size_t k = proto::kHeaderSize + h.payload_length; k < proto::kReportSize; ++k)
         FUZZ_CHECK((*packet)[k] == 0);
@@ -620,9 +636,10 @@ class Harness {
   }
   struct DfuDevice {
     fw::sim::SimFlash& flash = dfu_flash();
+    fw::sim::SimSecurityFloor floor;
     fw::sim::SimUsbController usb;
-    fw::usb::BootloaderUsb boot{usb,         flash,    kDfuFlash, flutterscan::kStm32f405AppRegion,
-                                kBootDevice, kUniqueId};
+    fw::usb::BootloaderUsb boot{usb,       flash,       floor, kDfuFlash,
+                                flutterscan::kStm32f405AppRegion, kBootDevice, kUniqueId};
     DfuDevice() {
       usb.attach(&boot);
       usb.bus_reset();
@@ -799,7 +816,7 @@ class Harness {
                    static_cast<unsigned>(controller_->state()));
     FUZZ_CHECK(h.command == (request.size() > 0 ? request[0] : 0));
     FUZZ_CHECK(h.sequence == (request.size() > 1 ? request[1] : 0));
-    FUZZ_CHECK(h.status <= static_cast<std::uint8_t>(proto::Status::kHardwareError));
+    FUZZ_CHECK(h.status <= static_cast<std::uint8_t>(proto::Status::kAboveCeiling));
     FUZZ_CHECK(h.payload_length <= proto::kMaxPayloadSize);
     for (std::size_t i = proto::kHeaderSize + h.payload_length; i < proto::kReportSize; ++i)
       FUZZ_CHECK(reply[i] == 0);
@@ -1037,8 +1054,21 @@ class Harness {
   /// the writes since the last call, under `limits` (the guard in force).
   void observe(const OnLimits& limits) {
     check_state();
+    check_ceiling();
     check_on_times(limits);
     check_duty();
+  }
+
+  /// The settings in force are within the compiled ceiling.
+  void check_ceiling() const {
+    const fw::ControllerSettings& s = controller_->settings();
+    for (int led = 0; led < board_.pins.led_count; ++led) {
+      const auto k = static_cast<std::size_t>(led);
+      FUZZ_CHECK(s.guard.max_on_time_us[k] <= board_.ceiling.max_on_time_us[k]);
+      FUZZ_CHECK(s.guard.max_duty_permille[k] <= board_.ceiling.max_duty_permille[k]);
+      FUZZ_CHECK(s.brightness_permille[k] <= board_.ceiling.max_current_permille[k]);
+      FUZZ_CHECK(port_.led_brightness(led) <= board_.ceiling.max_current_permille[k]);
+    }
   }
 
   /// The duty oracle's state: the table playing (or last played) and the gap
@@ -1049,31 +1079,44 @@ class Harness {
     std::uint64_t start_us = 0;
     std::uint64_t gap_us = 0;
     std::array<std::uint16_t, flutterscan::kMaxLeds> cap{};
-    std::array<std::uint64_t, flutterscan::kMaxLeds> on_us{};
+    /// Energy so far, us x per mille of full current.
+    std::array<std::uint64_t, flutterscan::kMaxLeds> energy{};
     std::uint8_t leds_on = 0;
     std::uint64_t last_us = 0;
     std::size_t seen_starts = 0;
     std::size_t seen_writes = 0;
   };
 
-  /// Adds the LEDs' on-time up to `t` to the current table's and checks it.
+  /// Adds the LEDs' energy up to `t` (at the brightness they have now: it
+  /// cannot rise while a table plays) to the current table's and checks it.
   void duty_accrue(std::uint64_t t) {
     DutyState& d = duty_;
     for (int led = 0; led < board_.pins.led_count; ++led) {
       const auto k = static_cast<std::size_t>(led);
       if (((d.leds_on >> led) & 1u) == 0) continue;
-      d.on_us[k] += t - d.last_us;
-      if (!d.have_gap || d.on_us[k] * 1000 <= static_cast<std::uint64_t>(d.cap[k]) * d.gap_us)
-        continue;
+      d.energy[k] += (t - d.last_us) * port_.led_brightness(led);
+      if (!d.have_gap || d.energy[k] <= static_cast<std::uint64_t>(d.cap[k]) * d.gap_us) continue;
       std::fprintf(stderr,
-                   "LED %d on %llu us in the table started at %llu us, %llu us after the one "
-                   "before: over max_duty_permille %u\n",
-                   led, static_cast<unsigned long long>(d.on_us[k]),
+                   "LED %d: %llu us x per mille in the table started at %llu us, %llu us after "
+                   "the one before: over max_duty_permille %u\n",
+                   led, static_cast<unsigned long long>(d.energy[k]),
                    static_cast<unsigned long long>(d.start_us),
                    static_cast<unsigned long long>(d.gap_us), d.cap[k]);
-      fail("an LED's duty exceeded the guard's max_duty_permille", __LINE__);
+      fail("an LED's energy duty exceeded the guard's max_duty_permille", __LINE__);
     }
     d.last_us = t;
+  }
+
+  /// A table start (or a boot) at `t`: the energy after it is judged over the gap since the last.
+  void duty_start(std::uint64_t t) {
+    DutyState& d = duty_;
+    duty_accrue(std::max(d.last_us, t));
+    d.have_gap = d.have_start;
+    d.gap_us = t - d.start_us;
+    d.have_start = true;
+    d.start_us = t;
+    d.energy = {};
+    d.cap = controller_->settings().guard.max_duty_permille;
   }
 
   void check_duty() {
@@ -1085,14 +1128,7 @@ class Harness {
           d.seen_starts < starts.size() && (d.seen_writes == writes.size() ||
                                             starts[d.seen_starts] <= writes[d.seen_writes].time_us);
       if (start_next) {
-        const std::uint64_t t = starts[d.seen_starts++];
-        duty_accrue(t);
-        d.have_gap = d.have_start;
-        d.gap_us = t - d.start_us;
-        d.have_start = true;
-        d.start_us = t;
-        d.on_us = {};
-        d.cap = controller_->settings().guard.max_duty_permille;
+        duty_start(starts[d.seen_starts++]);
       } else {
         const auto& w = writes[d.seen_writes++];
         duty_accrue(w.time_us);
@@ -1123,17 +1159,20 @@ class Harness {
     bool ever_off = false;
     std::uint64_t off_at_us = 0;      // the last off transition
     std::uint64_t prev_since_us = 0;  // start of the run that ended then
-    std::uint32_t prev_limit_us = 0;
   };
 
   void check_run(int led, std::uint64_t start_us, std::uint64_t end_us,
                  std::uint32_t limit_us) const {
-    if (end_us - start_us <= limit_us) return;
-    std::fprintf(stderr, "LED %d on from %llu us to %llu us (%llu us), guard max_on_time_us %u\n",
+    const std::uint32_t ceiling = board_.ceiling.max_on_time_us[static_cast<std::size_t>(led)];
+    if (end_us - start_us <= std::min(limit_us, ceiling)) return;
+    std::fprintf(stderr,
+                 "LED %d on from %llu us to %llu us (%llu us, runs less than %u us apart "
+                 "joined), guard max_on_time_us %u, ceiling %u\n",
                  led, static_cast<unsigned long long>(start_us),
                  static_cast<unsigned long long>(end_us),
-                 static_cast<unsigned long long>(end_us - start_us), limit_us);
-    fail("an LED stayed on longer than the guard's max_on_time_us", __LINE__);
+                 static_cast<unsigned long long>(end_us - start_us),
+                 board_.ceiling.min_off_time_us, limit_us, ceiling);
+    fail("an LED's joined run exceeded the guard's max_on_time_us or the ceiling", __LINE__);
   }
 
   void check_on_times(const OnLimits& limits) {
@@ -1152,11 +1191,14 @@ class Harness {
           r.ever_off = true;
           r.off_at_us = w.time_us;
           r.prev_since_us = r.since_us;
-          r.prev_limit_us = r.limit_us;
         } else if (!r.on && on) {
-          if (r.ever_off && r.off_at_us == w.time_us) {  // off for no time: one run
+          // Off for less than the minimum off-time: one run (the die did not
+          // cool), judged by the guard in force when it lights again: the host
+          // may relax the guard in the gap (within the ceiling, which
+          // check_run applies to every run), as the controller judges it.
+          if (r.ever_off && w.time_us - r.off_at_us < board_.ceiling.min_off_time_us) {
             r.since_us = r.prev_since_us;
-            r.limit_us = std::min(r.prev_limit_us, limits[k]);
+            r.limit_us = limits[k];
           } else {
             r.since_us = w.time_us;
             r.limit_us = limits[k];

@@ -188,7 +188,7 @@ int main(int argc, char** argv) {
     upload(w, 0, 2, {1, 2, 3, 0, 1, 2, 0, 3});
     select(w, 0);
     timing(w, 100, 0, proto::SlotTimeSource::kFollowExposure);
-    guard(w, 50'000, 1000);
+    guard(w, 50'000, 500);  // the product's ceiling
     w.raw_report(request(proto::Command::kArm));
     w.strobes(6, 10, 5'000, 2'400);
     w.op(Op::kEncoder).u8(1).i32(12'345);
@@ -203,7 +203,7 @@ int main(int argc, char** argv) {
     upload(w, 7, 3, masks);
     select(w, 7);
     timing(w, 10, 0);
-    guard(w, 100'000, 1000);
+    guard(w, 100'000, 500);
     w.raw_report(request(proto::Command::kArm));
     w.strobes(2, 0, 3'000, 1'000);
     w.advance(10'000);
@@ -222,6 +222,33 @@ int main(int argc, char** argv) {
     w.op(Op::kReboot).u8(1);
     w.raw_report(request(proto::Command::kArm));
     ok &= write(dir, "selftest_save_reboot", w);
+  }
+  {  // The ceiling: a guard and a brightness above it, the brightness raised
+     // while armed; a power-on reboot, then an exposure at once (heat at boot).
+    InputWriter w(kBoard3);
+    guard(w, 100'001, 500);
+    guard(w, 100'000, 501);
+    guard(w, 5'000, 300);
+    proto::SetBrightnessRequest b{};
+    b.permille = {1000, 1001, 500, 0};
+    w.raw_report(request(proto::Command::kSetBrightness, b));
+    b.permille = {400, 400, 400, 0};
+    w.raw_report(request(proto::Command::kSetBrightness, b));
+    upload(w, 0, 3, {1, 0, 0, 1, 2, 4});
+    select(w, 0);
+    timing(w, 500, 3'050);
+    mode(w, proto::SyncMode::kFreeRun);
+    w.raw_report(request(proto::Command::kSaveConfig));
+    w.raw_report(request(proto::Command::kArm));
+    w.advance(20'000);
+    b.permille = {1000, 1000, 1000, 0};
+    w.raw_report(request(proto::Command::kSetBrightness, b));
+    w.advance(20'000);
+    w.op(Op::kReboot).u8(0);
+    w.raw_report(request(proto::Command::kArm));
+    w.advance(20'000);
+    w.read_events(8);
+    ok &= write(dir, "ceiling_heat", w);
   }
   {  // Faults: slot timer failure, port fault, USB reset, bootloader.
     InputWriter w(kBoard3);

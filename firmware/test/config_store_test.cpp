@@ -128,5 +128,30 @@ TEST(ConfigStore, EmptyFlashGivesDefaultsWithoutAlarm) {
   EXPECT_EQ(load_config(rig.port, test_board()).error(), ConfigError::kEmpty);
 }
 
+// SaveConfig of settings the newest copy already holds erases nothing: each
+// sector is rated for 10,000 erase cycles, and an erase masks interrupts for
+// up to 2 s (issue 46, defect 5).
+TEST(ConfigStore, SavingUnchangedSettingsWritesNothing) {
+  Rig rig;
+  ASSERT_EQ(rig.upload(2, "124", 3), Status::kOk);
+  const Reply first = rig.send(Command::kSaveConfig);
+  ASSERT_EQ(first.status(), Status::kOk);
+  const int operations = rig.port.flash_operations();
+  EXPECT_GT(operations, 0);
+  for (int i = 0; i < 3; ++i) {
+    const Reply again = rig.send(Command::kSaveConfig);
+    ASSERT_EQ(again.status(), Status::kOk);
+    EXPECT_EQ(again.as<proto::SaveConfigReply>().crc32,
+              first.as<proto::SaveConfigReply>().crc32);
+  }
+  EXPECT_EQ(rig.port.flash_operations(), operations);
+  // A change is written (into the other page), and loads after a reboot.
+  ASSERT_EQ(rig.set_timing(250), Status::kOk);
+  ASSERT_EQ(rig.send(Command::kSaveConfig).status(), Status::kOk);
+  EXPECT_GT(rig.port.flash_operations(), operations);
+  rig.reboot();
+  EXPECT_EQ(rig.controller().settings().timing.slot_time_us, 250u);
+}
+
 }  // namespace
 }  // namespace flutterscan::firmware::test

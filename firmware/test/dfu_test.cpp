@@ -12,6 +12,7 @@
 
 #include "flutterscan/firmware/boot_decision.hpp"
 #include "flutterscan/firmware/sim/sim_flash.hpp"
+#include "flutterscan/firmware/sim/sim_security_floor.hpp"
 #include "flutterscan/firmware/sim/sim_usb_controller.hpp"
 #include "flutterscan/firmware/usb/bootloader_usb.hpp"
 #include "usb_test_host.hpp"
@@ -290,6 +291,26 @@ TEST_F(DfuTest, SmallerTransferSizesGiveAContiguousImage) {
   }
 }
 
+// Issue 46 defect 6: with dfu-util -t 1022 the second block starts at an
+// unaligned address, which the product's flash_program refuses (errPROG); the
+// simulated flash now refuses it too. Every transfer size dfu-util allows
+// (1 .. wTransferSize) gives the image, word-programmed.
+TEST_F(DfuTest, TransferSizesThatAreNotAMultipleOfFourGiveTheImage) {
+  for (const std::size_t transfer : {std::size_t{1022}, std::size_t{1023}, std::size_t{1021},
+                                     std::size_t{6}, std::size_t{1}}) {
+    SCOPED_TRACE(transfer);
+    const auto image = sim::make_application_image(kBoardIdStm32f405, 3, 0, 0, 5 * 1024 + 77,
+                                                   static_cast<std::uint8_t>(transfer));
+    const DownloadLog log = dfu_download(board_, image, transfer);
+    ASSERT_FALSE(log.dnload_stalled);
+    EXPECT_EQ(log.final_status.state, DfuState::kDfuIdle);
+    EXPECT_EQ(log.final_status.status, DfuStatus::kOk);
+    EXPECT_EQ(board_.bootloader()->dfu().downloaded_bytes(), image.size());
+    EXPECT_EQ(region(image.size()), image);
+    EXPECT_EQ(board_.bootloader()->dfu().last_manifest_check(), ImageCheck::kOk);
+  }
+}
+
 TEST_F(DfuTest, UploadWithoutAnImageReadsTheWholeRegion) {
   board_.flash().bytes()[kAppBase - board_.flash().base()] ^= 0xFF;  // break the magic
   std::size_t total = 0;
@@ -392,7 +413,9 @@ class DfuLeavingTest : public ::testing::Test {
   static constexpr auto kDevice = usb::bootloader_device_descriptor(0x0100);
   sim::SimFlash flash_;
   sim::SimUsbController usb_;
-  usb::BootloaderUsb boot_{usb_, flash_, kStm32f405Flash, kStm32f405AppRegion, kDevice, kUniqueId};
+  sim::SimSecurityFloor floor_;
+  usb::BootloaderUsb boot_{usb_,    flash_,  floor_,   kStm32f405Flash, kStm32f405AppRegion,
+                           kDevice, kUniqueId};
 };
 
 TEST_F(DfuLeavingTest, NoDownloadAfterDetach) {

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include "flutterscan/common/joined_runs.hpp"
 #include "flutterscan/common/sequencer.hpp"
 
 namespace flutterscan {
@@ -101,32 +102,26 @@ TEST(LedOnStats, KeepsLeadingAndTrailingRunsApart) {
   EXPECT_EQ(all_on.trailing_run_slots[0], 4);
 }
 
-TEST(Guard, SeamJoinsThePreviousOnTimeToTheNextCodesLeadingRun) {
-  std::array<std::uint64_t, kMaxLeds> previous{};
-  previous[0] = 750;  // e.g. "0111" at 250 us slots
-  // "1000" at 250 us: 1000 us at the seam.
-  const GuardVerdict hit = check_led_guard_seam(previous, led_on_stats(code("1000", 1)), 250,
-                                                limits(750, 1000));
-  EXPECT_EQ(hit.status, GuardStatus::kOnTimeTooLong);
-  EXPECT_EQ(hit.led, 0);
-  EXPECT_EQ(hit.value, 1000u);
-  EXPECT_EQ(hit.limit, 750u);
-  // At a shorter slot time, or a code that starts dark, the seam fits.
-  EXPECT_EQ(check_led_guard_seam(previous, led_on_stats(code("1000", 1)), 250, limits(1000, 1000))
-                .status,
-            GuardStatus::kOk);
-  EXPECT_EQ(check_led_guard_seam(previous, led_on_stats(code("0100", 1)), 250, limits(750, 1000))
-                .status,
-            GuardStatus::kOk);
-  // Per LED: LED 1 was off at the end, so its leading run alone counts.
-  previous[1] = 0;
-  GuardLimits per_led = limits(750, 1000);
-  per_led.max_on_time_us[1] = 100;
-  const GuardVerdict led1 =
-      check_led_guard_seam(previous, led_on_stats(code("2200", 2)), 60, per_led);
-  EXPECT_EQ(led1.status, GuardStatus::kOnTimeTooLong);
-  EXPECT_EQ(led1.led, 1);
-  EXPECT_EQ(led1.value, 120u);
+TEST(JoinedRuns, RunsCloserThanTheMinimumOffTimeAreOneRunWithTheGapCountedAsOn) {
+  // "1101110011" at 100 us: runs 0-200, 300-600, 800-1000 us; gaps 100 and 200 us.
+  const LedCode c = code("1101110011", 1);
+  const JoinedRuns apart = joined_runs(c, 0, 100, 101);  // only the 200 us gap separates
+  EXPECT_TRUE(apart.lit);
+  EXPECT_EQ(apart.first_on_us, 0u);
+  EXPECT_EQ(apart.first_run_us, 600u);  // 0-600: the 100 us gap joined
+  EXPECT_EQ(apart.last_off_us, 1000u);
+  EXPECT_EQ(apart.last_run_us, 200u);
+  EXPECT_EQ(apart.longest_us, 600u);
+  EXPECT_FALSE(apart.one_run());
+  const JoinedRuns joined = joined_runs(c, 0, 100, 201);  // every gap joins
+  EXPECT_EQ(joined.longest_us, 1000u);
+  EXPECT_TRUE(joined.one_run());
+  const JoinedRuns exact = joined_runs(c, 0, 100, 1);  // no gap is shorter than 1 us
+  EXPECT_EQ(exact.longest_us, 300u);
+  EXPECT_EQ(exact.first_run_us, 200u);
+  // An LED the code does not light, or one beyond its LED count.
+  EXPECT_FALSE(joined_runs(code("2200", 2), 0, 100, 100).lit);
+  EXPECT_FALSE(joined_runs(c, 1, 100, 100).lit);
 }
 
 }  // namespace

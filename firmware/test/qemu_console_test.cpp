@@ -56,6 +56,9 @@ class QemuConsoleTest : public ::testing::Test {
         device_(port_, controller_),
         console_(handler_, device_) {
     controller_.start();
+    // The guard counts the LEDs hot at every boot (their supply is not the
+    // MCU's): the console's commands come a second later, as a user's would.
+    port_.run_until(1'000'000);
   }
 
   /// Feeds `line` and a newline; returns what the console wrote.

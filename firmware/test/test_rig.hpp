@@ -41,7 +41,21 @@ struct Reply {
   }
 };
 
-/// \brief The default test board: three LEDs on pins 0, 1, 2.
+/// \brief The ceiling of the test board: everything the protocol allows (so the
+/// guard's own logic can be tested at any setting, down to the microsecond),
+/// and runs joined only when they touch (a minimum off-time of 1 us).
+inline LedCeiling protocol_ceiling() {
+  LedCeiling ceiling = kProductLedCeiling;
+  ceiling.max_on_time_us.fill(proto::kMaxGuardOnTimeUs);
+  ceiling.max_duty_permille.fill(proto::kDutyFullScale);
+  ceiling.max_current_permille.fill(proto::kBrightnessFullScale);
+  ceiling.min_off_time_us = 1;
+  return ceiling;
+}
+
+/// \brief The default test board: three LEDs on pins 0, 1, 2, the protocol's
+/// ceiling, LEDs powered with the MCU (cold after a power-on reset). Tests of
+/// the product's boot behaviour use product_like_board().
 inline BoardConfig test_board() {
   BoardConfig board;
   board.pins = LedPinMap{3, {0, 1, 2, 3}};
@@ -50,6 +64,17 @@ inline BoardConfig test_board() {
   board.firmware_minor = 2;
   board.firmware_patch = 3;
   board.build_id = 0xC0FFEE01;
+  board.ceiling = protocol_ceiling();
+  board.leds_powered_with_mcu = true;
+  return board;
+}
+
+/// \brief The test board with the product's ceiling and LED supply (own 12 V:
+/// never cold at boot).
+inline BoardConfig product_like_board() {
+  BoardConfig board = test_board();
+  board.ceiling = kProductLedCeiling;
+  board.leds_powered_with_mcu = false;
   return board;
 }
 

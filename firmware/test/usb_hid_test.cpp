@@ -47,9 +47,9 @@ class UsbHidTest : public ::testing::Test {
     for (int i = 0; i < 6; ++i) r.masks[static_cast<std::size_t>(i)] = code.value().mask(i);
     expect_ok(round_trip(proto::Command::kSetCode, r));
     expect_ok(round_trip(proto::Command::kSelectCode, proto::SelectCodeRequest{0, {}}));
-    proto::SetGuardRequest guard{};
-    guard.max_on_time_us.fill(proto::kMaxGuardOnTimeUs);
-    guard.max_duty_permille.fill(proto::kDutyFullScale);
+    proto::SetGuardRequest guard{};  // the board's ceiling, the most it allows
+    guard.max_on_time_us.fill(kProductLedCeiling.max_on_time_us[0]);
+    guard.max_duty_permille.fill(kProductLedCeiling.max_duty_permille[0]);
     expect_ok(round_trip(proto::Command::kSetGuard, guard));
     expect_ok(
         round_trip(proto::Command::kSetTiming,

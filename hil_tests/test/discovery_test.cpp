@@ -17,7 +17,7 @@ void expect_info(const HarnessRun& run, const std::string& backend) {
   EXPECT_NE(run.output.find("device mode=application serial=" + std::string(kSerial)),
             std::string::npos)
       << run.output;
-  EXPECT_EQ(output_value(run.output, "protocol"), "1.0");
+  EXPECT_EQ(output_value(run.output, "protocol"), "1.1");
   EXPECT_EQ(output_value(run.output, "firmware"), "0.3.1");  // the image in the board's flash
   EXPECT_EQ(output_value(run.output, "led_count"), "3");
   // The board saw the enumeration and a GetInfo request first.

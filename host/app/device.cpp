@@ -17,6 +17,7 @@ void add_device_command(CLI::App& app) {
   add_device_set_timing(*device);
   add_device_set_mode(*device);
   add_device_brightness(*device);
+  add_device_guard(*device);
   add_device_arm(*device);
   add_device_disarm(*device);
   add_device_selftest(*device);

@@ -13,6 +13,7 @@ void add_device_select_code(CLI::App& device);
 void add_device_set_timing(CLI::App& device);
 void add_device_set_mode(CLI::App& device);
 void add_device_brightness(CLI::App& device);
+void add_device_guard(CLI::App& device);
 void add_device_arm(CLI::App& device);
 void add_device_disarm(CLI::App& device);
 void add_device_selftest(CLI::App& device);

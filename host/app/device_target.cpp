@@ -37,7 +37,8 @@ std::string version_text(std::uint8_t major, std::uint8_t minor, std::uint8_t pa
     case ErrorKind::kRejected:
       if (error.status == protocol::Status::kOutOfRange ||
           error.status == protocol::Status::kBadCode ||
-          error.status == protocol::Status::kNoSuchCode)
+          error.status == protocol::Status::kNoSuchCode ||
+          error.status == protocol::Status::kAboveCeiling)
         throw UsageError(error.message);
       throw RuntimeFailure(error.message);
     default:

@@ -188,9 +188,16 @@ Expected<std::optional<Report>> ControllerClient::attempt_direct(Transport& tran
   }
 }
 
+std::chrono::microseconds ControllerClient::reply_timeout_for(Command command) const {
+  if (command == Command::kSaveConfig)
+    return std::max(options_.reply_timeout, options_.save_config_timeout);
+  return options_.reply_timeout;
+}
+
 Expected<std::optional<Report>> ControllerClient::attempt_locked(std::unique_lock<std::mutex>& lock,
                                                                  const Report& request,
-                                                                 bool* not_sent) {
+                                                                 bool* not_sent,
+                                                                 std::chrono::microseconds timeout) {
   using Out = Expected<std::optional<Report>>;
   const std::shared_ptr<Transport> transport = transport_;
   waiting_ = true;
@@ -209,7 +216,7 @@ Expected<std::optional<Report>> ControllerClient::attempt_locked(std::unique_loc
     lock.lock();
     return fail<std::optional<Report>>(ErrorKind::kGone, written.error().message);
   }
-  state_changed_.wait_for(lock, options_.reply_timeout,
+  state_changed_.wait_for(lock, timeout,
                           [&] { return reply_.has_value() || reply_link_lost_ || stopping_; });
   waiting_ = false;
   if (reply_) return Out::success(*reply_);
@@ -248,7 +255,7 @@ Expected<Report> ControllerClient::transact(Command command,
     else if (attempt > 0)
       ++stats_.retries;
     bool not_sent = false;
-    auto reply = attempt_locked(lock, request, &not_sent);
+    auto reply = attempt_locked(lock, request, &not_sent, reply_timeout_for(command));
     if (!reply.ok() && not_sent && options_.reconnect && !bootloader_requested_ && ++unsent < 3) {
       --attempt;  // nothing was sent: wait for the controller to come back, then send
       continue;
@@ -258,7 +265,7 @@ Expected<Report> ControllerClient::transact(Command command,
   }
   return fail<Report>(ErrorKind::kTimeout, "no reply from " + name() + " to " +
                                                command_name(command) + " within " +
-                                               milliseconds_text(options_.reply_timeout) + " (" +
+                                               milliseconds_text(reply_timeout_for(command)) + " (" +
                                                std::to_string(attempts) + " attempts)");
 }
 
@@ -274,7 +281,7 @@ Expected<Report> ControllerClient::exchange_raw(std::span<const std::uint8_t> re
   std::copy_n(request.begin(), std::min(request.size(), report.size()), report.begin());
   report[1] = next_sequence_++;
   ++stats_.commands;
-  auto reply = attempt_locked(lock, report, nullptr);
+  auto reply = attempt_locked(lock, report, nullptr, options_.reply_timeout);
   if (!reply.ok()) return fail<Report>(reply.error());
   if (!reply.value())
     return fail<Report>(ErrorKind::kTimeout, "no reply from " + name() + " within " +

@@ -36,6 +36,10 @@ struct ClientOptions {
   std::chrono::microseconds reply_timeout{std::chrono::milliseconds(500)};
   /// Extra attempts after a timeout (so 1 + retries in all).
   int retries = 2;
+  /// Wait for SaveConfig's reply (at least reply_timeout): the controller erases
+  /// a flash sector first, up to 2 s for the 128 KiB sector 11 (STM32F405
+  /// datasheet, t_ERASE128KB at x32), with interrupts masked, so it cannot answer sooner.
+  std::chrono::microseconds save_config_timeout{std::chrono::milliseconds(4000)};
   /// After an unplug: how long a command waits for the controller to come back.
   std::chrono::milliseconds reconnect_wait{3000};
   /// Between attempts to re-open an unplugged controller.
@@ -131,9 +135,13 @@ class ControllerClient {
   /// Sends `request` (command and payload already encoded, sequence filled in here)
   /// and waits for its reply, with retries.
   Expected<Report> transact(protocol::Command command, std::span<const std::uint8_t> payload);
-  /// One attempt through the reader thread; `*not_sent` true if the write failed.
+  /// How long to wait for the reply to `command`.
+  std::chrono::microseconds reply_timeout_for(protocol::Command command) const;
+  /// One attempt through the reader thread, waiting `timeout`; `*not_sent` true
+  /// if the write failed.
   Expected<std::optional<Report>> attempt_locked(std::unique_lock<std::mutex>& state_lock,
-                                                 const Report& request, bool* not_sent);
+                                                 const Report& request, bool* not_sent,
+                                                 std::chrono::microseconds timeout);
   /// One attempt reading the transport directly (connect and restore, no reader thread).
   Expected<std::optional<Report>> attempt_direct(Transport& transport, const Report& request);
   /// transact + status check + payload decoding.

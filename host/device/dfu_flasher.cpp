@@ -55,7 +55,8 @@ std::string dfu_status_text(std::uint8_t status) {
     case protocol::DfuStatus::kErrFirmware:
       return "errFIRMWARE: the image failed the bootloader's check (header, board, size or CRC)";
     case protocol::DfuStatus::kErrVendor:
-      return "errVENDOR: vendor-specific error";
+      return "errVENDOR: the image's security version is below the newest confirmed image's on "
+             "this controller (anti-rollback)";
     case protocol::DfuStatus::kErrUsbReset:
       return "errUSBR: unexpected USB reset";
     case protocol::DfuStatus::kErrPowerOnReset:
@@ -142,8 +143,10 @@ Expected<DfuState> poll_until(DfuControl& dfu, std::initializer_list<DfuState> d
     const auto status = dfu_get_status(dfu);
     if (!status.ok()) return fail<DfuState>(status.error());
     const DfuStatusReply s = status.value();
+    // An image older than the controller allows is the caller's bad input (exit 2).
     if (s.state == DfuState::kError || s.status != protocol::DfuStatus::kOk)
-      return fail<DfuState>(ErrorKind::kRejected,
+      return fail<DfuState>(s.status == protocol::DfuStatus::kErrVendor ? ErrorKind::kBadInput
+                                                                         : ErrorKind::kRejected,
                             "the bootloader refused " + what + ": " +
                                 dfu_status_text(static_cast<std::uint8_t>(s.status)) + " (state " +
                                 dfu_state_name(s.state) + ")");

@@ -45,6 +45,10 @@ void VirtualController::boot_locked() {
   controller_ = std::make_unique<firmware::Controller>(*port_, options_.board);
   handler_ = std::make_unique<firmware::CommandHandler>(*controller_);
   controller_->start();
+  // A host reaches a real board only after USB attach debounce (100 ms, USB 2.0
+  // 7.1.7.3), bus reset and enumeration; the guard counts the LEDs hot at boot
+  // (firmware/core/.../controller.hpp), so the virtual board's host comes as late.
+  port_->run_for(kBootToFirstRequestUs);
 }
 
 void VirtualController::poll_locked() {

@@ -41,6 +41,10 @@ inline constexpr const char* kVirtualSerial = "51A1A7ED0000000000000001";
 /// id kBoardIdStm32f405) with the firmware version of this build.
 firmware::BoardConfig default_virtual_board();
 
+/// \brief Virtual time from the controller's boot to the first request a host can
+/// send it (USB debounce, reset and enumeration on a real board).
+inline constexpr std::uint64_t kBootToFirstRequestUs = 500'000;
+
 /// \brief How a virtual controller is built.
 struct VirtualControllerOptions {
   std::string serial = kVirtualSerial;
@@ -89,7 +93,8 @@ class VirtualController {
   /// \brief Runs the virtual clock `duration_us` forward (frame ticks in master
   /// and free-run modes happen here).
   void advance_us(std::uint64_t duration_us);
-  /// \brief Controller clock (restarts at 0 after a re-plug, like a power cycle).
+  /// \brief Controller clock (restarts at 0 after a re-plug, like a power cycle;
+  /// kBootToFirstRequestUs have passed when a host can talk to it).
   std::uint64_t now_us() const;
   /// \brief Every LED bank write since the last call, oldest first.
   std::vector<LedTransition> take_led_transitions();

@@ -14,6 +14,7 @@
 #include "flutterscan/firmware/boot_decision.hpp"
 #include "flutterscan/firmware/flash.hpp"
 #include "flutterscan/firmware/stm32f4/otg_fs_device.hpp"
+#include "flutterscan/firmware/stm32f4/otp_security_floor.hpp"
 #include "flutterscan/firmware/stm32f4/registers.hpp"
 #include "flutterscan/firmware/stm32f4/stm32f4_board.hpp"
 #include "flutterscan/firmware/stm32f4/stm32f4_flash.hpp"
@@ -32,6 +33,7 @@ constexpr auto kDeviceDescriptor = fw::usb::bootloader_device_descriptor(fw::usb
 
 stm::OtgFsDevice g_otg_fs;
 stm::Stm32f4Flash g_flash;
+stm::OtpSecurityFloor g_security_floor;
 alignas(fw::usb::BootloaderUsb) std::byte g_usb_storage[sizeof(fw::usb::BootloaderUsb)];
 
 void start_tick(std::uint32_t hclk_hz) {
@@ -60,7 +62,7 @@ extern "C" void OTG_FS_IRQHandler() {
 [[noreturn]] void bootloader_main() {
   const stm::ClockResult clocks = stm::init_clocks();
   auto* usb = new (g_usb_storage)
-      fw::usb::BootloaderUsb(g_otg_fs, g_flash, fw::kStm32f405Flash,
+      fw::usb::BootloaderUsb(g_otg_fs, g_flash, g_security_floor, fw::kStm32f405Flash,
                              flutterscan::kStm32f405AppRegion, kDeviceDescriptor, stm::unique_id());
   g_otg_fs.set_events(usb);
   start_tick(clocks.tree.hclk_hz);

@@ -7,10 +7,12 @@
 // unconfirmed and fewer than kMaxWatchdogResets resets in a row were watchdog
 // resets (RCC_CSR; both counts in the BootRecord after the hand-off word; the
 // reset flags cleared with RMVF and handed over in the record) and the image passes
-// check_boot_image (header, CRC, load address, vector table at 0x200, SP, PC);
+// check_boot_image (header, CRC, load address, vector table at 0x200, SP, PC,
+// security_version at or above the security floor in OTP);
 // otherwise the C runtime starts and bootloader_main() serves DFU. The jump
-// leaves the chip as reset left it, except VTOR and MSP (GPIOB's clock and
-// PB2's pull-down, used to read the pin, are put back to their reset values).
+// leaves the chip as reset left it, except VTOR, MSP and the independent
+// watchdog, started with kBootWatchdogTimeoutMs (GPIOB's clock and PB2's
+// pull-down, used to read the pin, are put back to their reset values).
 
 #include <cstdint>
 #include <cstring>
@@ -19,8 +21,10 @@
 #include "flutterscan/common/image_header.hpp"
 #include "flutterscan/firmware/boot_decision.hpp"
 #include "flutterscan/firmware/cortex_m/c_runtime.hpp"
+#include "flutterscan/firmware/security_floor.hpp"
 #include "flutterscan/firmware/stm32f4/registers.hpp"
 #include "flutterscan/firmware/stm32f4/stm32f4_board.hpp"
+#include "flutterscan/firmware/stm32f4/system.hpp"
 #include "sector0_protection.hpp"
 
 extern "C" {
@@ -139,12 +143,20 @@ void Reset_Handler() {
   in.watchdog_resets = fw::watchdog_resets(record);
   const auto region = std::span<const std::uint8_t>(
       reinterpret_cast<const std::uint8_t*>(stm::kAppBase), stm::kAppMaxSize);
-  in.image = fw::check_boot_image(region, flutterscan::kStm32f405AppRegion);
+  // Anti-rollback: the newest confirmed image's security_version (OTP).
+  const std::uint8_t floor = fw::security_floor_of(std::span<const std::uint8_t, fw::kSecurityFloorBytes>(
+      reinterpret_cast<const std::uint8_t*>(stm::kSecurityFloorAddress), fw::kSecurityFloorBytes));
+  in.image = fw::check_boot_image(region, flutterscan::kStm32f405AppRegion, floor);
   const fw::BootDecision decision = fw::decide_boot(in);
   record = fw::make_boot_record(decision.unconfirmed_starts, decision.watchdog_resets,
                                 csr & stm::reg::rcc::kCsrResetFlags);
   std::memcpy(reinterpret_cast<void*>(stm::kBootRecordAddress), &record, sizeof record);
-  if (decision.target == fw::BootTarget::kApplication) start_application();
+  if (decision.target == fw::BootTarget::kApplication) {
+    // Whatever the image does from its first instruction on (hang, fault,
+    // never feed it), the watchdog resets it, and decide_boot counts it.
+    (void)stm::start_independent_watchdog(stm::kBootWatchdogTimeoutMs);
+    start_application();
+  }
 
   stm::reg::set_bits(stm::reg::scb::kCpacr, stm::reg::scb::kCpacrFpuFullAccess);
   asm volatile("dsb\n\tisb" ::: "memory");

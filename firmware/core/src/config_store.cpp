@@ -120,6 +120,15 @@ std::uint32_t commit_crc(const ConfigCommit& commit) {
                                              offsetof(ConfigCommit, crc32)));
 }
 
+/// Whether config page `copy` holds exactly `image` at offset 0.
+bool page_holds(Port& port, int copy, const ConfigImage& image) {
+  ConfigImage stored;
+  auto stored_bytes =
+      std::span<std::uint8_t>(reinterpret_cast<std::uint8_t*>(&stored), sizeof(stored));
+  return port.read_config_page(copy, 0, stored_bytes) == PortStatus::kOk &&
+         std::memcmp(&stored, &image, sizeof(image)) == 0;
+}
+
 /// Reads page `copy`; decodes it into `settings` (if not null) when valid.
 CopyState read_copy(Port& port, int copy, const BoardConfig& board, ControllerSettings* settings) {
   CopyState state;
@@ -189,6 +198,9 @@ Result<std::uint32_t, protocol::Status> save_config(Port& port, const Controller
       newest < 0 ? 1 : copies[static_cast<std::size_t>(newest)].sequence + 1;
 
   const ConfigImage image = encode_config(settings);
+  // The newest copy already holds these settings: no erase (each sector is
+  // rated for 10,000 erase cycles, and an erase masks interrupts for seconds).
+  if (newest >= 0 && page_holds(port, newest, image)) return Saved::success(image.crc32);
   ConfigCommit commit{kConfigCommitMagic, sequence, image.crc32, 0};
   commit.crc32 = commit_crc(commit);
   const auto commit_bytes =

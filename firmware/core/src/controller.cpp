@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "flutterscan/common/joined_runs.hpp"
 #include "flutterscan/firmware/config_store.hpp"
 
 namespace flutterscan::firmware {
@@ -26,17 +27,24 @@ Controller::Controller(Port& port, const BoardConfig& board)
 void Controller::start() {
   stop_sequencing();
   state_ = ControllerState::kIdle;
-  const ResetCause cause = port_.reset_cause();
-  if (cause == ResetCause::kWatchdog) last_fault_ = protocol::FaultCode::kWatchdogReset;
-  if (cause != ResetCause::kPowerOn) {
-    // A warm reset: an exposure may have lit the LEDs just before it, so the
-    // guard's duty period counts from now (a reset loop gains no duty).
-    have_previous_start_ = true;
-    previous_start_us_ = port_.now_us();
-  }
+  if (port_.reset_cause() == ResetCause::kWatchdog)
+    last_fault_ = protocol::FaultCode::kWatchdogReset;
+  // Whatever the reset cause, the LEDs may have been on just before it: they
+  // have their own supply, and the MCU's power-on, brown-out and pin resets
+  // say nothing about them. So the duty period counts from now and every LED
+  // counts as having been on up to its on-time ceiling until now (a reset
+  // loop, or a host cycling the USB port, gains no duty and no on-time).
+  const std::uint64_t now = port_.now_us();
+  cold_ = board_.leds_powered_with_mcu && port_.reset_cause() == ResetCause::kPowerOn;
+  previous_start_us_ = now;
+  lit_start_us_ = now;
+  lit_end_us_ = now;
+  run_end_us_.fill(now);
+  for (std::size_t k = 0; k < run_us_.size(); ++k) run_us_[k] = board_.ceiling.max_on_time_us[k];
+  has_run_.fill(!cold_);
   const auto loaded = load_config(port_, board_);
   if (loaded.ok()) {
-    settings_ = loaded.value();
+    settings_ = tighten_to_ceiling(loaded.value(), board_.ceiling);
     config_flags_ = protocol::kStatusConfigFromFlash;
   } else {
     settings_ = default_settings(board_);
@@ -137,9 +145,18 @@ Status Controller::check_code_runnable(std::uint8_t code_id) const {
   if (uses_frame_timer() && (timing.frame_period_us == 0 || timing.frame_period_us < duration))
     return Status::kTimingConflict;
   const std::uint64_t period = uses_frame_timer() ? timing.frame_period_us : 0;
-  const GuardVerdict verdict =
-      check_led_guard(led_on_stats(code), timing.slot_time_us, period, settings_.guard);
-  return verdict.status == GuardStatus::kOk ? Status::kOk : Status::kGuardLimit;
+  const GuardVerdict verdict = check_led_guard(led_on_stats(code), timing.slot_time_us, period,
+                                               settings_.guard, settings_.brightness_permille);
+  if (verdict.status != GuardStatus::kOk) return Status::kGuardLimit;
+  // Joined runs within the exposure (across exposures the guard judges each
+  // one as it starts).
+  for (int led = 0; led < code.leds(); ++led) {
+    const auto k = static_cast<std::size_t>(led);
+    const JoinedRuns runs =
+        joined_runs(code, led, timing.slot_time_us, board_.ceiling.min_off_time_us);
+    if (runs.longest_us > settings_.guard.max_on_time_us[k]) return Status::kGuardLimit;
+  }
+  return Status::kOk;
 }
 
 Result<protocol::SelectCodeReply, Status> Controller::select_code(
@@ -197,6 +214,19 @@ Status Controller::set_mode(const protocol::SetModeRequest& r) {
 Status Controller::set_brightness(const protocol::SetBrightnessRequest& r) {
   const Status range = check_brightness(r.permille, board_.pins.led_count);
   if (range != Status::kOk) return range;
+  const Status ceiling =
+      check_brightness_ceiling(r.permille, board_.ceiling, board_.pins.led_count);
+  if (ceiling != Status::kOk) return ceiling;
+  bool raises = false;
+  for (int led = 0; led < board_.pins.led_count; ++led) {
+    const auto k = static_cast<std::size_t>(led);
+    if (r.permille[k] > settings_.brightness_permille[k]) raises = true;
+  }
+  // The guard judged the tables playing and pre-armed at the current they
+  // had: more current only where nothing is armed or playing (Arm judges the
+  // code at it); less current is always within what was judged.
+  if (raises && is_armed()) return Status::kBadState;
+  if (raises && self_test_running_) return Status::kBusy;
   settings_.brightness_permille = r.permille;
   apply_brightness();
   return Status::kOk;
@@ -208,6 +238,8 @@ Status Controller::set_guard(const protocol::SetGuardRequest& r) {
   limits.max_duty_permille = r.max_duty_permille;
   const Status range = check_guard_limits(limits, board_.pins.led_count);
   if (range != Status::kOk) return range;
+  const Status ceiling = check_guard_ceiling(limits, board_.ceiling, board_.pins.led_count);
+  if (ceiling != Status::kOk) return ceiling;
   if (state_ != ControllerState::kIdle && state_ != ControllerState::kFault)
     return Status::kBadState;
   if (self_test_running_) return Status::kBusy;
@@ -301,7 +333,7 @@ Result<protocol::SelfTestReply, Status> Controller::self_test(const protocol::Se
   // A self test lights the LEDs like an exposure: the same guard, the same history.
   const LedOnStats stats = led_on_stats(code.value());
   const std::uint64_t start = port_.now_us();
-  if (guard_verdict(stats, r.step_time_us, start).status != GuardStatus::kOk)
+  if (guard_verdict(code.value(), stats, r.step_time_us, start).status != GuardStatus::kOk)
     return Out::failure(Status::kGuardLimit);
   const auto schedule =
       build_slot_table(code.value(), r.step_time_us, board_.pins, self_test_words_);
@@ -310,7 +342,7 @@ Result<protocol::SelfTestReply, Status> Controller::self_test(const protocol::Se
           std::span<const std::uint32_t>(self_test_words_.data(), schedule.value().word_count),
           r.step_time_us) != PortStatus::kOk)
     return Out::failure(Status::kHardwareError);
-  record_lit_exposure(stats, start, r.step_time_us);
+  record_lit_exposure(code.value(), start, r.step_time_us);
   self_test_running_ = true;
   protocol::SelfTestReply reply{};
   reply.leds_stepped = static_cast<std::uint8_t>(leds);
@@ -424,7 +456,7 @@ void Controller::begin_exposure(std::uint64_t time_us) {
   exposure_pulse_width_us_ = 0;
   exposure_flags_ = flags;
 
-  const GuardVerdict verdict = guard_verdict(table.stats, slot_time, light_us);
+  const GuardVerdict verdict = guard_verdict(table.code, table.stats, slot_time, light_us);
   if (verdict.status != GuardStatus::kOk) {
     // This exposure stays dark, but it takes no time: a trigger in the same
     // microsecond still touches the last lit exposure, so that one stays the
@@ -449,7 +481,7 @@ void Controller::begin_exposure(std::uint64_t time_us) {
     enter_fault(protocol::FaultCode::kSlotTimer);
     return;
   }
-  record_lit_exposure(table.stats, light_us, slot_time);
+  record_lit_exposure(table.code, light_us, slot_time);
   state_ = ControllerState::kExposing;
 }
 
@@ -460,7 +492,8 @@ void Controller::update_prearm() {
   std::uint16_t flags = 0;
   const std::uint32_t slot_time = slot_time_for_next_exposure(table.stats.length, flags);
   const bool accepted =
-      guard_verdict(table.stats, slot_time, port_.now_us()).status == GuardStatus::kOk;
+      guard_verdict(table.code, table.stats, slot_time, port_.now_us(), true).status ==
+      GuardStatus::kOk;
   if (accepted && prearm_.active && prearm_.table == index && prearm_.slot_time_us == slot_time)
     return;
   if (withdraw_prearm()) return;  // an edge started it: now exposing
@@ -498,56 +531,83 @@ void Controller::adopt_prearm(const PrearmStart& start) {
   exposure_flags_ = flags;
   encoder_at_start_ = port_.encoder_count();
   // The guard accepted this table for any start from the pre-arm on.
-  record_lit_exposure(table.stats, start.time_us, prearm_.slot_time_us);
+  record_lit_exposure(table.code, start.time_us, prearm_.slot_time_us);
   state_ = ControllerState::kExposing;
   adopted_edge_pending_ = start.edge_pending;
 }
 
-GuardVerdict Controller::guard_verdict(const LedOnStats& stats, std::uint32_t slot_time_us,
-                                       std::uint64_t start_us) const {
-  // The period since the last lit exposure began: one the guard refused lit
-  // nothing, so it neither starts a period nor ends the last lit exposure.
-  // Without one (only after a power-on reset) the first exposure's duty is
-  // judged over the frame period in master and free-run, and not at all in
-  // slave mode or for a self test (the LEDs were cold).
+GuardVerdict Controller::guard_verdict(const LedCode& code, const LedOnStats& stats,
+                                       std::uint32_t slot_time_us, std::uint64_t start_us,
+                                       bool any_later_start) const {
+  // The period since the last lit exposure began (or since boot): one the
+  // guard refused lit nothing, so it neither starts a period nor ends the
+  // last lit exposure. Cold LEDs (a board powering them with the MCU, after a
+  // power-on reset): the first exposure's duty is judged over the frame period
+  // in master and free-run, and not at all in slave mode or for a self test.
   const bool frame_timer = is_armed() && uses_frame_timer();
-  const std::uint64_t period = have_previous_start_ ? start_us - previous_start_us_
-                               : frame_timer        ? settings_.timing.frame_period_us
-                                                    : 0;
-  GuardVerdict verdict = check_led_guard(stats, slot_time_us, period, settings_.guard);
+  const std::uint64_t period = !cold_       ? start_us - previous_start_us_
+                               : frame_timer ? settings_.timing.frame_period_us
+                                             : 0;
+  const GuardLimits& limits = settings_.guard;
+  const auto& brightness = settings_.brightness_permille;
+  GuardVerdict verdict = check_led_guard(stats, slot_time_us, period, limits, brightness);
   if (verdict.status != GuardStatus::kOk) return verdict;
-  // Back to back with the last lit exposure if this one starts the moment that
-  // one's all-off word lands: then each LED's run at the seam is the previous
-  // exposure's trailing run (its code, its slot time) plus this code's leading
-  // run at this slot time. The previous code or slot time may differ from these.
-  if (have_lit_exposure_ && start_us <= lit_end_us_) {
-    verdict = check_led_guard_seam(lit_trailing_on_us_, stats, slot_time_us, settings_.guard);
-    if (verdict.status != GuardStatus::kOk) return verdict;
+  // Joined runs: inside this exposure, and its first one joined to the LED's
+  // last run when it starts less than the minimum off-time after that ended.
+  const std::uint32_t min_off = board_.ceiling.min_off_time_us;
+  for (int led = 0; led < stats.leds; ++led) {
+    const auto k = static_cast<std::size_t>(led);
+    const JoinedRuns runs = joined_runs(code, led, slot_time_us, min_off);
+    if (!runs.lit) continue;
+    if (runs.longest_us > limits.max_on_time_us[k])
+      return {GuardStatus::kOnTimeTooLong, led, runs.longest_us, limits.max_on_time_us[k]};
+    const std::uint64_t first_on = start_us + runs.first_on_us;
+    const std::uint64_t gap = first_on > run_end_us_[k] ? first_on - run_end_us_[k] : 0;
+    if (has_run_[k] && gap < min_off) {
+      // A pre-armed table may start later, up to a gap of min_off - 1 that still joins.
+      const std::uint64_t joined_gap = any_later_start ? min_off - 1 : gap;
+      const std::uint64_t joined = run_us_[k] + joined_gap + runs.first_run_us;
+      if (joined > limits.max_on_time_us[k])
+        return {GuardStatus::kOnTimeTooLong, led, joined, limits.max_on_time_us[k]};
+    }
   }
-  if (!have_previous_start_) return verdict;
   // check_led_guard judges back-to-back exposures over their own duration;
   // when this one is longer than the time since the last start (a longer code
   // or slot time after a shorter one) that is more than the time it follows:
-  // the duty cap holds over the time actually elapsed.
+  // the energy cap holds over the time actually elapsed.
+  if (cold_) return verdict;
   for (int led = 0; led < stats.leds; ++led) {
     const auto k = static_cast<std::size_t>(led);
-    const std::uint64_t on_us = static_cast<std::uint64_t>(stats.on_slots[k]) * slot_time_us;
-    if (on_us * protocol::kDutyFullScale > period * settings_.guard.max_duty_permille[k]) {
-      const std::uint64_t duty = period == 0
-                                     ? protocol::kDutyFullScale + 1
-                                     : (on_us * protocol::kDutyFullScale + period - 1) / period;
-      return {GuardStatus::kDutyTooHigh, led, duty, settings_.guard.max_duty_permille[k]};
+    const std::uint64_t energy =
+        static_cast<std::uint64_t>(stats.on_slots[k]) * slot_time_us * brightness[k];
+    if (energy > period * limits.max_duty_permille[k]) {
+      const std::uint64_t duty =
+          period == 0 ? protocol::kDutyFullScale + 1 : (energy + period - 1) / period;
+      return {GuardStatus::kDutyTooHigh, led, duty, limits.max_duty_permille[k]};
     }
   }
   return verdict;
 }
 
-void Controller::record_lit_exposure(const LedOnStats& stats, std::uint64_t start_us,
+void Controller::record_lit_exposure(const LedCode& code, std::uint64_t start_us,
                                      std::uint32_t slot_time_us) {
-  const bool joins_previous = have_lit_exposure_ && start_us <= lit_end_us_;
-  note_lit_exposure(stats, start_us, slot_time_us, joins_previous);
+  const std::uint32_t min_off = board_.ceiling.min_off_time_us;
+  for (int led = 0; led < code.leds(); ++led) {
+    const auto k = static_cast<std::size_t>(led);
+    const JoinedRuns runs = joined_runs(code, led, slot_time_us, min_off);
+    if (!runs.lit) continue;  // dark the whole exposure: its last run stays
+    const std::uint64_t first_on = start_us + runs.first_on_us;
+    const std::uint64_t gap = first_on > run_end_us_[k] ? first_on - run_end_us_[k] : 0;
+    const bool joins = has_run_[k] && gap < min_off;
+    run_us_[k] = joins && runs.one_run()
+                     ? run_us_[k] + gap + (runs.last_off_us - runs.first_on_us)
+                     : runs.last_run_us;
+    run_end_us_[k] = start_us + runs.last_off_us;
+    has_run_[k] = true;
+  }
+  cold_ = false;
   lit_start_us_ = start_us;
-  have_previous_start_ = true;
+  lit_end_us_ = start_us + static_cast<std::uint64_t>(code.length()) * slot_time_us;
   previous_start_us_ = start_us;
 }
 
@@ -577,25 +637,6 @@ void Controller::on_slot_table_done(std::uint64_t) {
 // ---------------------------------------------------------------------------
 // Helpers
 
-void Controller::note_lit_exposure(const LedOnStats& stats, std::uint64_t start_us,
-                                   std::uint32_t slot_time_us, bool joins_previous) {
-  const std::uint64_t duration_us = static_cast<std::uint64_t>(stats.length) * slot_time_us;
-  for (std::size_t k = 0; k < lit_trailing_on_us_.size(); ++k) {
-    if (static_cast<int>(k) >= stats.leds) {
-      lit_trailing_on_us_[k] = 0;  // not in the code: off the whole exposure
-      continue;
-    }
-    const std::uint64_t trailing_us =
-        static_cast<std::uint64_t>(stats.trailing_run_slots[k]) * slot_time_us;
-    // An LED on in every slot continues the run it joined at the start.
-    const bool on_throughout = stats.length > 0 && stats.leading_run_slots[k] == stats.length;
-    lit_trailing_on_us_[k] =
-        on_throughout && joins_previous ? lit_trailing_on_us_[k] + duration_us : trailing_us;
-  }
-  lit_end_us_ = start_us + duration_us;
-  have_lit_exposure_ = true;
-}
-
 void Controller::build_table(SlotTable& table, std::uint8_t code_id) const {
   const LedCode& code = settings_.codes[code_id].code;
   // Codes are checked against the board's LEDs on upload and load, and the
@@ -604,6 +645,7 @@ void Controller::build_table(SlotTable& table, std::uint8_t code_id) const {
   const auto schedule = build_slot_table(code, protocol::kMinSlotTimeUs, board_.pins, table.words);
   table.word_count = schedule.ok() ? schedule.value().word_count : 0;
   table.code_id = code_id;
+  table.code = code;
   table.stats = led_on_stats(code);
 }
 
@@ -623,12 +665,15 @@ void Controller::stop_sequencing() {
   pending_table_ = -1;
   strobe_active_ = false;
   // Every LED is off now. The guard's history stays; an exposure cut short
-  // ends now, and its LEDs' runs at the cut are at most the time since it
+  // ends now, and each LED's run at the cut is at most the time since it
   // started plus the run it joined (bounded by the on-time limit).
   const std::uint64_t now = port_.now_us();
-  if (have_lit_exposure_ && now < lit_end_us_) {
-    for (std::size_t k = 0; k < lit_trailing_on_us_.size(); ++k)
-      lit_trailing_on_us_[k] = (now - lit_start_us_) + settings_.guard.max_on_time_us[k];
+  if (now < lit_end_us_) {
+    for (std::size_t k = 0; k < run_us_.size(); ++k) {
+      run_us_[k] = (now - lit_start_us_) + settings_.guard.max_on_time_us[k];
+      run_end_us_[k] = now;
+      has_run_[k] = true;
+    }
     lit_end_us_ = now;
   }
 }

@@ -1,5 +1,7 @@
 #include "flutterscan/firmware/settings.hpp"
 
+#include <algorithm>
+
 namespace flutterscan::firmware {
 
 using protocol::Status;
@@ -19,7 +21,9 @@ bool all_zero(const std::array<std::uint8_t, 2>& bytes) {
 ControllerSettings default_settings(const BoardConfig& board) {
   ControllerSettings settings;
   settings.guard = board.default_guard;
-  return settings;
+  // Full brightness and the default guard, but never above the ceiling (a
+  // board whose LEDs take less than the driver's full-scale current).
+  return tighten_to_ceiling(settings, board.ceiling);
 }
 
 Status check_timing(const TimingSettings& timing) {
@@ -71,6 +75,39 @@ Status check_guard_limits(const GuardLimits& limits, int led_count) {
       return Status::kOutOfRange;
   }
   return Status::kOk;
+}
+
+Status check_guard_ceiling(const GuardLimits& limits, const LedCeiling& ceiling, int led_count) {
+  for (int led = 0; led < led_count; ++led) {
+    const auto k = static_cast<std::size_t>(led);
+    if (limits.max_on_time_us[k] > ceiling.max_on_time_us[k] ||
+        limits.max_duty_permille[k] > ceiling.max_duty_permille[k])
+      return Status::kAboveCeiling;
+  }
+  return Status::kOk;
+}
+
+Status check_brightness_ceiling(const std::array<std::uint16_t, kMaxLeds>& permille,
+                                const LedCeiling& ceiling, int led_count) {
+  for (int led = 0; led < led_count; ++led) {
+    const auto k = static_cast<std::size_t>(led);
+    if (permille[k] > ceiling.max_current_permille[k]) return Status::kAboveCeiling;
+  }
+  return Status::kOk;
+}
+
+ControllerSettings tighten_to_ceiling(const ControllerSettings& settings,
+                                      const LedCeiling& ceiling) {
+  ControllerSettings tight = settings;
+  for (std::size_t k = 0; k < static_cast<std::size_t>(kMaxLeds); ++k) {
+    tight.guard.max_on_time_us[k] =
+        std::min(tight.guard.max_on_time_us[k], ceiling.max_on_time_us[k]);
+    tight.guard.max_duty_permille[k] =
+        std::min(tight.guard.max_duty_permille[k], ceiling.max_duty_permille[k]);
+    tight.brightness_permille[k] =
+        std::min(tight.brightness_permille[k], ceiling.max_current_permille[k]);
+  }
+  return tight;
 }
 
 Status check_stored_code(const StoredCode& code, int led_count) {

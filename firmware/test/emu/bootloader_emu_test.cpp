@@ -208,6 +208,34 @@ TEST_F(BootloaderEmu, ThreeWatchdogResetsInARowStayInDfuModeConfirmedOrNot) {
   EXPECT_EQ(unconfirmed_starts(read_record(chip)), 1u);
 }
 
+// Issue 46 defect 4: the bootloader never started the watchdog, and the
+// application starts it only after its start-up, so an image whose reset
+// handler loops (`b .`) passed the manifest check and never came back to DFU
+// mode without the recovery jumper. The bootloader now starts the IWDG (2 s)
+// just before the jump: three watchdog resets, then DFU mode, within 10 s.
+TEST_F(BootloaderEmu, AnImageThatHangsAtItsFirstInstructionIsBackInDfuModeWithinTenSeconds) {
+  auto image = image_;
+  const std::uint32_t reset_offset = (app_reset_ & ~1u) - kAppBase;
+  image[reset_offset] = Chip::kBranchToSelf & 0xFFu;  // b .
+  image[reset_offset + 1] = Chip::kBranchToSelf >> 8;
+  ASSERT_TRUE(stamp_image(image));  // CRC-valid: DFU's manifest check takes it
+  const auto sleeps = bootloader_.wfi_in("_Z15bootloader_mainv");
+  ASSERT_EQ(sleeps.size(), 1u);
+  Chip chip;
+  flash(chip, image);
+  chip.sleep_at(sleeps[0]);
+  ASSERT_EQ(chip.run(), "application");  // powered on: the first start
+  constexpr std::uint64_t kTenSeconds = 10 * Chip::kCpuHz;
+  ASSERT_EQ(chip.run_for(kTenSeconds - chip.cycles()), "ran");
+  // Three watchdog resets in a row, about 2 s apart, then the bootloader keeps DFU mode.
+  ASSERT_EQ(chip.watchdog_resets().size(), 3u);
+  EXPECT_LT(chip.watchdog_resets().back(), 7 * Chip::kCpuHz);
+  EXPECT_EQ(watchdog_resets(read_record(chip)), 3u);
+  EXPECT_LT(chip.reg(UC_ARM_REG_PC), kAppBase) << "running the bootloader, not the image";
+  EXPECT_TRUE(chip.otg_fs().attached()) << "DFU mode: the bootloader's USB device is up";
+  EXPECT_EQ(chip.system_resets(), 0);
+}
+
 // Reset -> bootloader -> image check -> application: the application's own
 // start-up (C runtime, clocks from HSE through the PLL, the port's GPIO,
 // timers, DMA, NVIC, the controller loading its config from both flash copies,

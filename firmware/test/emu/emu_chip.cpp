@@ -167,19 +167,26 @@ std::string Chip::run() {
   return go(pc, false);
 }
 
-void Chip::system_reset() {
-  // PM0214 4.3.5 SYSRESETREQ: a system reset. Flash, SRAM and the option bytes
-  // keep their contents; every peripheral and the core start over; RCC_CSR
-  // keeps its flags and adds SFTRSTF, and PINRSTF (the reset circuit drives
-  // NRST on any internal reset, RM0090 6.1.2).
+void Chip::system_reset(bool by_watchdog) {
+  // PM0214 4.3.5 SYSRESETREQ, or the independent watchdog (RM0090 21.3): a
+  // system reset. Flash, SRAM and the option bytes keep their contents; every
+  // peripheral (the IWDG too: software watchdog mode) and the core start over;
+  // RCC_CSR keeps its flags and adds SFTRSTF or IWDGRSTF, and PINRSTF (the
+  // reset circuit drives NRST on any internal reset, RM0090 6.1.2).
   reset_requested_ = false;
+  iwdg_zero_ = kNever;
+  iwdg_unlocked_ = false;
+  iwdg_expired_ = false;
   const std::uint32_t optcr = regs_.at(kFlashOptcr);
   const std::uint32_t csr_flags = regs_.at(kRccBase + 0x74) & 0xFF000000u;
+  std::vector<std::uint32_t> otp;  // non-volatile, like the option bytes
+  for (std::uint32_t a = kOtpBase; a < kOtpBase + kOtpSize; a += 4) otp.push_back(regs_.at(a));
   regs_.clear();
   model_registers();
+  for (std::uint32_t i = 0; i < otp.size(); ++i) regs_[kOtpBase + 4 * i] = otp[i];
   regs_[kFlashOptcr] = optcr | kOptcrOptLock;
-  regs_[kRccBase + 0x74] =
-      (regs_.at(kRccBase + 0x74) & 0x00FFFFFFu) | csr_flags | 1u << 28 | 1u << 26;
+  regs_[kRccBase + 0x74] = (regs_.at(kRccBase + 0x74) & 0x00FFFFFFu) | csr_flags |
+                           (by_watchdog ? 1u << 29 : 1u << 28) | 1u << 26;
   otg_ = OtgFs();
   tim2_start_ = 0;
   tim2_count0_ = 0;
@@ -192,7 +199,10 @@ void Chip::system_reset() {
   optkey_step_ = 0;
   flash_key_step_ = 0;
   flash_busy_reads_ = 0;
-  ++system_resets_;
+  if (by_watchdog)
+    watchdog_resets_.push_back(cycles_);
+  else
+    ++system_resets_;
   const std::uint32_t sp = read_word(kFlashBase);
   const std::uint32_t pc = read_word(kFlashBase + 4) & ~1u;
   const std::uint32_t xpsr = 0x01000000u, zero = 0, lr = 0xFFFFFFFFu;
@@ -229,6 +239,7 @@ std::string Chip::go(std::uint32_t pc, bool until_trampoline) {
     const uc_err err = uc_emu_start(uc_, pc | 1u, 0, 0, kSlice);
     if (!error_.empty()) return "error: " + error_;
     if (reset_requested_) return "error: SYSRESETREQ outside the main loop (not modelled)";
+    if (iwdg_expired_) return "error: a watchdog reset outside the main loop (not modelled)";
     if (err != UC_ERR_OK) return std::string("error: unicorn: ") + uc_strerror(err);
     if (stopped_) {
       if (!until_trampoline || stopped_at_ == "return") return stopped_at_;
@@ -259,6 +270,11 @@ std::string Chip::run_for(std::uint64_t cycles) {
       }
       cycles_ = std::max(cycles_, std::min(next_hardware_event(), end));
       run_hardware_until(cycles_);
+      if (iwdg_expired_) {
+        system_reset(true);
+        pc = reg(UC_ARM_REG_PC);
+        skip_stop_ = 0;
+      }
       continue;
     }
     // Not inside an IT block (xPSR ICI/IT 26:25, 15:10): Unicorn's slices end
@@ -272,14 +288,21 @@ std::string Chip::run_for(std::uint64_t cycles) {
       }
     }
     stopped_ = false;
-    const std::uint64_t slice = std::min<std::uint64_t>(kSlice, end - cycles_);
-    const uc_err err = uc_emu_start(uc_, pc | 1u, 0, 0, slice);
-    if (!error_.empty()) break;
-    if (err != UC_ERR_OK) return std::string("error: unicorn: ") + uc_strerror(err);
-    cycles_ += slice;
-    run_hardware_until(cycles_);
-    if (reset_requested_) {
-      system_reset();
+    if ((read_word(pc & ~3u) >> (8 * (pc & 2u))) % 0x10000u == kBranchToSelf) {
+      // `b .` (an image hung at its reset handler, a fault loop): nothing
+      // changes until a hardware event, so the chip skips time to it.
+      cycles_ = std::max(cycles_, std::min(next_hardware_event(), end));
+      run_hardware_until(cycles_);
+    } else {
+      const std::uint64_t slice = std::min<std::uint64_t>(kSlice, end - cycles_);
+      const uc_err err = uc_emu_start(uc_, pc | 1u, 0, 0, slice);
+      if (!error_.empty()) break;
+      if (err != UC_ERR_OK) return std::string("error: unicorn: ") + uc_strerror(err);
+      cycles_ += slice;
+      run_hardware_until(cycles_);
+    }
+    if (reset_requested_ || iwdg_expired_) {
+      system_reset(iwdg_expired_);
       pc = reg(UC_ARM_REG_PC);
       skip_stop_ = 0;
       continue;
@@ -457,13 +480,19 @@ void Chip::apply_bsrr(std::uint32_t base, std::uint32_t value, std::uint64_t at,
 std::uint64_t Chip::next_hardware_event() const {
   const std::uint64_t tim1 =
       (regs_.at(kTim1Base + kTimCr1) & kCr1Cen) != 0 ? tim1_next_update_ : kNever;
-  return std::min(tim1, systick_zero_);
+  return std::min({tim1, systick_zero_, iwdg_zero_});
 }
 
 void Chip::run_hardware_until(std::uint64_t cycle) {
   while (error_.empty()) {
     const std::uint64_t next = next_hardware_event();
     if (next > cycle) return;
+    if (next == iwdg_zero_) {
+      // RM0090 21.3.2: the down-counter reached 0 without a reload: reset.
+      iwdg_zero_ = kNever;
+      iwdg_expired_ = true;
+      return;
+    }
     if (next == systick_zero_) {
       // PM0214 4.4: at 0 the counter reloads from LOAD (LOAD + 1 cycles a
       // period) and sets COUNTFLAG; TICKINT pends the SysTick exception.
@@ -679,6 +708,8 @@ void Chip::model_registers() {
   regs_[kScsBase + 0xD00] = 0x410FC241;  // CPUID: Cortex-M4 r0p1
   regs_[kScsBase + kScbCpacr] = 0;
   // The 96-bit unique ID (RM0090 39.1), read-only.
+  // OTP (RM0090 3.8), erased; programmed through the flash interface (store).
+  for (std::uint32_t a = kOtpBase; a < kOtpBase + kOtpSize; a += 4) regs_[a] = 0xFFFFFFFFu;
   regs_[kUniqueIdPage + 0xA10] = 0x00470031;
   regs_[kUniqueIdPage + 0xA14] = 0x31385119;
   regs_[kUniqueIdPage + 0xA18] = 0x32363734;
@@ -739,10 +770,50 @@ std::uint32_t Chip::observe(std::uint32_t address) {
   return v;
 }
 
+void Chip::iwdg_store(std::uint32_t offset, std::uint32_t value) {
+  // RM0090 21.4: KR 0xCCCC starts the counter (and the LSI), 0xAAAA reloads it
+  // from RLR, 0x5555 opens PR and RLR to writes (any other key closes them);
+  // SR's PVU/RVU read 0 (updates take effect at once). Timeout: 4 x 2^PR x
+  // (RLR + 1) LSI cycles at the nominal 32 kHz, in 168 MHz core cycles.
+  if (offset == 0x00) {
+    const std::uint32_t key = value & 0xFFFFu;
+    iwdg_unlocked_ = key == 0x5555u;
+    const bool start = key == 0xCCCCu;
+    if (start || (key == 0xAAAAu && iwdg_zero_ != kNever)) {
+      const std::uint64_t lsi_ticks = (4ull << (regs_.at(kIwdgBase + 0x04) & 7u)) *
+                                      ((regs_.at(kIwdgBase + 0x08) & 0xFFFu) + 1);
+      iwdg_zero_ = cycles_ + lsi_ticks * (kCpuHz / kLsiHz);
+    }
+    return;
+  }
+  if ((offset == 0x04 || offset == 0x08) && iwdg_unlocked_)
+    regs_[kIwdgBase + offset] = value & (offset == 0x04 ? 7u : 0xFFFu);
+}
+
 void Chip::store(std::uint32_t address, std::uint32_t value) {
   writes_.push_back({address, value});
   const std::uint32_t offset = address & 0x3FFu;
   const std::uint32_t base = address & ~0x3FFu;
+  if (base == kIwdgBase) {
+    iwdg_store(offset, value);
+    return;
+  }
+  if (address >= kOtpBase && address < kOtpBase + kOtpSize) {
+    // RM0090 3.8: OTP is programmed like main flash (PG, x32 here) and never erased.
+    const std::uint32_t cr = regs_.at(kFlashCr);
+    const std::uint32_t old = regs_.at(address);
+    if ((cr & kCrLock) != 0 || (cr & kCrPg) == 0 || flash_busy_reads_ > 0 || (old & value) != value) {
+      char b[96];
+      std::snprintf(b, sizeof b, "OTP program of 0x%08x over 0x%08x at 0x%08x (no PG or not erased)",
+                    value, old, address);
+      fail(b);
+      return;
+    }
+    regs_[address] = value;
+    ++otp_programs_;
+    flash_busy_reads_ = 1;
+    return;
+  }
   if (address == kRccBase + 0x74 && (value & (1u << 24)) != 0) {  // CSR.RMVF
     regs_[address] = regs_[address] & 0x00FFFFFFu;
     return;

@@ -80,6 +80,9 @@ inline constexpr std::uint32_t kDma2Base = 0x40026400;
 inline constexpr std::uint32_t kIwdgBase = 0x40003000;
 inline constexpr std::uint32_t kDbgmcuBase = 0xE0042000;
 inline constexpr std::uint32_t kUniqueIdPage = 0x1FFF7000;
+/// OTP area (RM0090 3.8): 16 blocks of 32 bytes, then 16 lock bytes; erased 0xFF.
+inline constexpr std::uint32_t kOtpBase = 0x1FFF7800;
+inline constexpr std::uint32_t kOtpSize = 528;
 inline constexpr std::uint32_t kScsBase = 0xE000E000;
 inline constexpr std::uint32_t kScbVtor = 0xD08;
 inline constexpr std::uint32_t kScbCpacr = 0xD88;
@@ -95,6 +98,10 @@ inline constexpr int kIrqOtgFs = 67;
 class Chip {
  public:
   static constexpr std::uint64_t kCpuHz = 168'000'000;
+  /// The LSI clocking the IWDG, nominal (RM0090 5.2.5: 17-47 kHz).
+  static constexpr std::uint64_t kLsiHz = 32'000;
+  /// Thumb `b .` (branch to itself).
+  static constexpr std::uint32_t kBranchToSelf = 0xE7FE;
   static constexpr std::uint64_t kCyclesPerUs = kCpuHz / 1'000'000;
 
   Chip();
@@ -127,6 +134,8 @@ class Chip {
   std::uint64_t cycles() const { return cycles_; }
   /// System resets requested through AIRCR so far.
   int system_resets() const { return system_resets_; }
+  /// The cycles at which the independent watchdog reset the chip, in order.
+  const std::vector<std::uint64_t>& watchdog_resets() const { return watchdog_resets_; }
   std::uint32_t reg(int r);
   OtgFs& otg_fs() { return otg_; }
   /// A modelled peripheral register's value (as stored; no side effects).
@@ -146,6 +155,8 @@ class Chip {
   const std::vector<int>& flash_erases() const { return flash_erases_; }
   /// Words programmed through the flash interface.
   int flash_programs() const { return flash_programs_; }
+  /// Words programmed into the OTP area through the flash interface.
+  int otp_programs() const { return otp_programs_; }
   /// Option-byte programming operations (OPTSTRT) seen.
   int option_programs() const { return option_programs_; }
   /// Sets the option bytes the chip comes out of reset with (FLASH_OPTCR).
@@ -192,7 +203,9 @@ class Chip {
   bool take_exception(int exception);
   std::uint32_t exception_priority(int exception) const;
   void systick_store(std::uint32_t address, std::uint32_t value);
-  void system_reset();
+  void iwdg_store(std::uint32_t offset, std::uint32_t value);
+  /// A system reset: AIRCR's SYSRESETREQ, or the watchdog's (`by_watchdog`).
+  void system_reset(bool by_watchdog = false);
   static std::uint32_t flash_sector_base(int sector);
   void flash_control(std::uint32_t value);
   static void flash_store(uc_engine*, uc_mem_type, std::uint64_t address, int size,
@@ -233,6 +246,12 @@ class Chip {
   bool sleeping_ = false;
   bool reset_requested_ = false;
   int system_resets_ = 0;
+  // IWDG (RM0090 21.3): the cycle its counter reaches 0 while started; PR and
+  // RLR writable after the 0x5555 key; the resets it made.
+  std::uint64_t iwdg_zero_ = kNever;
+  bool iwdg_unlocked_ = false;
+  bool iwdg_expired_ = false;
+  std::vector<std::uint64_t> watchdog_resets_;
   OtgFs otg_;
   // NVIC (96 device interrupts).
   std::uint32_t nvic_enabled_[3] = {0, 0, 0};
@@ -242,6 +261,7 @@ class Chip {
   int flash_key_step_ = 0;
   std::vector<int> flash_erases_;
   int flash_programs_ = 0;
+  int otp_programs_ = 0;
   int flash_busy_reads_ = 0;
   int option_programs_ = 0;
   std::vector<PinWrite> gpioc_writes_;

@@ -14,6 +14,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstddef>
 #include <cstdint>
@@ -25,6 +26,7 @@
 #include "emu_product.hpp"
 #include "emu_usb_host.hpp"
 #include "flutterscan/common/protocol.hpp"
+#include "flutterscan/firmware/settings.hpp"
 
 namespace flutterscan::firmware::emu {
 namespace {
@@ -199,10 +201,14 @@ TEST_F(StrobeEmu, TheGuardRefusesAnEdgeTooSoonBeforeAnyLedLights) {
   }
   EXPECT_EQ(chip_.io(kGpioCBase + kGpioOdr) & 0x7u, 0u);
   EXPECT_FALSE(slot_table_prearmed());
-  // Past the minimum period the main loop (woken at 1 kHz) pre-arms again and an edge plays.
+  // Past the minimum period, and the minimum off-time after the first
+  // exposure's last lit slot (its runs would join), the main loop (woken at
+  // 1 kHz) pre-arms again and an edge plays.
   const std::uint64_t now_us = (chip_.cycles() - first) / kUs;
   ASSERT_LT(now_us, kMinPeriodUs);
-  run_us(kMinPeriodUs - now_us + 1100);
+  const std::uint64_t cooled_us =
+      std::max<std::uint64_t>(kMinPeriodUs, kMasks.size() * kSlotUs + kLedMinOffTimeUs);
+  run_us(cooled_us - now_us + 1100);
   ASSERT_TRUE(slot_table_prearmed());
   const std::size_t third = chip_.gpioc_writes().size();
   const std::uint64_t edge = chip_.cycles();
@@ -220,7 +226,8 @@ TEST_F(StrobeEmu, TheGuardRefusesAnEdgeTooSoonBeforeAnyLedLights) {
 // armed with a code within the cap, by SelectCode: the next edge plays the
 // code within the cap.
 TEST_F(StrobeEmu, TheOnTimeCapRefusesACodeBeforeAnyLedLights) {
-  ASSERT_EQ(upload(1, {0b001, 0b001, 0b001, 0b010}), proto::Status::kOk);  // PC0 on 300 us
+  ASSERT_EQ(upload(1, {0b001, 0b001, 0b001, 0b001, 0b001, 0b010}),
+            proto::Status::kOk);  // PC0 on 500 us
   ASSERT_EQ(send(proto::Command::kSetTiming,
                  proto::SetTimingRequest{
                      kSlotUs, 0, static_cast<std::uint8_t>(proto::SlotTimeSource::kFixed), {}}),
@@ -229,11 +236,11 @@ TEST_F(StrobeEmu, TheOnTimeCapRefusesACodeBeforeAnyLedLights) {
                  proto::SetModeRequest{static_cast<std::uint8_t>(proto::SyncMode::kSlave), 0, {}}),
             proto::Status::kOk);
   proto::SetGuardRequest guard{};
-  guard.max_on_time_us.fill(250);
-  guard.max_duty_permille.fill(1000);
+  guard.max_on_time_us.fill(450);
+  guard.max_duty_permille.fill(kProductLedCeiling.max_duty_permille[0]);
   ASSERT_EQ(send(proto::Command::kSetGuard, guard), proto::Status::kOk);
   ASSERT_EQ(upload(0, std::vector<std::uint8_t>(kMasks.begin(), kMasks.end())),
-            proto::Status::kOk);  // no LED on for more than two slots
+            proto::Status::kOk);  // no joined run longer than four slots (PC0: slots 0 and 3)
   ASSERT_EQ(send(proto::Command::kSelectCode, proto::SelectCodeRequest{1, {}}), proto::Status::kOk);
   EXPECT_EQ(send(proto::Command::kArm), proto::Status::kGuardLimit);
   EXPECT_FALSE(slot_table_prearmed());
@@ -271,7 +278,7 @@ TEST_F(StrobeEmu, SelectingOtherCodesWhileTheDmaPlaysLeavesItsTableAlone) {
   longer.assign(16, 0b101);
   ASSERT_EQ(upload(2, longer), proto::Status::kOk);
   ASSERT_EQ(upload(3, playing), proto::Status::kOk);
-  configure_and_arm(5000, 1000);  // every code within the guard: SelectCode accepts them
+  configure_and_arm(5000, kProductLedCeiling.max_duty_permille[0]);  // SelectCode accepts them all
   ASSERT_EQ(send(proto::Command::kSelectCode, proto::SelectCodeRequest{3, {}}), proto::Status::kOk);
   run_us(1100);
   ASSERT_TRUE(slot_table_prearmed());

@@ -121,7 +121,7 @@ TEST_F(DeviceCli, InfoDescribesTheVirtualController) {
   const auto r = run(sim({"device", "info"}));
   ASSERT_EQ(r.exit_code, 0) << r;
   EXPECT_TRUE(contains(r.out, "virtual controller")) << r;
-  EXPECT_TRUE(contains(r.out, "protocol    1.0")) << r;
+  EXPECT_TRUE(contains(r.out, "protocol    1.1")) << r;
   EXPECT_TRUE(contains(r.out, "3 LEDs, 8 code slots")) << r;
   EXPECT_TRUE(contains(r.out, "slave-sync")) << r;
 }
@@ -210,6 +210,22 @@ TEST_F(DeviceCli, BrightnessPerLed) {
   EXPECT_TRUE(contains(r.err, "the controller has 3 LEDs")) << r;
 }
 
+TEST_F(DeviceCli, GuardAboveTheFirmwaresCeilingIsRefusedByName) {
+  auto r = run(sim({"device", "guard", "--on-time-us", "50000", "--duty-permille", "400"}));
+  ASSERT_EQ(r.exit_code, 0) << r;
+  r = run(sim({"device", "guard", "--on-time-us", "50000", "--duty-permille", "400", "400",
+               "900"}));
+  EXPECT_EQ(r.exit_code, 2) << r;
+  EXPECT_TRUE(contains(r.err, "above the LED ceiling compiled into the firmware (status 14)"))
+      << r;
+  r = run(sim({"device", "guard", "--on-time-us", "0", "--duty-permille", "400"}));
+  EXPECT_EQ(r.exit_code, 2) << r;
+  EXPECT_TRUE(contains(r.err, "--on-time-us of LED 0: 0 is outside 1..2560000")) << r;
+  r = run(sim({"device", "guard", "--on-time-us", "1", "2", "--duty-permille", "400"}));
+  EXPECT_EQ(r.exit_code, 2) << r;
+  EXPECT_TRUE(contains(r.err, "--on-time-us has 2 values, the controller has 3 LEDs")) << r;
+}
+
 TEST_F(DeviceCli, ArmWithoutACodeFailsAndDisarmAlwaysWorks) {
   auto r = run(sim({"device", "arm"}));
   EXPECT_EQ(r.exit_code, 2) << r;
@@ -289,7 +305,8 @@ TEST_F(DeviceCli, HelpListsTheDeviceCommands) {
   const auto r = run({"device", "--help"});
   ASSERT_EQ(r.exit_code, 0) << r;
   for (const char* name : {"info", "status", "set-code", "select-code", "set-timing", "set-mode",
-                           "brightness", "arm", "disarm", "selftest", "save", "monitor"})
+                           "brightness", "guard", "arm", "disarm", "selftest", "save",
+                           "monitor"})
     EXPECT_TRUE(contains(r.out, name)) << name;
 }
 

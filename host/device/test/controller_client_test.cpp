@@ -8,6 +8,7 @@
 #include <atomic>
 #include <mutex>
 #include <string_view>
+#include <thread>
 #include <vector>
 
 #include "device/in_process_transport.hpp"
@@ -170,10 +171,30 @@ TEST_F(ClientTest, SetBrightness) {
 TEST_F(ClientTest, SetGuard) {
   proto::SetGuardRequest guard{};
   guard.max_on_time_us.fill(10'000);
-  guard.max_duty_permille.fill(800);
+  guard.max_duty_permille.fill(400);
   ASSERT_TRUE(client->set_guard(guard).ok());
   guard.max_duty_permille[0] = 0;
   expect_rejected(client->set_guard(guard), proto::Status::kOutOfRange, "SetGuard refused");
+  // Above the product board's compiled ceiling (50 %): refused, by name.
+  guard.max_duty_permille.fill(800);
+  expect_rejected(client->set_guard(guard), proto::Status::kAboveCeiling,
+                  "SetGuard refused by the controller: above the LED ceiling compiled into the "
+                  "firmware (status 14)");
+}
+
+// SaveConfig erases a flash sector (up to 2 s) before it can answer: the
+// client waits for it instead of timing out and sending it again (which erased
+// a second time and still reported a timeout).
+TEST_F(ClientTest, SaveConfigWaitsForTheSectorEraseWithoutResending) {
+  vc->hold_replies(true);
+  std::thread release([this] {
+    std::this_thread::sleep_for(milliseconds(400));  // 4 x the reply timeout
+    vc->hold_replies(false);
+  });
+  const auto saved = client->save_config();
+  release.join();
+  ASSERT_TRUE(saved.ok()) << saved.error().message;
+  EXPECT_EQ(client->stats().retries, 0u);
 }
 
 TEST_F(ClientTest, ArmAndDisarm) {

@@ -19,6 +19,7 @@ class FakeBootloader final : public DfuControl {
   DfuState state = DfuState::kDfuIdle;
   std::uint8_t status = 0;
   Bytes flash;
+  std::uint8_t security_floor = 0;  ///< as the firmware's security floor: errVENDOR below it
   std::size_t next_block = 0;
   int busy_polls_left = 0;
   std::optional<std::size_t> unplug_at_block;  ///< fails every transfer from that DNLOAD on
@@ -83,8 +84,9 @@ class FakeBootloader final : public DfuControl {
       } else if (state == DfuState::kManifest) {
         const bool valid = check_image(flash, kStm32f405AppRegion.board_id,
                                        kStm32f405AppRegion.max_size) == ImageCheck::kOk;
-        state = valid ? DfuState::kDfuIdle : DfuState::kError;
-        status = valid ? 0 : 0x0A;
+        const bool rolled_back = valid && read_image_header(flash).security_version < security_floor;
+        state = valid && !rolled_back ? DfuState::kDfuIdle : DfuState::kError;
+        status = !valid ? 0x0A : rolled_back ? 0x0B : 0;
         next_block = 0;
       }
       return Expected<Bytes>::success(Bytes{status, static_cast<std::uint8_t>(poll_ms),
@@ -165,6 +167,21 @@ TEST(DfuDownload, CorruptImageIsRefusedAtManifestWithErrFirmware) {
   EXPECT_NE(result.error().message.find("errFIRMWARE"), std::string::npos)
       << result.error().message;
   EXPECT_EQ(bootloader.state, DfuState::kError);
+}
+
+TEST(DfuDownload, AnImageBelowTheSecurityFloorIsBadInputNamedAntiRollback) {
+  FakeBootloader bootloader;
+  bootloader.security_floor = 2;
+  const Bytes image = make_image(kStm32f405AppRegion.board_id, 3000);  // security version 0
+  SleepLog sleeps;
+  const auto result = dfu_download(bootloader, image, nullptr, sleeps.sleeper());
+  ASSERT_FALSE(result.ok());
+  EXPECT_EQ(result.error().kind, ErrorKind::kBadInput);  // the CLI exits 2
+  EXPECT_NE(result.error().message.find("errVENDOR: the image's security version is below the "
+                                        "newest confirmed image's on this controller "
+                                        "(anti-rollback)"),
+            std::string::npos)
+      << result.error().message;
 }
 
 TEST(DfuDownload, InterruptedDownloadThenASecondOneSucceeds) {

@@ -48,7 +48,11 @@ struct ImageHeader {
   std::uint8_t version_major;
   std::uint8_t version_minor;
   std::uint8_t version_patch;
-  std::uint8_t reserved[3];
+  /// Anti-rollback: the bootloader starts, and DFU manifests, no image whose
+  /// security_version is below the newest confirmed image's (the board's
+  /// security floor). Images from before this field carry 0.
+  std::uint8_t security_version;
+  std::uint8_t reserved[2];
   std::uint32_t load_address;         ///< where the image runs (kAppBase)
   std::uint32_t vector_table_offset;  ///< from load_address; 512-byte aligned
   std::uint32_t image_size;           ///< bytes from load_address to the image's end

@@ -44,7 +44,7 @@ static_assert(std::endian::native == std::endian::little,
 /// Incompatible protocol changes bump the major; the host refuses another major.
 inline constexpr std::uint8_t kProtocolMajor = 1;
 /// Compatible additions bump the minor; any minor works with the same major.
-inline constexpr std::uint8_t kProtocolMinor = 0;
+inline constexpr std::uint8_t kProtocolMinor = 1;
 
 /// pid.codes (https://pid.codes), the open-source USB vendor ID.
 inline constexpr std::uint16_t kUsbVendorId = 0x1209;
@@ -132,6 +132,7 @@ enum class Status : std::uint8_t {
   kFlashError = 11,      ///< flash erase, write or verify failed
   kBusy = 12,            ///< a self test is running
   kHardwareError = 13,   ///< the port refused (e.g. timer could not start)
+  kAboveCeiling = 14,    ///< above the board's compiled LED ceiling (protocol 1.1)
 };
 
 /// \brief A short English text for a status (for the host's messages).
@@ -165,6 +166,8 @@ constexpr const char* status_text(Status status) {
       return "busy (self test running)";
     case Status::kHardwareError:
       return "hardware error";
+    case Status::kAboveCeiling:
+      return "above the LED ceiling compiled into the firmware";
   }
   return "unknown status";
 }

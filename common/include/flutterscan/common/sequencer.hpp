@@ -115,21 +115,21 @@ struct GuardVerdict {
   std::uint64_t limit = 0;  ///< the limit it broke
 };
 
+/// Current of an LED at full brightness, per mille (the guard's energy unit).
+inline constexpr std::uint16_t kFullCurrentPermille = 1000;
+/// Every LED at full current.
+inline constexpr std::array<std::uint16_t, kMaxLeds> kFullCurrent{
+    kFullCurrentPermille, kFullCurrentPermille, kFullCurrentPermille, kFullCurrentPermille};
+
 /// \brief Checks a code at `slot_time_us` against `limits`. `period_us` is the
 /// time from one exposure start to the next: 0 when unknown (the duty check is
 /// then skipped); a period no longer than the exposure means exposures run
 /// back to back (runs wrap into the next exposure, duty over the exposure).
+/// The duty is energy: on-time times `current_permille[k]` (per mille of full
+/// current) over the period, so a dimmer LED may stay on longer.
 GuardVerdict check_led_guard(const LedOnStats& stats, std::uint32_t slot_time_us,
-                             std::uint64_t period_us, const GuardLimits& limits);
-
-/// \brief Checks the seam between two exposures that touch (the next starts
-/// the moment the previous one ends), whatever code and slot time each has:
-/// per LED, `previous_on_us[k]` (how long LED k had been on, without a gap,
-/// when the previous exposure ended) plus the next code's leading run at
-/// `slot_time_us` against max_on_time_us. Checks nothing else: the next code's
-/// own runs are check_led_guard's.
-GuardVerdict check_led_guard_seam(const std::array<std::uint64_t, kMaxLeds>& previous_on_us,
-                                  const LedOnStats& next, std::uint32_t slot_time_us,
-                                  const GuardLimits& limits);
+                             std::uint64_t period_us, const GuardLimits& limits,
+                             const std::array<std::uint16_t, kMaxLeds>& current_permille =
+                                 kFullCurrent);
 
 }  // namespace flutterscan

@@ -14,13 +14,17 @@ bool is_request(const SetupPacket& setup, std::uint8_t request_type) {
 
 }  // namespace
 
-DfuMode::DfuMode(Flash& flash, const FlashLayout& layout, const AppRegion& region,
-                 std::uint8_t interface_number)
-    : flash_(flash), layout_(layout), region_(region), interface_number_(interface_number) {}
+DfuMode::DfuMode(Flash& flash, SecurityFloor& floor, const FlashLayout& layout,
+                 const AppRegion& region, std::uint8_t interface_number)
+    : flash_(flash),
+      floor_(floor),
+      layout_(layout),
+      region_(region),
+      interface_number_(interface_number) {}
 
 bool DfuMode::application_valid() {
   const auto image = flash_.read(region_.load_address, region_.max_size);
-  return check_boot_image(image, region_) == BootImageCheck::kOk;
+  return check_boot_image(image, region_, floor_.floor()) == BootImageCheck::kOk;
 }
 
 ControlReply DfuMode::fail(DfuStatus status) {
@@ -107,6 +111,7 @@ void DfuMode::start_download() {
   pending_offset_ = 0;
   erased_sectors_ = 0;
   block_pending_ = false;
+  partial_length_ = 0;
   manifest_done_ = false;
   manifested_ = false;
 }
@@ -264,28 +269,70 @@ void DfuMode::write_block() {
     }
     a = sector.base + sector.size;
   }
-  if (flash_.program(address, data) != FlashResult::kOk) {
-    fail(DfuStatus::kErrProg);
-    return;
+  // Whole words at aligned addresses only, whatever the transfer size (dfu-util
+  // -t 1022 starts its second block at an unaligned address): first complete
+  // the word the last block left partial, then every whole word of this one;
+  // its last bytes wait for the next block, or for the manifest.
+  std::uint32_t word_address = address - static_cast<std::uint32_t>(partial_length_);
+  std::size_t used = 0;
+  if (partial_length_ > 0) {
+    used = std::min(partial_word_.size() - partial_length_, data.size());
+    std::copy_n(data.begin(), used, partial_word_.begin() + partial_length_);
+    partial_length_ += used;
+    if (partial_length_ == partial_word_.size()) {
+      if (!program_verified(word_address, partial_word_)) return;
+      word_address += kFlashProgramAlignment;
+      partial_length_ = 0;
+    }
   }
-  const auto written = flash_.read(address, data.size());
-  if (written.size() != data.size() || !std::equal(data.begin(), data.end(), written.begin())) {
-    fail(DfuStatus::kErrVerify);
-    return;
+  const std::size_t rest = data.size() - used;
+  const std::size_t whole = rest - rest % kFlashProgramAlignment;
+  if (whole > 0 && !program_verified(word_address, data.subspan(used, whole))) return;
+  if (whole < rest) {
+    partial_length_ = rest - whole;
+    std::copy_n(data.begin() + static_cast<std::ptrdiff_t>(used + whole), partial_length_,
+                partial_word_.begin());
   }
-  download_end_ =
-      std::max<std::uint32_t>(download_end_, offset + static_cast<std::uint32_t>(data.size()));
+  download_end_ = offset + static_cast<std::uint32_t>(data.size());
   ++next_block_;
   state_ = DfuState::kDnloadSync;
 }
 
+bool DfuMode::program_verified(std::uint32_t address, std::span<const std::uint8_t> data) {
+  if (flash_.program(address, data) != FlashResult::kOk) {
+    fail(DfuStatus::kErrProg);
+    return false;
+  }
+  const auto written = flash_.read(address, data.size());
+  if (written.size() != data.size() || !std::equal(data.begin(), data.end(), written.begin())) {
+    fail(DfuStatus::kErrVerify);
+    return false;
+  }
+  return true;
+}
+
+bool DfuMode::flush_partial_word() {
+  if (partial_length_ == 0) return true;
+  const std::uint32_t address =
+      region_.load_address + download_end_ - static_cast<std::uint32_t>(partial_length_);
+  const std::size_t length = partial_length_;
+  partial_length_ = 0;
+  return program_verified(address, std::span<const std::uint8_t>(partial_word_).first(length));
+}
+
 void DfuMode::manifest() {
+  if (!flush_partial_word()) return;
   const auto image = flash_.read(region_.load_address, download_end_);
   last_check_ = check_image(image, region_.board_id, region_.max_size);
   // Also what the bootloader's jump needs (load address, vector table, SP, PC):
   // an image the bootloader would not start is refused here, not after a reset.
-  if (last_check_ != ImageCheck::kOk || check_boot_image(image, region_) != BootImageCheck::kOk) {
+  if (last_check_ != ImageCheck::kOk) {
     fail(DfuStatus::kErrFirmware);
+    return;
+  }
+  const BootImageCheck boot = check_boot_image(image, region_, floor_.floor());
+  if (boot != BootImageCheck::kOk) {
+    fail(boot == BootImageCheck::kRolledBack ? DfuStatus::kErrVendor : DfuStatus::kErrFirmware);
     return;
   }
   manifest_done_ = true;

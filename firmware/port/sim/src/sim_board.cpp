@@ -31,10 +31,12 @@ std::string decode_string(const std::vector<std::uint8_t>& d) {
 std::vector<std::uint8_t> make_application_image(std::uint16_t board_id, std::uint8_t major,
                                                  std::uint8_t minor, std::uint8_t patch,
                                                  std::size_t size, std::uint32_t seed,
-                                                 std::uint32_t load_address) {
+                                                 std::uint32_t load_address,
+                                                 std::uint8_t security_version) {
   constexpr std::uint32_t kVectorOffset = 0x200;
   std::vector<std::uint8_t> image(std::max<std::size_t>(size, kVectorOffset + 16), 0);
   ImageHeader h{};
+  h.security_version = security_version;
   h.magic = kImageMagic;
   h.header_version = kImageHeaderVersion;
   h.header_size = sizeof(ImageHeader);
@@ -98,7 +100,7 @@ void SimBoard::boot(bool dfu_requested, ResetCause cause) {
   in.watchdog_reset = cause == ResetCause::kWatchdog;  // RCC_CSR IWDGRSTF on the chip
   in.unconfirmed_starts = firmware::unconfirmed_starts(boot_record_);
   in.watchdog_resets = firmware::watchdog_resets(boot_record_);
-  in.image = check_boot_image(region_bytes, config_.region);
+  in.image = check_boot_image(region_bytes, config_.region, security_floor_.floor());
   const BootDecision decision = decide_boot(in);
   boot_record_ = make_boot_record(decision.unconfirmed_starts, decision.watchdog_resets);
   if (decision.target == BootTarget::kApplication) {
@@ -122,8 +124,9 @@ void SimBoard::boot(bool dfu_requested, ResetCause cause) {
   } else {
     device_descriptor_ = usb::bootloader_device_descriptor(usb::bcd_device(
         config_.bootloader_major, config_.bootloader_minor, config_.bootloader_patch));
-    bootloader_ = std::make_unique<usb::BootloaderUsb>(
-        *usb_, flash_, kStm32f405Flash, config_.region, device_descriptor_, config_.unique_id);
+    bootloader_ = std::make_unique<usb::BootloaderUsb>(*usb_, flash_, security_floor_,
+                                                       kStm32f405Flash, config_.region,
+                                                       device_descriptor_, config_.unique_id);
     usb_->attach(bootloader_.get());
     mode_ = BoardMode::kBootloader;
   }
@@ -145,8 +148,12 @@ void SimBoard::poll() {
   // The application's main loop (stm32f4 main.cpp): a host query answered over
   // configured USB, or USB configured long enough.
   if (confirmation_.poll(application_->device().configured(), handler_->queries_answered(),
-                         port_.now_us()))
+                         port_.now_us())) {
     boot_record_ = confirm_boot_record(boot_record_);  // the watchdog count stays
+    // This image works: no older one may run again (anti-rollback).
+    const auto header = flash_.read(config_.region.load_address, sizeof(ImageHeader));
+    security_floor_.raise(read_image_header(header).security_version);
+  }
 }
 
 void SimBoard::after_host_call() {
@@ -227,6 +234,9 @@ Enumeration SimBoard::enumerate(std::uint8_t address) {
     return true;
   };
   std::vector<std::uint8_t> scratch;
+  // The hub debounces the connection for 100 ms before the first reset (USB
+  // 2.0 7.1.7.3); the device runs meanwhile.
+  run_for(kAttachDebounceUs);
   // hub_port_init: reset, 64-byte device descriptor read at address 0, reset, SET_ADDRESS.
   bus_reset();
   step("GET_DESCRIPTOR(device, 64) at address 0", 0x80, kGetDescriptor,

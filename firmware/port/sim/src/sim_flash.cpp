@@ -46,6 +46,8 @@ FlashResult SimFlash::erase_sector(int sector) {
 FlashResult SimFlash::program(std::uint32_t address, std::span<const std::uint8_t> data) {
   if (address < base_ || address - base_ + data.size() > bytes_.size())
     return FlashResult::kBadAddress;
+  // The product's flash_program refuses an unaligned address (errPROG).
+  if (address % kFlashProgramAlignment != 0) return FlashResult::kProgramFailed;
   for (std::uint32_t a = address; a < address + data.size();) {
     const int s = layout_.sector_of(a);
     ++programs_[static_cast<std::size_t>(s)];

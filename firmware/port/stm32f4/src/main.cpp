@@ -13,6 +13,7 @@
 #include "flutterscan/firmware/command_handler.hpp"
 #include "flutterscan/firmware/controller.hpp"
 #include "flutterscan/firmware/stm32f4/otg_fs_device.hpp"
+#include "flutterscan/firmware/stm32f4/otp_security_floor.hpp"
 #include "flutterscan/firmware/stm32f4/registers.hpp"
 #include "flutterscan/firmware/stm32f4/stm32f4_board.hpp"
 #include "flutterscan/firmware/stm32f4/stm32f4_flash.hpp"
@@ -33,7 +34,8 @@ namespace flutterscan::firmware::stm32f4 {
     FLUTTERSCAN_VERSION_MAJOR,
     FLUTTERSCAN_VERSION_MINOR,
     FLUTTERSCAN_VERSION_PATCH,
-    {0, 0, 0},
+    kImageSecurityVersion,
+    {0, 0},
     kAppBase,
     kAppVectorOffset,
     0,
@@ -117,6 +119,9 @@ extern "C" void OTG_FS_IRQHandler() {
         std::memcpy(&record, reinterpret_cast<const void*>(kBootRecordAddress), sizeof record);
         record = confirm_boot_record(record);  // the watchdog count stays
         std::memcpy(reinterpret_cast<void*>(kBootRecordAddress), &record, sizeof record);
+        // This image works: no older one may run on this board again.
+        OtpSecurityFloor floor;
+        (void)floor.raise(g_image_header.security_version);
       }
     }
     if (!g_otg_fs.work_pending()) asm volatile("wfi" ::: "memory");

@@ -140,20 +140,9 @@ void Stm32f4Port::init() {
 }
 
 void Stm32f4Port::start_watchdog(std::uint32_t timeout_ms) {
-  const WatchdogSetting setting = watchdog_setting(timeout_ms);
-  if (!setting.ok) return;
-  set_bits(dbgmcu::kApb1Fz, dbgmcu::kApb1FzIwdgStop);
-  at(iwdg::kKr) = iwdg::kKeyStart;  // also starts the LSI
-  at(iwdg::kKr) = iwdg::kKeyUnlock;
-  for (int i = 0; i < 1'000'000 && (at(iwdg::kSr) & (iwdg::kSrPvu | iwdg::kSrRvu)) != 0; ++i) {
-  }
-  at(iwdg::kPr) = setting.pr;
-  at(iwdg::kRlr) = setting.rlr;
-  // The new values reach the LSI domain within a few LSI cycles (RM0090 21.4.4).
-  for (int i = 0; i < 1'000'000 && (at(iwdg::kSr) & (iwdg::kSrPvu | iwdg::kSrRvu)) != 0; ++i) {
-  }
-  at(iwdg::kKr) = iwdg::kKeyReload;
-  watchdog_started_ = true;
+  // Running already since the bootloader's jump (kBootWatchdogTimeoutMs): this
+  // sets the application's timeout.
+  watchdog_started_ = start_independent_watchdog(timeout_ms);
 }
 
 void Stm32f4Port::kick_watchdog() {

@@ -1,10 +1,13 @@
-// Clock setup, flash programming and the emergency LED shutdown of the stm32f4
-// image, written from RM0090 (6: RCC, 3: flash interface, 10: DMA).
+// Clock setup, flash programming, the independent watchdog and the emergency
+// LED shutdown of the stm32f4 images, written from RM0090 (6: RCC, 3: flash
+// interface, 21: IWDG, 10: DMA).
 
 #include "flutterscan/firmware/stm32f4/system.hpp"
 
 #include <cstring>
 
+#include "flutterscan/firmware/flash.hpp"
+#include "flutterscan/firmware/stm32f4/hardware_math.hpp"
 #include "flutterscan/firmware/stm32f4/registers.hpp"
 #include "flutterscan/firmware/stm32f4/stm32f4_board.hpp"
 
@@ -120,7 +123,7 @@ PortStatus flash_erase_sector(int sector) {
 
 PortStatus flash_program(std::uint32_t address, std::span<const std::uint8_t> data) {
   if (data.empty()) return PortStatus::kOk;
-  if (address % 4 != 0 || flash_sector_of(address) < 1 ||
+  if (address % kFlashProgramAlignment != 0 || flash_sector_of(address) < 1 ||
       flash_sector_of(address + static_cast<std::uint32_t>(data.size()) - 1) < 1)
     return PortStatus::kError;
   if (!flash_wait_idle() || !flash_unlock()) return PortStatus::kError;
@@ -145,7 +148,48 @@ PortStatus flash_program(std::uint32_t address, std::span<const std::uint8_t> da
   return ok ? PortStatus::kOk : PortStatus::kError;
 }
 
+PortStatus otp_program(std::uint32_t address, std::span<const std::uint32_t> words) {
+  constexpr std::uint32_t kOtpBase = 0x1FFF7800;
+  constexpr std::uint32_t kOtpDataBytes = 512;
+  if (address % 4 != 0 || address < kOtpBase ||
+      address + 4 * words.size() > kOtpBase + kOtpDataBytes)
+    return PortStatus::kError;
+  if (!flash_wait_idle() || !flash_unlock()) return PortStatus::kError;
+  reg::at(reg::flash::kSr) = reg::flash::kSrErrors | reg::flash::kSrEop;
+  reg::at(reg::flash::kCr) = reg::flash::kCrPg | reg::flash::kCrPsizeX32;
+  bool ok = true;
+  for (std::size_t i = 0; ok && i < words.size(); ++i) {
+    reg::at(address + 4 * static_cast<std::uint32_t>(i)) = words[i];
+    ok = flash_wait_idle() && (reg::at(reg::flash::kSr) & reg::flash::kSrErrors) == 0;
+  }
+  reg::clear_bits(reg::flash::kCr, reg::flash::kCrPg);
+  flash_lock();
+  for (std::size_t i = 0; ok && i < words.size(); ++i)
+    ok = reg::at(address + 4 * static_cast<std::uint32_t>(i)) == words[i];
+  return ok ? PortStatus::kOk : PortStatus::kError;
+}
+
 // ---------------------------------------------------------------------------
+
+bool start_independent_watchdog(std::uint32_t timeout_ms) {
+  const WatchdogSetting setting = watchdog_setting(timeout_ms);
+  if (!setting.ok) return false;
+  reg::set_bits(reg::dbgmcu::kApb1Fz, reg::dbgmcu::kApb1FzIwdgStop);
+  reg::at(reg::iwdg::kKr) = reg::iwdg::kKeyStart;  // also starts the LSI
+  reg::at(reg::iwdg::kKr) = reg::iwdg::kKeyUnlock;
+  const auto updating = [] {
+    return (reg::read(reg::iwdg::kSr) & (reg::iwdg::kSrPvu | reg::iwdg::kSrRvu)) != 0;
+  };
+  for (int i = 0; i < 1'000'000 && updating(); ++i) {
+  }
+  reg::at(reg::iwdg::kPr) = setting.pr;
+  reg::at(reg::iwdg::kRlr) = setting.rlr;
+  // The new values reach the LSI domain within a few LSI cycles (RM0090 21.4.4).
+  for (int i = 0; i < 1'000'000 && updating(); ++i) {
+  }
+  reg::at(reg::iwdg::kKr) = reg::iwdg::kKeyReload;
+  return true;
+}
 
 void emergency_leds_off() {
   constexpr std::uintptr_t slot_stream = reg::dma::stream(reg::dma::kDma2, kTim1UpRoute.stream);

@@ -55,12 +55,14 @@ enum class BootImageCheck : std::uint8_t {
   kWrongVectorOffset,  ///< vector table not where the bootloader jumps through
   kBadStackPointer,    ///< initial SP outside SRAM or misaligned
   kBadResetVector,     ///< reset vector not a Thumb address inside the image
+  kRolledBack,         ///< security_version below the board's security floor
 };
 
 /// \brief Whether the bootloader can start the image in `region_bytes`: the
-/// common checker, then what the jump itself reads (see the file comment).
+/// common checker, what the jump itself reads (see the file comment), and its
+/// security_version against the board's `security_floor` (security_floor.hpp).
 inline BootImageCheck check_boot_image(std::span<const std::uint8_t> region_bytes,
-                                       const AppRegion& region) {
+                                       const AppRegion& region, std::uint8_t security_floor = 0) {
   if (check_image(region_bytes, region.board_id, region.max_size) != ImageCheck::kOk)
     return BootImageCheck::kImageRefused;
   const ImageHeader h = read_image_header(region_bytes);
@@ -77,6 +79,7 @@ inline BootImageCheck check_boot_image(std::span<const std::uint8_t> region_byte
   const std::uint32_t target = pc & ~1u;
   if ((pc & 1u) == 0 || target < code_begin || target >= code_end)
     return BootImageCheck::kBadResetVector;
+  if (h.security_version < security_floor) return BootImageCheck::kRolledBack;
   return BootImageCheck::kOk;
 }
 

@@ -14,12 +14,19 @@
 // refuses stays dark and its event carries kEventGuardHit. Its history (when
 // the last lit exposure started, when it ended, each LED's run at its end) is
 // the LEDs' and outlives Arm, Disarm, faults and mode or code changes; a self
-// test is an exposure like any other. Only a power-on reset starts it empty;
-// after a watchdog or software reset the duty period counts from boot.
+// test is an exposure like any other. Every boot, whatever the reset cause,
+// starts it full: the duty period counts from boot and every LED counts as
+// having been on up to its on-time ceiling until boot (the LEDs have their own
+// supply, so a reset of the MCU does not cool them). Only a board that
+// declares its LEDs powered with the MCU (BoardConfig::leds_powered_with_mcu)
+// starts empty after a power-on reset.
 // The invariant (docs/hardware.md, "Thermal guard"): for any two lit
 // exposures (self tests included) starting at a < b with none between, each
-// LED's on-time in the one starting at b is at most its duty cap times b - a,
-// and no LED stays on longer than its max_on_time, across exposures too.
+// LED's energy (on-time x brightness) in the one starting at b is at most its
+// duty cap times b - a, and no LED has a joined run (runs less than the
+// board's minimum off-time apart are one run) longer than its max_on_time,
+// across exposures too. The guard limits never exceed the board's compiled
+// ceiling (BoardConfig::ceiling), nor does the brightness.
 //
 // On the MCU the Port callbacks run in interrupt context and the command
 // methods in the main loop: the stm32f4 port must mask the strobe, frame and
@@ -28,9 +35,10 @@
 // Pre-arming (issue 15, finding 3): the port can start a table on the trigger
 // edge in hardware, before any callback. The controller pre-arms only the
 // table of the next exposure, at its slot time, once the guard accepts it for
-// a start at the moment of pre-arming; acceptance only grows with a later
-// start (longer period, no seam), so whatever edge starts it, the guard said
-// yes before any LED lit. A pre-armed table that an edge started is always
+// every start from the moment of pre-arming on: the duty only improves with a
+// later start, and a join with an LED's last run is judged at the longest gap
+// that still joins, so whatever edge starts it, the guard said yes before any
+// LED lit. A pre-armed table that an edge started is always
 // adopted as a lit exposure, also when SelectCode or Disarm withdraws it too
 // late. Otherwise the edge's callback decides and starts the table in software
 // (late by the interrupt latency, never early). The controller re-decides the
@@ -85,9 +93,10 @@ class Controller final : public PortListener {
   protocol::Status set_timing(const protocol::SetTimingRequest& r);
   /// \brief SetMode (idle only).
   protocol::Status set_mode(const protocol::SetModeRequest& r);
-  /// \brief SetBrightness (any state; applied at once).
+  /// \brief SetBrightness: at or below the ceiling's current; lowering in any
+  /// state, raising only while nothing is armed or playing.
   protocol::Status set_brightness(const protocol::SetBrightnessRequest& r);
-  /// \brief SetGuard (idle only).
+  /// \brief SetGuard (idle only; at or below the ceiling).
   protocol::Status set_guard(const protocol::SetGuardRequest& r);
   /// \brief Arm: checks code, timing and guard, then waits for triggers or starts frames.
   protocol::Status arm();
@@ -126,6 +135,7 @@ class Controller final : public PortListener {
     std::array<std::uint32_t, kMaxSlotWords> words{};
     std::uint16_t word_count = 0;
     std::uint8_t code_id = protocol::kNoCode;
+    LedCode code;
     LedOnStats stats;
   };
 
@@ -147,7 +157,8 @@ class Controller final : public PortListener {
   bool uses_frame_timer() const { return settings_.mode.sync != protocol::SyncMode::kSlave; }
   /// Fills `table` for stored code `code_id` (which must be present).
   void build_table(SlotTable& table, std::uint8_t code_id) const;
-  /// kOk if code `code_id` may run with the current timing (frame period, guard).
+  /// kOk if code `code_id` may run with the current timing (frame period, guard)
+  /// and brightness.
   protocol::Status check_code_runnable(std::uint8_t code_id) const;
   void begin_exposure(std::uint64_t time_us);
   /// Pre-arms the next exposure's table if the guard accepts it from now on
@@ -157,17 +168,18 @@ class Controller final : public PortListener {
   bool withdraw_prearm();
   /// Records the pre-armed table an edge started as the exposure in progress.
   void adopt_prearm(const PrearmStart& start);
-  /// The guard's verdict on `stats` at `slot_time_us` for an exposure whose
-  /// LEDs light at `start_us`, given the history of lit exposures.
-  GuardVerdict guard_verdict(const LedOnStats& stats, std::uint32_t slot_time_us,
-                             std::uint64_t start_us) const;
-  /// Records a lit exposure (or self test) starting at `start_us` in the guard's history.
-  void record_lit_exposure(const LedOnStats& stats, std::uint64_t start_us,
+  /// The guard's verdict on `code` (whose stats are `stats`) at `slot_time_us`
+  /// for an exposure whose LEDs light at `start_us`, given the history of lit
+  /// exposures; with `any_later_start`, for every start from `start_us` on
+  /// (a pre-arm): a later start still within the minimum off-time of an LED's
+  /// last run joins a longer gap, so the join is judged at the longest gap that joins.
+  GuardVerdict guard_verdict(const LedCode& code, const LedOnStats& stats,
+                             std::uint32_t slot_time_us, std::uint64_t start_us,
+                             bool any_later_start = false) const;
+  /// Records a lit exposure (or self test) of `code` starting at `start_us` in the guard's history.
+  void record_lit_exposure(const LedCode& code, std::uint64_t start_us,
                            std::uint32_t slot_time_us);
   std::uint32_t slot_time_for_next_exposure(int code_length, std::uint16_t& flags) const;
-  /// Records the exposure just started (lit) for the next one's seam check.
-  void note_lit_exposure(const LedOnStats& stats, std::uint64_t start_us,
-                         std::uint32_t slot_time_us, bool joins_previous);
   void queue_event(const protocol::ExposureEvent& event);
   void stop_sequencing();
   void all_leds_off();
@@ -203,14 +215,17 @@ class Controller final : public PortListener {
   std::uint32_t exposure_slot_time_us_ = 0;
   std::uint16_t exposure_flags_ = 0;
   std::uint32_t exposure_pulse_width_us_ = 0;
-  bool have_previous_start_ = false;
+  /// No lit exposure since a power-on reset of a board whose LEDs are powered with the MCU.
+  bool cold_ = false;
   std::uint64_t previous_start_us_ = 0;  ///< start of the last lit exposure (the guard's period)
-  // The last exposure that lit its LEDs (a refused one stays dark): when its
-  // all-off word lands, and per LED how long the LED had been on, without a
-  // gap, at that moment. An exposure starting then joins its runs to these.
-  bool have_lit_exposure_ = false;
-  std::uint64_t lit_end_us_ = 0;
-  std::array<std::uint64_t, kMaxLeds> lit_trailing_on_us_{};
+  // Per LED, its last joined run (a refused exposure stays dark): when it
+  // ended and how long it was. A lit slot starting less than the minimum
+  // off-time after that end joins it (the gap counts as on). Boot sets every
+  // LED's run to its on-time limit, ending at boot.
+  std::array<std::uint64_t, kMaxLeds> run_end_us_{};
+  std::array<std::uint64_t, kMaxLeds> run_us_{};
+  std::array<bool, kMaxLeds> has_run_{};  ///< false: the LED has not lit since a cold boot
+  std::uint64_t lit_end_us_ = 0;    ///< when the last lit exposure's all-off word lands
   std::uint64_t lit_start_us_ = 0;  ///< start of the last lit exposure
   /// The self test's table (its own, so a self test never writes a code's table).
   std::array<std::uint32_t, kMaxLeds + 1> self_test_words_{};

@@ -56,6 +56,12 @@ inline constexpr std::array<FlashSector, 12> kStm32f405FlashSectors{{
 }};
 inline constexpr FlashLayout kStm32f405Flash{kStm32f405FlashSectors, 5};
 
+/// \brief Programming goes in words of this many bytes at addresses that are
+/// multiples of it (the STM32F4's x32 parallelism, RM0090 3.5.4): a program
+/// call at any other address fails; a last word shorter than this is padded
+/// with erased bytes (0xFF), which leave its cells as they are.
+inline constexpr std::uint32_t kFlashProgramAlignment = 4;
+
 /// \brief Outcome of a flash operation.
 enum class FlashResult : std::uint8_t { kOk, kEraseFailed, kProgramFailed, kBadAddress };
 
@@ -64,7 +70,8 @@ class Flash {
  public:
   /// \brief Erases sector `sector` of the layout (every byte 0xFF).
   virtual FlashResult erase_sector(int sector) = 0;
-  /// \brief Programs `data` at `address` (erased cells only; 0 bits can't become 1).
+  /// \brief Programs `data` at `address`, a multiple of kFlashProgramAlignment
+  /// (erased cells only; 0 bits can't become 1).
   virtual FlashResult program(std::uint32_t address, std::span<const std::uint8_t> data) = 0;
   /// \brief The `size` bytes at `address` (memory-mapped on the MCU); empty if out of range.
   virtual std::span<const std::uint8_t> read(std::uint32_t address, std::size_t size) = 0;

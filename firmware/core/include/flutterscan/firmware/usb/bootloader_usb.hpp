@@ -20,14 +20,16 @@ namespace flutterscan::firmware::usb {
 /// \brief DFU mode device of the bootloader.
 class BootloaderUsb final : public UsbDeviceEvents {
  public:
-  /// \brief The device on `controller` writing `region` of `flash`;
-  /// `device_descriptor` (bootloader_device_descriptor()) must outlive it.
-  BootloaderUsb(UsbDeviceController& controller, Flash& flash, const FlashLayout& layout,
-                const AppRegion& region, std::span<const std::uint8_t> device_descriptor,
+  /// \brief The device on `controller` writing `region` of `flash`, refusing
+  /// images below `floor`; `device_descriptor` (bootloader_device_descriptor())
+  /// must outlive it.
+  BootloaderUsb(UsbDeviceController& controller, Flash& flash, SecurityFloor& floor,
+                const FlashLayout& layout, const AppRegion& region,
+                std::span<const std::uint8_t> device_descriptor,
                 std::span<const std::uint8_t, kUniqueIdSize> unique_id)
       : descriptors_(bootloader_descriptors(device_descriptor)),
         device_(controller, descriptors_, unique_id),
-        dfu_(flash, layout, region, kDfuModeInterface) {
+        dfu_(flash, floor, layout, region, kDfuModeInterface) {
     device_.set_function(kDfuModeInterface, &dfu_);
   }
   BootloaderUsb(const BootloaderUsb&) = delete;

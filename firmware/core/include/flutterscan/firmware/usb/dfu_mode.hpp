@@ -17,9 +17,15 @@
 // - A zero-length DNLOAD ends the download (dfuMANIFEST-SYNC); GETSTATUS then
 //   reports dfuMANIFEST and the image is checked with the common checker
 //   (check_image: magic, header, board id, size, CRC-32 over exactly the bytes
-//   downloaded); failure: dfuERROR with errFIRMWARE, the device stays in DFU
-//   mode; success (bitManifestationTolerant): the next GETSTATUS says dfuIDLE
+//   downloaded) and what the bootloader's jump needs; failure: dfuERROR with
+//   errFIRMWARE, the device stays in DFU mode. An image whose security_version
+//   is below the board's security floor (security_floor.hpp: the newest
+//   confirmed image's), however valid: dfuERROR with errVENDOR (anti-rollback).
+//   Success (bitManifestationTolerant): the next GETSTATUS says dfuIDLE
 //   and the application starts at the next USB reset or DFU_DETACH.
+// - Blocks are programmed in whole words at aligned addresses
+//   (kFlashProgramAlignment): a block's bytes after its last word boundary
+//   wait for the next block, the last partial word for the manifest.
 // - UPLOAD block n returns the region from the bytes already uploaded: up to the image
 //   size of a valid-looking header, else the whole region; a short block
 //   (fewer bytes than wLength) ends the upload (dfuIDLE).
@@ -41,6 +47,7 @@
 
 #include "flutterscan/common/image_header.hpp"
 #include "flutterscan/firmware/flash.hpp"
+#include "flutterscan/firmware/security_floor.hpp"
 #include "flutterscan/firmware/usb/dfu.hpp"
 #include "flutterscan/firmware/usb/usb_descriptors.hpp"
 #include "flutterscan/firmware/usb/usb_function.hpp"
@@ -54,8 +61,9 @@ inline constexpr std::uint32_t kDfuManifestPollMs = 50;
 class DfuMode final : public UsbFunction {
  public:
   /// \brief DFU mode writing `region` of `flash` (whose sectors `layout` lists),
-  /// as interface `interface_number`. `flash` must outlive it.
-  DfuMode(Flash& flash, const FlashLayout& layout, const AppRegion& region,
+  /// as interface `interface_number`, refusing images below `floor`. `flash`
+  /// and `floor` must outlive it.
+  DfuMode(Flash& flash, SecurityFloor& floor, const FlashLayout& layout, const AppRegion& region,
           std::uint8_t interface_number);
 
   DfuState state() const { return state_; }
@@ -86,12 +94,19 @@ class DfuMode final : public UsbFunction {
   void start_download();
   /// Estimated ms to erase and program the pending block.
   std::uint32_t block_poll_ms() const;
-  /// Erases, programs and verifies the pending block.
+  /// Erases, programs and verifies the pending block: whole words only, the
+  /// bytes after its last word boundary kept for the next block (or the manifest).
   void write_block();
+  /// Programs `data` at `address` (word-aligned) and reads it back; false
+  /// (dfuERROR: errPROG or errVERIFY) if either fails.
+  bool program_verified(std::uint32_t address, std::span<const std::uint8_t> data);
+  /// Programs the bytes kept after the last word boundary, padded with 0xFF.
+  bool flush_partial_word();
   void manifest();
   std::uint32_t upload_size();
 
   Flash& flash_;
+  SecurityFloor& floor_;
   FlashLayout layout_;
   AppRegion region_;
   std::uint8_t interface_number_;
@@ -112,6 +127,10 @@ class DfuMode final : public UsbFunction {
   std::uint32_t upload_offset_ = 0;   ///< bytes sent by this upload so far
   std::size_t pending_length_ = 0;
   std::array<std::uint8_t, kDfuTransferSize> block_{};
+  /// Downloaded bytes after the last word boundary, not yet programmed (the
+  /// flash programs whole words at aligned addresses, kFlashProgramAlignment).
+  std::array<std::uint8_t, kFlashProgramAlignment> partial_word_{};
+  std::size_t partial_length_ = 0;
 };
 
 }  // namespace flutterscan::firmware::usb

@@ -50,6 +50,7 @@
 #include "flutterscan/firmware/settings.hpp"
 #include "flutterscan/firmware/sim/sim_flash.hpp"
 #include "flutterscan/firmware/sim/sim_port.hpp"
+#include "flutterscan/firmware/sim/sim_security_floor.hpp"
 #include "flutterscan/firmware/sim/sim_usb_controller.hpp"
 #include "flutterscan/firmware/usb/application_usb.hpp"
 #include "flutterscan/firmware/usb/bootloader_usb.hpp"
@@ -82,6 +83,9 @@ struct SimBoardConfig {
   }
 };
 
+/// \brief How long a hub debounces a new connection before resetting it (USB 2.0 7.1.7.3).
+inline constexpr std::uint64_t kAttachDebounceUs = 100'000;
+
 /// \brief What the host learned by enumerating the device.
 struct Enumeration {
   bool ok = false;
@@ -95,12 +99,14 @@ struct Enumeration {
 };
 
 /// \brief A stamped application image (header + vector table offset + `size`
-/// bytes in all) for `board_id` with version `major.minor.patch`; the payload
-/// bytes come from `seed`. What tests and the HIL harness flash.
+/// bytes in all) for `board_id` with version `major.minor.patch` and
+/// `security_version`; the payload bytes come from `seed`. What tests and the
+/// HIL harness flash.
 std::vector<std::uint8_t> make_application_image(std::uint16_t board_id, std::uint8_t major,
                                                  std::uint8_t minor, std::uint8_t patch,
                                                  std::size_t size, std::uint32_t seed = 1,
-                                                 std::uint32_t load_address = 0x08008000);
+                                                 std::uint32_t load_address = 0x08008000,
+                                                 std::uint8_t security_version = 0);
 
 /// \brief A simulated controller board.
 class SimBoard {
@@ -146,7 +152,8 @@ class SimBoard {
   void bus_reset();
   /// \brief Whether IN or OUT endpoint `address` is halted (usbdevfs: EPIPE).
   bool endpoint_halted(std::uint8_t address) const { return usb_->endpoint_halted(address); }
-  /// \brief Enumerates the device as Linux does at plug-in, leaving it configured at `address`.
+  /// \brief Enumerates the device as Linux does at plug-in (after the hub's
+  /// kAttachDebounceUs of virtual time), leaving it configured at `address`.
   Enumeration enumerate(std::uint8_t address = 2);
 
   // Identity for the umockdev sysfs record --------------------------------------
@@ -168,6 +175,8 @@ class SimBoard {
 
   SimPort& port() { return port_; }
   SimFlash& flash() { return flash_; }
+  /// \brief The board's security floor (kept across resets and power cycles).
+  SimSecurityFloor& security_floor() { return security_floor_; }
   SimUsbController& usb() { return *usb_; }
   const SimBoardConfig& config() const { return config_; }
   /// \brief Application mode's objects (nullptr in the bootloader).
@@ -187,6 +196,7 @@ class SimBoard {
   SimBoardConfig config_;
   SimPort port_;
   SimFlash flash_;
+  SimSecurityFloor security_floor_;
   BoardMode mode_ = BoardMode::kBootloader;
   std::uint32_t epoch_ = 0;
   int self_resets_ = 0;

@@ -112,6 +112,23 @@ inline constexpr std::array<int, 2> kConfigSectors{kConfigSector, 11};
 inline constexpr std::uint32_t kBootRequestAddress = 0x20000000;
 inline constexpr std::uint32_t kBootRequestReserved = 32;  ///< bytes kept free there
 inline constexpr std::uint32_t kBootRequestMagic = 0xB007DF11;
+
+/// \brief The security floor's cells (security_floor.hpp): OTP block 0 (RM0090
+/// 3.8: 16 blocks of 32 one-time-programmable bytes from 0x1FFF7800; its lock
+/// byte at 0x1FFF7A00 is left unprogrammed, so the floor can still rise).
+inline constexpr std::uint32_t kSecurityFloorAddress = 0x1FFF7800;
+/// \brief The product image's security_version (image header). Raise it in a
+/// release that must never be rolled back from (a safety fix): once such an
+/// image confirms itself on a board, no older one runs there again.
+inline constexpr std::uint8_t kImageSecurityVersion = 1;
+
+/// \brief The watchdog timeout the bootloader starts the IWDG with just before
+/// it jumps to the application (at the nominal 32 kHz LSI), so that an image
+/// that hangs or faults before it feeds the watchdog is reset, and the third
+/// such reset in a row keeps DFU mode: back in DFU mode about 3 x 2 s after the
+/// first start (LSI 17-47 kHz: 1.4-3.8 s each). Longer than the application's
+/// start-up before its own start_watchdog (4 s), shorter than 10 s / 3.
+inline constexpr std::uint32_t kBootWatchdogTimeoutMs = 2'000;
 /// The BootRecord (boot_decision.hpp: unconfirmed application starts, watchdog
 /// resets in a row, the reset flags) right after the hand-off word, inside the
 /// same reserved 32 bytes (both linker scripts start SRAM at 0x20000020).

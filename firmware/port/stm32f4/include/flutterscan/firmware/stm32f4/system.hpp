@@ -48,6 +48,15 @@ PortStatus flash_erase_sector(int sector);
 /// (PSIZE x32; a partial last word is padded with 0xFF). Verifies every word.
 PortStatus flash_program(std::uint32_t address, std::span<const std::uint8_t> data);
 
+/// \brief Starts the independent watchdog (or, running already, sets its new
+/// timeout) with `timeout_ms` at the nominal LSI and reloads it; false if the
+/// timeout is out of the IWDG's range. Stopped only by a reset (RM0090 21.3).
+bool start_independent_watchdog(std::uint32_t timeout_ms);
+
+/// \brief Programs `words` at `address` in the OTP area (x32; 0 bits only, OTP
+/// is never erased) and verifies them. kError on a flash error or timeout.
+PortStatus otp_program(std::uint32_t address, std::span<const std::uint32_t> words);
+
 /// \brief Turns every LED of the board off and stops the slot DMA, from any
 /// context (fault handlers): touches registers only, needs no object.
 void emergency_leds_off();
