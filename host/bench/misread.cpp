@@ -34,9 +34,6 @@
 
 #include <CLI/CLI.hpp>
 
-#include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -122,14 +119,6 @@ struct FrameRun {
   bool positive = true, read_right = false, ceiling = false;
   double ms = 0;
 };
-
-imaging::Plane original_grey(const std::string& path) {
-  const cv::Mat grey = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  imaging::Plane plane(grey.cols, grey.rows);
-  for (int y = 0; y < grey.rows; ++y)
-    for (int x = 0; x < grey.cols; ++x) plane.at(x, y) = grey.at<std::uint8_t>(y, x) / 255.0f;
-  return plane;
-}
 
 /// The photos of `dir`: with a .txt (positives) and without (negatives).
 std::vector<Subject> photo_subjects(const std::string& dir) {
@@ -363,8 +352,8 @@ int run(const Options& o) {
   for (Subject& subject : mine) {
     if (subject.photo) {
       const auto original =
-          reader::read_codes(original_grey(subject.spec.content), {}, imaging::Direction::kPlusX,
-                             reader::whole_frame_options())
+          reader::read_codes(bench::photo_file_grey(subject.spec.content), {},
+                             imaging::Direction::kPlusX, reader::whole_frame_options())
               .readout;
       for (const reader::DecodedCode& c : original.codes) {
         if (c.text == subject.text)

@@ -125,20 +125,11 @@ reader::BarcodeReadout read_whole(const imaging::Plane& latent) {
       .readout;
 }
 
-/// The photo file as stored, as the reader sees an 8-bit grey picture.
-imaging::Plane original_grey(const std::string& path) {
-  const cv::Mat grey = cv::imread(path, cv::IMREAD_GRAYSCALE);
-  imaging::Plane plane(grey.cols, grey.rows);
-  for (int y = 0; y < grey.rows; ++y)
-    for (int x = 0; x < grey.cols; ++x) plane.at(x, y) = grey.at<std::uint8_t>(y, x) / 255.0f;
-  return plane;
-}
-
 SharpRead sharp_read(const bench::RealPhoto& photo, const imaging::Plane& truth,
                      const std::vector<imaging::Plane>& bands) {
   SharpRead s;
   const reader::BarcodeReadout readout = read_whole(truth);
-  const reader::BarcodeReadout original = read_whole(original_grey(photo.path));
+  const reader::BarcodeReadout original = read_whole(bench::photo_file_grey(photo.path));
   s.original = reads(original, photo.text);
   for (const reader::DecodedCode& code : readout.codes) s.scene |= code.text == photo.text;
   for (const auto* read : {&readout, &original})

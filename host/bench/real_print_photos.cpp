@@ -1,5 +1,8 @@
 #include "bench/real_print_photos.hpp"
 
+#include <opencv2/core.hpp>
+#include <opencv2/imgcodecs.hpp>
+
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
@@ -45,6 +48,14 @@ Result<std::vector<RealPhoto>, std::string> real_photos(const std::string& dir, 
   }
   if (photos.empty()) return Out::failure("no photos with a .txt beside them in '" + dir + "'");
   return Out::success(std::move(photos));
+}
+
+imaging::Plane photo_file_grey(const std::string& path) {
+  const cv::Mat grey = cv::imread(path, cv::IMREAD_GRAYSCALE);
+  imaging::Plane plane(grey.cols, grey.rows);
+  for (int y = 0; y < grey.rows; ++y)
+    for (int x = 0; x < grey.cols; ++x) plane.at(x, y) = grey.at<std::uint8_t>(y, x) / 255.0f;
+  return plane;
 }
 
 Result<sim::SceneSpec, std::string> photo_scene_spec(const std::string& path, double blur_px) {

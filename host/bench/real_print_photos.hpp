@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "flutterscan/common/result.hpp"
+#include "imaging/image.hpp"
 #include "sim/scene.hpp"
 
 namespace flutterscan::bench {
@@ -22,6 +23,10 @@ struct RealPhoto {
 /// `match`. The error says why there are none (no folder, no photos).
 Result<std::vector<RealPhoto>, std::string> real_photos(const std::string& dir, int every,
                                                         const std::string& match);
+
+/// \brief The photo file at `path` as stored, as the reader sees an 8-bit grey
+/// picture (reflectance 0..1): what the ceiling is read on.
+imaging::Plane photo_file_grey(const std::string& path);
 
 /// \brief The photo scene of `path` unturned, its frame sized as `flutterscan
 /// simulate` sizes it for motion along x: the photo with sim::kMinBeltPx of belt
