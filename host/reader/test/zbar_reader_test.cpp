@@ -114,7 +114,7 @@ TEST(ZbarReader, TooFewSamplesForTheSizeGivenReadNothing) {
   EXPECT_TRUE(zbar_read(lum, 0, 100, "EAN-13", false).empty());
 }
 
-TEST(ZbarReader, ABooksEan13ZXingReadsNothingOnIsReadByZbar) {
+TEST(ZbarReader, ABooksEan13ZXingReadsNothingOnIsReadByZbarAloneAndSoNotReported) {
   // ean13-2-01 of the shared real-label photos (../shared/data beside the
   // repository, from ZXing's test images; skipped where absent): a book's
   // EAN-13 photographed out of focus, 1.5-2 px modules whose narrow spaces
@@ -137,15 +137,19 @@ TEST(ZbarReader, ABooksEan13ZXingReadsNothingOnIsReadByZbar) {
   const auto bands = sim::render_photo_bands(spec);
   ASSERT_TRUE(bands.ok()) << bands.error();
   const imaging::Plane scene = sim::fuse_bands(bands.value());
+  // zbar reads it, alone: no second reading backs an EAN-13's weak check digit
+  // (its halves, each read on its own, do not both read), so the value is not
+  // reported, only logged as unconfirmed (read_evidence.hpp).
   const BarcodeReadout readout = read_barcodes(scene, "EAN-13", false);
-  ASSERT_EQ(readout.codes.size(), 1u);
-  EXPECT_EQ(readout.codes[0].text, "9780804816632");
-  EXPECT_EQ(readout.codes[0].decoder, "zbar");
-  EXPECT_EQ(readout.codes[0].format, "EAN-13");
+  EXPECT_TRUE(readout.codes.empty());
+  ASSERT_EQ(readout.unconfirmed.size(), 1u);
+  EXPECT_EQ(readout.unconfirmed[0].text, "9780804816632");
+  EXPECT_EQ(readout.unconfirmed[0].decoder, "zbar");
+  EXPECT_EQ(readout.unconfirmed[0].format, "EAN-13");
   // Where it lies: the photo's lower middle (the code spans x 100-420, y 110-300
   // of the 480 x 360 photo, 8 px of belt around it).
-  EXPECT_GT(readout.codes[0].centre_x, 150);
-  EXPECT_LT(readout.codes[0].centre_x, 400);
+  EXPECT_GT(readout.unconfirmed[0].centre_x, 150);
+  EXPECT_LT(readout.unconfirmed[0].centre_x, 400);
   // Without the second decoder, or in a window read in fewer than all views, nothing.
   DecodeWindow zxing_only{0, 0, scene.width, scene.height};
   zxing_only.second_decoder = false;
@@ -155,9 +159,11 @@ TEST(ZbarReader, ABooksEan13ZXingReadsNothingOnIsReadByZbar) {
   // The reader's options say so for every window (the session's first pass in a cascade).
   ReaderOptions options = whole_frame_options();
   options.symbologies = "EAN-13";
-  EXPECT_EQ(read_codes(scene, {}, imaging::Direction::kPlusX, options).readout.codes.size(), 1u);
+  EXPECT_EQ(read_codes(scene, {}, imaging::Direction::kPlusX, options).readout.unconfirmed.size(),
+            1u);
   options.second_decoder = false;
-  EXPECT_TRUE(read_codes(scene, {}, imaging::Direction::kPlusX, options).readout.codes.empty());
+  EXPECT_TRUE(
+      read_codes(scene, {}, imaging::Direction::kPlusX, options).readout.unconfirmed.empty());
 }
 
 }  // namespace
