@@ -110,6 +110,7 @@ struct Report {
   std::string subject, scene, motion, path, tries, text, format, decoder, pass, verdict;
   double electrons = 0, turn = 0;
   int seed = 0;
+  bool held = false;  ///< logged as unconfirmed, not reported (read_evidence.hpp)
 };
 
 /// One frame read by one path.
@@ -251,8 +252,8 @@ std::optional<imaging::Image> kept_frame(const fs::path& path) {
 }
 
 /// `flutterscan deblur --decode`'s reading of a frame (its picture beyond the windows aside).
-std::vector<reader::DecodedCode> cascade_read(const imaging::Image& dn, imaging::CaptureModel model,
-                                              const session::SecondPassTries& tries) {
+reader::BarcodeReadout cascade_read(const imaging::Image& dn, imaging::CaptureModel model,
+                                    const session::SecondPassTries& tries) {
   auto frame = imaging::MotionFrame::make(imaging::dn_to_electrons(dn, model), model.direction);
   if (!frame.ok()) throw std::runtime_error(frame.error());
   constexpr double kTolerance = 0.10;  // deblur's default for codes of two or more LEDs
@@ -273,8 +274,7 @@ std::vector<reader::DecodedCode> cascade_read(const imaging::Image& dn, imaging:
   reader::ReaderOptions reader_options;
   reader_options.area = reader::DecodeArea::kFrame;  // deblur's default
   return session::read_with_cascade({frame.value(), model, motion_latent, &camera_latent},
-                                    imaging::Plane{}, reader_options, tries, log)
-      .codes;
+                                    imaging::Plane{}, reader_options, tries, log);
 }
 
 /// A session path's second-pass credit per frame: offline every window; at a
@@ -351,16 +351,23 @@ int run(const Options& o) {
   std::vector<FrameRun> runs;
   for (Subject& subject : mine) {
     if (subject.photo) {
-      const auto original =
-          reader::read_codes(bench::photo_file_grey(subject.spec.content), {},
-                             imaging::Direction::kPlusX, reader::whole_frame_options())
-              .readout;
-      for (const reader::DecodedCode& c : original.codes) {
-        if (c.text == subject.text)
-          subject.original_reads = true;
-        else
-          subject.seconds.insert(c.text);
-      }
+      // The ceiling: the reader on the photo file. The values on it: read as it
+      // is and twice as large (a symbol whose truth file disagrees with what it
+      // encodes is then a second value, not a misread).
+      const imaging::Plane grey = bench::photo_file_grey(subject.spec.content);
+      imaging::Plane twice(grey.width * 2, grey.height * 2);
+      for (int y = 0; y < twice.height; ++y)
+        for (int x = 0; x < twice.width; ++x) twice.at(x, y) = grey.at(x / 2, y / 2);
+      for (const imaging::Plane* view : {&grey, static_cast<const imaging::Plane*>(&twice)})
+        for (const reader::DecodedCode& c :
+             reader::read_codes(*view, {}, imaging::Direction::kPlusX,
+                                reader::whole_frame_options())
+                 .readout.codes) {
+          if (c.text != subject.text)
+            subject.seconds.insert(c.text);
+          else if (view == &grey)
+            subject.original_reads = true;
+        }
     }
     for (const double turn : o.turns) {
       subject.spec.rotate_deg = turn;
@@ -400,14 +407,14 @@ int run(const Options& o) {
               for (const auto& [tries_name, tries] : tries_sets)
                 for (const std::string& path : o.paths) {
                   const auto t0 = std::chrono::steady_clock::now();
-                  std::vector<reader::DecodedCode> codes;
+                  reader::BarcodeReadout readout;
                   if (path != "cascade") {
                     const bench::SessionLine session(
                         subject.spec.width, subject.spec.height, kBlurPx, electrons,
                         reader::ReaderOptions{}.area, tries, second_pass_credit_ms(path));
-                    codes = session.read(*dn);
+                    readout = session.read(*dn);
                   } else {
-                    codes = cascade_read(*dn, line.model(), tries);
+                    readout = cascade_read(*dn, line.model(), tries);
                   }
                   FrameRun run{subject.name,
                                scene,
@@ -421,30 +428,34 @@ int run(const Options& o) {
                   run.ms = std::chrono::duration<double, std::milli>(
                                std::chrono::steady_clock::now() - t0)
                                .count();
-                  std::set<std::string> seen;  // one symbol read twice is one report
-                  for (const reader::DecodedCode& code : codes) {
-                    if (!seen.insert(code.text).second) continue;
-                    std::string verdict;
-                    if (subject.text.empty())
-                      verdict = "unexpected";
-                    else if (code.text == subject.text)
-                      verdict = "right";
-                    else if (subject.seconds.contains(code.text))
-                      verdict = "second";
-                    else
-                      verdict = "misread";
-                    run.read_right |= verdict == "right";
-                    if (verdict == "misread" || verdict == "unexpected")
-                      std::cerr << "\n"
-                                << verdict << ": " << path << " " << tries_name << " "
-                                << subject.name << " " << scene << " " << electrons << " e- "
-                                << motion << " seed " << seed << ": " << code.text << " ("
-                                << code.format << ", " << code.decoder << ", " << code.pass
-                                << ")\n";
-                    reports.push_back({subject.name, scene, motion, path, tries_name, code.text,
-                                       code.format, code.decoder, code.pass, verdict, electrons,
-                                       turn, seed});
-                  }
+                  // One symbol read twice is one report; a value held back is
+                  // counted only where the frame reported it nowhere.
+                  std::set<std::string> seen;
+                  for (const bool held : {false, true})
+                    for (const reader::DecodedCode& code :
+                         held ? readout.unconfirmed : readout.codes) {
+                      if (!seen.insert(code.text).second) continue;
+                      std::string verdict;
+                      if (subject.text.empty())
+                        verdict = "unexpected";
+                      else if (code.text == subject.text)
+                        verdict = "right";
+                      else if (subject.seconds.contains(code.text))
+                        verdict = "second";
+                      else
+                        verdict = "misread";
+                      run.read_right |= !held && verdict == "right";
+                      if (!held && (verdict == "misread" || verdict == "unexpected"))
+                        std::cerr << "\n"
+                                  << verdict << ": " << path << " " << tries_name << " "
+                                  << subject.name << " " << scene << " " << electrons << " e- "
+                                  << motion << " seed " << seed << ": " << code.text << " ("
+                                  << code.format << ", " << code.decoder << ", " << code.pass
+                                  << ")\n";
+                      reports.push_back({subject.name, scene, motion, path, tries_name, code.text,
+                                         code.format, code.decoder, code.pass, verdict, electrons,
+                                         turn, seed, held});
+                    }
                   runs.push_back(run);
                 }
             }
@@ -459,7 +470,8 @@ int run(const Options& o) {
   // Totals per path and tries.
   std::cout << "| path | tries | frames with a code | right reads | of the ceiling's frames | "
                "misreads per read | photos misread | frames with no code | unexpected per "
-               "frame | ms per frame (median) |\n|---|---|---|---|---|---|---|---|---|---|\n";
+               "frame | held back: right, wrong | ms per frame (median) |\n"
+               "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const auto& [tries_name, tries] : tries_sets)
     for (const std::string& path : o.paths) {
       int positives = 0, right = 0, ceiling = 0, ceiling_read = 0, negatives = 0;
@@ -476,10 +488,15 @@ int run(const Options& o) {
           ++negatives;
         }
       }
-      int misreads = 0, unexpected = 0, reads = 0;
+      int misreads = 0, unexpected = 0, reads = 0, held_right = 0, held_wrong = 0;
       std::set<std::string> misread_photos;
       for (const Report& r : reports) {
         if (r.path != path || r.tries != tries_name) continue;
+        if (r.held) {
+          held_right += r.verdict == "right";
+          held_wrong += r.verdict == "misread" || r.verdict == "unexpected";
+          continue;
+        }
         reads += r.verdict != "unexpected";
         if (r.verdict == "misread") {
           ++misreads;
@@ -496,27 +513,31 @@ int run(const Options& o) {
                 << " | "
                 << rate(static_cast<int>(misread_photos.size()),
                         static_cast<int>(positive_subjects.size()))
-                << " | " << negatives << " | " << rate(unexpected, negatives) << " | " << std::fixed
-                << std::setprecision(0) << (ms.empty() ? 0 : ms[ms.size() / 2]) << std::defaultfloat
-                << " |\n";
+                << " | " << negatives << " | " << rate(unexpected, negatives) << " | " << held_right
+                << ", " << held_wrong << " | " << std::fixed << std::setprecision(0)
+                << (ms.empty() ? 0 : ms[ms.size() / 2]) << std::defaultfloat << " |\n";
     }
   // Per try and decoder: what each reported, right and wrong.
-  std::cout << "\nBy the latent a value was read on (pass) and its decoder\n\n"
-               "| path | tries | pass | decoder | right | second | misread | unexpected |\n"
-               "|---|---|---|---|---|---|---|---|\n";
+  std::cout << "\nBy the latent a value was read on (pass) and its decoder; held back: "
+               "values no second reading backed, logged as unconfirmed\n\n"
+               "| path | tries | pass | decoder | right | second | misread | unexpected | "
+               "held back right | held back wrong |\n|---|---|---|---|---|---|---|---|---|---|\n";
   std::map<std::vector<std::string>, std::map<std::string, int>> by;
-  for (const Report& r : reports) ++by[{r.path, r.tries, r.pass, r.decoder}][r.verdict];
+  for (const Report& r : reports)
+    ++by[{r.path, r.tries, r.pass, r.decoder}]
+        [r.held ? (r.verdict == "right" ? "held right" : "held wrong") : r.verdict];
   for (auto& [key, counts] : by)
     std::cout << "| " << key[0] << " | " << key[1] << " | " << key[2] << " | " << key[3] << " | "
               << counts["right"] << " | " << counts["second"] << " | " << counts["misread"] << " | "
-              << counts["unexpected"] << " |\n";
+              << counts["unexpected"] << " | " << counts["held right"] << " | "
+              << counts["held wrong"] << " |\n";
   std::cout << "\nEvery misread and unexpected read\n\n"
                "| path | tries | subject | scene | e- | motion | seed | turn | read | format | "
                "decoder | pass | truth |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   std::map<std::string, std::string> truth;
   for (const Subject& s : mine) truth[s.name] = s.text;
   for (const Report& r : reports)
-    if (r.verdict == "misread" || r.verdict == "unexpected")
+    if (!r.held && (r.verdict == "misread" || r.verdict == "unexpected"))
       std::cout << "| " << r.path << " | " << r.tries << " | " << r.subject << " | " << r.scene
                 << " | " << r.electrons << " | " << r.motion << " | " << r.seed << " | " << r.turn
                 << " | " << r.text << " | " << r.format << " | " << r.decoder << " | " << r.pass
@@ -526,9 +547,10 @@ int run(const Options& o) {
     csv << "kind,path,tries,subject,scene,electrons,motion,seed,turn,text,format,decoder,pass,"
            "verdict,ms,ceiling\n";
     for (const Report& r : reports)
-      csv << "read," << r.path << ",\"" << r.tries << "\"," << r.subject << "," << r.scene << ","
-          << r.electrons << "," << r.motion << "," << r.seed << "," << r.turn << ",\"" << r.text
-          << "\"," << r.format << "," << r.decoder << "," << r.pass << "," << r.verdict << ",,\n";
+      csv << (r.held ? "held," : "read,") << r.path << ",\"" << r.tries << "\"," << r.subject << ","
+          << r.scene << "," << r.electrons << "," << r.motion << "," << r.seed << "," << r.turn
+          << ",\"" << r.text << "\"," << r.format << "," << r.decoder << "," << r.pass << ","
+          << r.verdict << ",,\n";
     for (const FrameRun& r : runs)
       csv << "frame," << r.path << ",\"" << r.tries << "\"," << r.subject << "," << r.scene << ","
           << r.electrons << "," << r.motion << ",,,,,,,"

@@ -302,9 +302,8 @@ int run(const Options& o) {
                                              electrons, reader::DecodeArea::kFrame);
         for (const auto& [path, session] :
              {std::pair{kSessionPath, &level}, std::pair{kSessionFrame, &whole_frame}}) {
-          reader::BarcodeReadout session_readout;
-          session_readout.codes = session->read(capture.dn);
-          const std::vector<std::string> session_reads = reader::code_texts(session_readout);
+          const std::vector<std::string> session_reads =
+              reader::code_texts(session->read(capture.dn));
           trials.push_back({photo.name, colour, electrons, path,
                             std::find(session_reads.begin(), session_reads.end(), photo.text) !=
                                 session_reads.end(),

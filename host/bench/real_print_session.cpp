@@ -50,7 +50,7 @@ SessionLine::SessionLine(int width, int height, double blur_px, double electrons
   model_ = std::move(model.value());
 }
 
-std::vector<reader::DecodedCode> SessionLine::read(const imaging::Image& dn) const {
+reader::BarcodeReadout SessionLine::read(const imaging::Image& dn) const {
   session::FrameJob job;
   job.event = event(config_, encoder_counts_);
   job.frame.format = format(width_, height_, config_.optics.bit_depth);
@@ -66,14 +66,22 @@ std::vector<reader::DecodedCode> SessionLine::read(const imaging::Image& dn) con
       }
   session::WorkerShared shared(config_);
   const session::FrameOutcome out = session::process_frame(job, config_, shared, nullptr);
-  std::vector<reader::DecodedCode> codes;
+  reader::BarcodeReadout readout;
   if (!out.processed) {  // a NO-READ, said
     std::cerr << "the session did not process a frame: " << out.log.dump() << "\n";
-    return codes;
+    return readout;
   }
   for (const session::Sighting& s : out.sightings)
-    if (s.decoded) codes.push_back(s.code);
-  return codes;
+    if (s.decoded) readout.codes.push_back(s.code);
+  for (const auto& logged : out.log.value("unconfirmed", nlohmann::json::array())) {
+    reader::DecodedCode code;
+    code.text = logged.at("text").get<std::string>();
+    code.format = logged.at("format").get<std::string>();
+    code.decoder = logged.at("decoder").get<std::string>();
+    code.pass = logged.at("pass").get<std::string>();
+    readout.unconfirmed.push_back(std::move(code));
+  }
+  return readout;
 }
 
 }  // namespace flutterscan::bench

@@ -10,6 +10,7 @@
 
 #include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
+#include "reader/barcode_reader.hpp"
 #include "session/session_config.hpp"
 
 namespace flutterscan::bench {
@@ -30,9 +31,10 @@ class SessionLine {
   /// what a simulated frame must be recorded with.
   const imaging::CaptureModel& model() const { return model_; }
 
-  /// \brief The codes the session reads on `dn` (a frame recorded with model()),
-  /// each as its sighting reports it (value, format, decoder, pass).
-  std::vector<reader::DecodedCode> read(const imaging::Image& dn) const;
+  /// \brief What the session reads on `dn` (a frame recorded with model()): its
+  /// codes, each as its sighting reports it (value, format, decoder, pass), and
+  /// the values it logged as unconfirmed (value, format, decoder, pass).
+  reader::BarcodeReadout read(const imaging::Image& dn) const;
 
  private:
   session::SessionConfig config_;
