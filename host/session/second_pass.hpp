@@ -144,26 +144,27 @@ struct IsotropicTry {
   std::vector<std::string> read;  ///< the codes the last try read
 };
 
+/// \brief One try's run in one window (window_tries.hpp), in the order they ran.
+struct TryRun {
+  std::string name;  ///< the try's (second_pass_tries.hpp), or "tv"
+  /// What the budget was charged before it ran, ms; 0 for "bar-sums", which is
+  /// charged with tv in the window's estimate (tv's estimate_ms).
+  double estimate_ms = 0;
+  double ms = 0;                  ///< what it took, wall time
+  std::vector<std::string> read;  ///< the values it read
+};
+
 /// \brief One window the second pass deblurred again.
 struct WindowRetry {
   reader::DecodeWindow window;    ///< in the frame (camera coordinates)
   double ms = 0;                  ///< its deblurs and decodes, wall time
   std::vector<std::string> read;  ///< the codes it read (tv's, the bar sums', the isotropic tv's)
+  std::vector<TryRun> tries;      ///< each try that ran, in order
   std::optional<BarSumsTry> bar_sums;  ///< absent: not tried
   /// tv with an isotropic prior (the window again where nothing else
   /// read); absent: not tried.
   std::optional<IsotropicTry> isotropic;
 };
-
-/// \brief The codes of `found` (read on tv's latent of a window's bar sums)
-/// whose bars `sums` (the frame's latent with joint Wiener's sums where tv's
-/// were: the light's evidence without tv's prior) support: judged by
-/// reader::fit_bar_pattern, every character fitting at least 1 noise variance
-/// better than any other allowed in its place. Formats it cannot judge are
-/// not supported. Each code's verdict is added to `checked`.
-std::vector<reader::DecodedCode> supported_reads(const imaging::Plane& sums,
-                                                 std::vector<reader::DecodedCode> found,
-                                                 std::vector<BarSumsTry::Checked>& checked);
 
 /// \brief What a frame's second pass did.
 struct SecondPass {

@@ -20,6 +20,7 @@
 #include "device/virtual_controller.hpp"
 #include "imaging/bar_sums.hpp"
 #include "imaging/capture_descriptor.hpp"
+#include "session/window_tries.hpp"
 #include "sim/scene.hpp"
 
 namespace flutterscan::session {
@@ -430,6 +431,58 @@ TEST(SecondPass, CodesComingIntoOrGoingOutOfViewAreLeftForAnotherFrame) {
             << " window(s) deblurred again\n";
   ASSERT_FALSE(whole.empty());
   for (const std::string& value : whole) EXPECT_EQ(read.count(value), 1u) << value;
+}
+
+// Each try runs as its own unit, in the order docs/algorithms.md gives, each
+// charged before it runs and logged with what it cost and read; a try switched
+// off does not run. A label in light too dim for anything to read: every try
+// switched on runs in its window.
+TEST(SecondPass, EachTryRunsInItsOrderChargedAndLoggedAndOnlyWhereSwitchedOn) {
+  SessionConfig config = small_config();
+  config.optics.electrons = 15;
+  config.processing.cascade = true;
+  config.processing.second_pass_ms = kMaxSecondPassMs;  // offline: every window
+  std::string problem;
+  config.processing.second_pass_tries = *parse_second_pass_tries("all", problem);
+  ASSERT_EQ(check_config(config), "");
+  const FrameJob dim = job_with_a_label(config);
+  auto tries_run = [&](const SessionConfig& c) {
+    FrameJob job = dim;
+    WorkerShared shared(c);
+    const FrameOutcome out = process_frame(job, c, shared, nullptr);
+    EXPECT_TRUE(out.processed) << out.log.dump();
+    std::vector<std::vector<std::string>> names;
+    for (const auto& window : out.log["second_pass"]["windows"]) {
+      EXPECT_TRUE(window["read"].empty()) << "a code read at 15 e-: " << window.dump();
+      names.emplace_back();
+      for (const auto& t : window["tries"]) {
+        names.back().push_back(t["name"]);
+        EXPECT_GE(t["ms"].get<double>(), 0) << t.dump();
+        EXPECT_EQ(t["estimate_ms"].get<double>() > 0, t["name"] != "bar-sums") << t.dump();
+      }
+    }
+    return names;
+  };
+  const auto all = tries_run(config);
+  ASSERT_FALSE(all.empty());
+  for (const std::vector<std::string>& window : all) {
+    // tv; bar-sums once; tv-on-sums and fit once per count of rows summed
+    // (one or two); isotropic-tv at each of its two weights.
+    ASSERT_GE(window.size(), 6u);
+    EXPECT_EQ(window[0], "tv");
+    EXPECT_EQ(window[1], "bar-sums");
+    const auto n = static_cast<std::ptrdiff_t>((window.size() - 4) / 2);
+    ASSERT_EQ(window.size(), static_cast<std::size_t>(4 + 2 * n));
+    EXPECT_TRUE(std::all_of(window.begin() + 2, window.begin() + 2 + n,
+                            [](const std::string& t) { return t == "tv-on-sums"; }));
+    EXPECT_TRUE(std::all_of(window.begin() + 2 + n, window.begin() + 2 + 2 * n,
+                            [](const std::string& t) { return t == "fit"; }));
+    EXPECT_EQ(window[window.size() - 2], "isotropic-tv");
+    EXPECT_EQ(window.back(), "isotropic-tv");
+  }
+  config.processing.second_pass_tries = *parse_second_pass_tries("bar-sums", problem);
+  for (const std::vector<std::string>& window : tries_run(config))
+    EXPECT_EQ(window, (std::vector<std::string>{"tv", "bar-sums"}));
 }
 
 TEST(SecondPassTries, NamedOneByOneNoneOrAllAndEachNeedsWhatItWorksOn) {
