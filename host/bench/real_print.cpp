@@ -303,7 +303,7 @@ int run(const Options& o) {
         for (const auto& [path, session] :
              {std::pair{kSessionPath, &level}, std::pair{kSessionFrame, &whole_frame}}) {
           const std::vector<std::string> session_reads =
-              reader::code_texts(session->read(capture.dn));
+              reader::code_texts(session->read(capture.dn).readout);
           trials.push_back({photo.name, colour, electrons, path,
                             std::find(session_reads.begin(), session_reads.end(), photo.text) !=
                                 session_reads.end(),

@@ -50,7 +50,7 @@ SessionLine::SessionLine(int width, int height, double blur_px, double electrons
   model_ = std::move(model.value());
 }
 
-reader::BarcodeReadout SessionLine::read(const imaging::Image& dn) const {
+SessionRead SessionLine::read(const imaging::Image& dn) const {
   session::FrameJob job;
   job.event = event(config_, encoder_counts_);
   job.frame.format = format(width_, height_, config_.optics.bit_depth);
@@ -66,13 +66,17 @@ reader::BarcodeReadout SessionLine::read(const imaging::Image& dn) const {
       }
   session::WorkerShared shared(config_);
   const session::FrameOutcome out = session::process_frame(job, config_, shared, nullptr);
-  reader::BarcodeReadout readout;
+  SessionRead read;
   if (!out.processed) {  // a NO-READ, said
     std::cerr << "the session did not process a frame: " << out.log.dump() << "\n";
-    return readout;
+    return read;
   }
+  reader::BarcodeReadout& readout = read.readout;
   for (const session::Sighting& s : out.sightings)
     if (s.decoded) readout.codes.push_back(s.code);
+  read.windows = out.log.value("decode_windows", 1);
+  if (out.log.contains("second_pass") && out.log["second_pass"].contains("windows"))
+    read.windows += static_cast<int>(out.log["second_pass"]["windows"].size());
   for (const auto& logged : out.log.value("unconfirmed", nlohmann::json::array())) {
     reader::DecodedCode code;
     code.text = logged.at("text").get<std::string>();
@@ -81,7 +85,7 @@ reader::BarcodeReadout SessionLine::read(const imaging::Image& dn) const {
     code.pass = logged.at("pass").get<std::string>();
     readout.unconfirmed.push_back(std::move(code));
   }
-  return readout;
+  return read;
 }
 
 }  // namespace flutterscan::bench

@@ -15,6 +15,15 @@
 
 namespace flutterscan::bench {
 
+/// \brief What the session reads on one frame.
+struct SessionRead {
+  /// Its codes, each as its sighting reports it (value, format, decoder, pass),
+  /// and the values it logged as unconfirmed (value, format, decoder, pass).
+  reader::BarcodeReadout readout;
+  /// The windows it decoded: the first pass's (1: the whole frame) and the second pass's.
+  int windows = 0;
+};
+
 class SessionLine {
  public:
   /// \brief Frames of `width` x `height` (RGB, 12 bits) moving `blur_px` along +x
@@ -31,10 +40,8 @@ class SessionLine {
   /// what a simulated frame must be recorded with.
   const imaging::CaptureModel& model() const { return model_; }
 
-  /// \brief What the session reads on `dn` (a frame recorded with model()): its
-  /// codes, each as its sighting reports it (value, format, decoder, pass), and
-  /// the values it logged as unconfirmed (value, format, decoder, pass).
-  reader::BarcodeReadout read(const imaging::Image& dn) const;
+  /// \brief What the session reads on `dn` (a frame recorded with model()).
+  SessionRead read(const imaging::Image& dn) const;
 
  private:
   session::SessionConfig config_;

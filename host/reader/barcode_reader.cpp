@@ -239,11 +239,11 @@ bool cut_along_reading(const ZXing::Result& result, int width, int height) {
 /// Whether `code` (read in `window`) is backed: a strong check, or for a
 /// weak-check symbology a second reading (corroboration()); `code.evidence`
 /// says which. A value nothing backs joins `unconfirmed` (once).
-bool backed(DecodedCode& code, const LumWindow& window, bool independent_rows,
+bool backed(DecodedCode& code, const LumWindow& window, int independent_apart,
             const ZXing::DecodeHints& linear_hints, const std::string& symbologies, bool try_rotate,
             std::vector<DecodedCode>& unconfirmed) {
   code.evidence = weak_check(code.format) ? corroboration(code, window, linear_hints, symbologies,
-                                                          try_rotate, independent_rows)
+                                                          try_rotate, independent_apart)
                                           : "check";
   if (!code.evidence.empty()) return true;
   if (std::none_of(unconfirmed.begin(), unconfirmed.end(),
@@ -379,7 +379,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
         if (weak_check(code.format) && luminance != LuminanceView::kSrgbFromBlack &&
             zbar_lum.empty())
           to_luminance(latent, x0, y0, x1, y1, LuminanceView::kSrgbFromBlack, zbar_lum);
-        if (!backed(code, {lum, x1 - x0, y1 - y0, x0, y0, zbar_lum}, w.independent_rows,
+        if (!backed(code, {lum, x1 - x0, y1 - y0, x0, y0, zbar_lum}, w.independent_apart,
                     linear_hints, symbologies, try_rotate, out.unconfirmed))
           continue;
         any = true;
@@ -402,7 +402,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
         continue;
       DecodedCode code = decoded_code(symbol, x0, y0, latent);
       if (!quiet_zones_clear(code, latent) ||
-          !backed(code, {lum, x1 - x0, y1 - y0, x0, y0, {}}, w.independent_rows, linear_hints,
+          !backed(code, {lum, x1 - x0, y1 - y0, x0, y0, {}}, w.independent_apart, linear_hints,
                   symbologies, try_rotate, out.unconfirmed))
         continue;
       any = true;
@@ -443,7 +443,8 @@ BarcodeReadout read_barcodes_turned(const imaging::Plane& latent, const DecodeWi
   cv::warpAffine(from, to, to_latent, to.size(), cv::INTER_LINEAR | cv::WARP_INVERSE_MAP,
                  cv::BORDER_REPLICATE);
   DecodeWindow whole{0, 0, tw, th};
-  whole.independent_rows = window.independent_rows;
+  // A turned row samples two rows of the latent (bilinear): one row more apart.
+  whole.independent_apart = window.independent_apart > 0 ? window.independent_apart + 1 : 0;
   BarcodeReadout out = read_barcodes(turned, symbologies, try_rotate, {&whole, 1});
   for (auto* codes : {&out.codes, &out.unconfirmed})
     for (DecodedCode& code : *codes) {

@@ -147,11 +147,12 @@ struct DecodeWindow {
   int x = 0, y = 0, width = 0, height = 0;
   int views = kLuminanceViews;
   bool second_decoder = true;
-  /// The latent's rows were deblurred each on its own (joint Wiener), so the
-  /// halves of a symbol carry independent noise and may back its value
-  /// (read_evidence.hpp); false on a latent whose prior ties rows together
-  /// (tv's), where only a second decoder does.
-  bool independent_rows = true;
+  /// Rows of the latent this many apart or more share no sample of the frame,
+  /// so the halves of a symbol split with that gap carry independent noise and
+  /// may back its value (read_evidence.hpp): 1 where each row was deblurred on
+  /// its own (joint Wiener), 2h + 1 on sums of 2h + 1 rows; 0 where a prior
+  /// ties every row together (tv's), and only a second decoder backs a value.
+  int independent_apart = 1;
 };
 
 /// \brief Every barcode of the named symbologies (check_symbologies() passed)

@@ -58,7 +58,7 @@ std::string symbology_family(const std::string& format) {
 
 std::string corroboration(const DecodedCode& code, const LumWindow& window,
                           const ZXing::DecodeHints& hints, const std::string& symbologies,
-                          bool try_rotate, bool independent_rows) {
+                          bool try_rotate, int independent_apart) {
   // The symbol's centre across its bars, in the window: the halves meet there.
   const double turn = code.orientation_deg * std::numbers::pi / 180;
   const bool along_x = std::abs(std::cos(turn)) >= std::abs(std::sin(turn));
@@ -66,9 +66,16 @@ std::string corroboration(const DecodedCode& code, const LumWindow& window,
   const int cut = static_cast<int>(
       std::lround(along_x ? code.centre_y - window.y0 : code.centre_x - window.x0));
   const bool zxing = code.decoder == "zxing";
-  if (independent_rows && cut > 0 && cut < across) {
+  // Left out at the cut: the rows that share samples with rows across it.
+  const int gap = std::max(0, independent_apart - 1);
+  const int end_a = cut - gap / 2, begin_b = cut + (gap - gap / 2);
+  if (independent_apart > 0 && end_a > 0 && begin_b < across) {
+    // Each half is one reading: a row that reads the value is enough (ZXing
+    // asks two rows of a symbol by default, which may lie side by side).
+    ZXing::DecodeHints one_row = hints;
+    one_row.setMinLineCount(1);
     bool both = true;
-    for (const auto& [from, to] : {std::pair{0, cut}, std::pair{cut, across}}) {
+    for (const auto& [from, to] : {std::pair{0, end_a}, std::pair{begin_b, across}}) {
       // The half as packed rows (a half of columns is copied out).
       std::vector<std::uint8_t> half;
       const int w = along_x ? window.width : to - from, h = along_x ? to - from : window.height;
@@ -83,7 +90,7 @@ std::string corroboration(const DecodedCode& code, const LumWindow& window,
         }
       }
       const bool reads =
-          zxing ? zxing_reads(ZXing::ImageView(half.data(), w, h, ZXing::ImageFormat::Lum), hints,
+          zxing ? zxing_reads(ZXing::ImageView(half.data(), w, h, ZXing::ImageFormat::Lum), one_row,
                               code)
                 : zbar_reads(half, w, h, symbologies, try_rotate, code);
       if (!reads) {

@@ -258,7 +258,7 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
             break;
         // Nothing read: tv's latent, turned upright where the bars lean.
         if (bars.read.empty() && !sums.empty() && sums.back().turn_rad != 0)
-          window.read_and_take("tv", linear, sums.back().turn_rad);
+          window.read_and_take("tv", kRowsTied, linear, sums.back().turn_rad);
         retry.bar_sums = std::move(bars);
       }
       // Nothing read, nor before: tv with an isotropic prior, at each of

@@ -85,11 +85,11 @@ void SecondPassWindow::paste(const imaging::Plane& latent,
     }
 }
 
-std::vector<reader::DecodedCode> SecondPassWindow::read(const std::string& pass,
+std::vector<reader::DecodedCode> SecondPassWindow::read(int independent_apart,
                                                         const std::string& symbologies,
                                                         double turn_rad) {
   reader::DecodeWindow window = window_;
-  window.independent_rows = pass == "bar-sums";
+  window.independent_apart = independent_apart;
   reader::BarcodeReadout again =
       turn_rad == 0
           ? reader::read_barcodes(camera(), symbologies, options_.try_rotate, {&window, 1})
@@ -126,9 +126,10 @@ std::vector<std::string> SecondPassWindow::take(std::vector<reader::DecodedCode>
 }
 
 std::vector<std::string> SecondPassWindow::read_and_take(const std::string& pass,
+                                                         int independent_apart,
                                                          const std::string& symbologies,
                                                          double turn_rad) {
-  return take(read(pass, symbologies, turn_rad), pass);
+  return take(read(independent_apart, symbologies, turn_rad), pass);
 }
 
 bool SecondPassWindow::holds(const reader::DecodedCode& code) const {

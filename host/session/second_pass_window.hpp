@@ -23,6 +23,10 @@ namespace flutterscan::session {
 /// or code region: the decode window's margin (reader::decode_windows' default).
 inline constexpr int kWindowMargin = 24;
 
+/// \brief reader::DecodeWindow::independent_apart of a latent whose prior
+/// ties its rows together (tv's): halves back no value read on it.
+inline constexpr int kRowsTied = 0;
+
 /// \brief Whether camera point (x, y) lies in `w`.
 bool in_window(const reader::DecodeWindow& w, double x, double y);
 
@@ -67,19 +71,20 @@ class SecondPassWindow {
   /// columns kept or, given `codes`, over their rows only (their corners' rows
   /// widened by 4 px, whatever the column).
   void paste(const imaging::Plane& latent, std::span<const reader::DecodedCode> codes = {});
-  /// \brief Reads the window on the latents as pasted, made by try `pass`
-  /// (joint Wiener's bar sums deblur each row on its own, tv's prior ties rows
-  /// together: reader::DecodeWindow::independent_rows), upright or turned by
-  /// `turn_rad`: the codes the readout does not hold yet. Values no second
-  /// reading backs join the readout's unconfirmed.
-  std::vector<reader::DecodedCode> read(const std::string& pass, const std::string& symbologies,
+  /// \brief Reads the window on the latents as pasted, whose rows
+  /// `independent_apart` or more apart share no sample of the frame
+  /// (reader::DecodeWindow's: kRowsTied for tv's latents; 2h + 1 for joint
+  /// Wiener's sums of 2h + 1 rows), upright or turned by `turn_rad`: the codes
+  /// the readout does not hold yet. Values no second reading backs join the
+  /// readout's unconfirmed.
+  std::vector<reader::DecodedCode> read(int independent_apart, const std::string& symbologies,
                                         double turn_rad = 0);
   /// \brief `codes`, read on the latent try `pass` made, join the readout and
   /// the belt's reads. Returns their values.
   std::vector<std::string> take(std::vector<reader::DecodedCode> codes, const std::string& pass);
-  /// \brief read() and take().
-  std::vector<std::string> read_and_take(const std::string& pass, const std::string& symbologies,
-                                         double turn_rad = 0);
+  /// \brief read() and take() (as try `pass`).
+  std::vector<std::string> read_and_take(const std::string& pass, int independent_apart,
+                                         const std::string& symbologies, double turn_rad = 0);
 
   /// \brief The codes read in the window before it was deblurred again (the
   /// first pass's, offline): a latent pasted must read them too, or it is not kept.

@@ -198,7 +198,7 @@ std::optional<imaging::Plane> tv_try(SecondPassWindow& window) {
   if (!deblurred.ok()) return std::nullopt;
   imaging::Plane tv = std::move(deblurred.value().latent);
   window.paste(tv);
-  window.read_and_take("tv", window.options().symbologies);
+  window.read_and_take("tv", kRowsTied, window.options().symbologies);
   return tv;
 }
 
@@ -232,8 +232,11 @@ std::vector<BarSums> bar_sums_try(SecondPassWindow& window, const imaging::Plane
     sums.wiener = std::move(profile.value().latent);
     sums.composite = over_rows_across(tv, sums.wiener, sums.across);
     window.paste(sums.composite);
-    std::vector<reader::DecodedCode> found = window.read("bar-sums", linear);
-    if (found.empty() && sums.turn_rad != 0) found = window.read("bar-sums", linear, sums.turn_rad);
+    // Joint Wiener deblurs each row of the sums on its own; sums 2h + 1 rows
+    // apart share no row of the frame.
+    const int apart = 2 * half_rows + 1;
+    std::vector<reader::DecodedCode> found = window.read(apart, linear);
+    if (found.empty() && sums.turn_rad != 0) found = window.read(apart, linear, sums.turn_rad);
     // The frame shows tv's latent, and the sums' over the rows of the codes
     // they read only: the sums smear whatever else the window holds (a
     // matrix code above or below that tv or the first pass read, text)
@@ -260,8 +263,8 @@ std::vector<std::string> tv_on_sums_try(SecondPassWindow& window, const BarSums&
   if (!profile.ok()) return {};
   const imaging::Plane composite = over_rows_across(tv, profile.value().latent, sums.across);
   window.paste(composite);
-  std::vector<reader::DecodedCode> found = window.read("tv-on-sums", linear);
-  if (found.empty() && sums.turn_rad != 0) found = window.read("tv-on-sums", linear, sums.turn_rad);
+  std::vector<reader::DecodedCode> found = window.read(kRowsTied, linear);
+  if (found.empty() && sums.turn_rad != 0) found = window.read(kRowsTied, linear, sums.turn_rad);
   window.paste(sums.composite);
   found = supported_reads(window.camera(), std::move(found), record.tv_checked);
   window.paste(tv);
@@ -318,7 +321,7 @@ std::vector<std::string> isotropic_tv_try(SecondPassWindow& window, double weigh
   auto deblurred = imaging::deblur(window.crop(), window.model(), isotropic);
   if (!deblurred.ok()) return {};
   window.paste(deblurred.value().latent);
-  record.read = window.read_and_take("isotropic-tv", window.options().symbologies);
+  record.read = window.read_and_take("isotropic-tv", kRowsTied, window.options().symbologies);
   if (record.read.empty()) window.paste(tv);
   return record.read;
 }
