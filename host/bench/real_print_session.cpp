@@ -65,10 +65,11 @@ SessionRead SessionLine::read(const imaging::Image& dn) const {
         job.frame.data[at + 1] = static_cast<std::uint8_t>(v >> 8);
       }
   session::WorkerShared shared(config_);
-  const session::FrameOutcome out = session::process_frame(job, config_, shared, nullptr);
+  session::FrameOutcome out = session::process_frame(job, config_, shared, nullptr);
   SessionRead read;
   if (!out.processed) {  // a NO-READ, said
     std::cerr << "the session did not process a frame: " << out.log.dump() << "\n";
+    read.log = std::move(out.log);
     return read;
   }
   reader::BarcodeReadout& readout = read.readout;
@@ -85,6 +86,7 @@ SessionRead SessionLine::read(const imaging::Image& dn) const {
     code.pass = logged.at("pass").get<std::string>();
     readout.unconfirmed.push_back(std::move(code));
   }
+  read.log = std::move(out.log);
   return read;
 }
 

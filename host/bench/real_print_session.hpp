@@ -8,7 +8,9 @@
 #include <string>
 #include <vector>
 
+#include <nlohmann/json.hpp>
 #include "imaging/capture_model.hpp"
+
 #include "imaging/image.hpp"
 #include "reader/barcode_reader.hpp"
 #include "session/session_config.hpp"
@@ -22,6 +24,7 @@ struct SessionRead {
   reader::BarcodeReadout readout;
   /// The windows it decoded: the first pass's (1: the whole frame) and the second pass's.
   int windows = 0;
+  nlohmann::json log;  ///< the frame's line of session.jsonl (times_ms: its stages)
 };
 
 class SessionLine {
