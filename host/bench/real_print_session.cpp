@@ -33,8 +33,9 @@ SessionLine::SessionLine(int width, int height, double blur_px, double electrons
 
 SessionLine::SessionLine(int width, int height, double blur_px, double electrons,
                          reader::DecodeArea area, const session::SecondPassTries& tries,
-                         double second_pass_ms)
+                         double second_pass_ms, double decode_ms)
     : width_(width), height_(height) {
+  config_.processing.decode_ms = decode_ms;
   config_.optics.electrons = electrons;
   config_.processing.decode_area = area;
   config_.optics.electrons_given = true;

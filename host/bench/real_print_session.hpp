@@ -34,10 +34,12 @@ class SessionLine {
   /// session's default: the label paper). Throws if the config does not check.
   SessionLine(int width, int height, double blur_px, double electrons,
               reader::DecodeArea area = reader::ReaderOptions{}.area);
-  /// \brief The same with the second pass's `tries` and a credit of
-  /// `second_pass_ms` per frame (session::kMaxSecondPassMs: offline, every window).
+  /// \brief The same with the second pass's `tries`, a credit of
+  /// `second_pass_ms` per frame (session::kMaxSecondPassMs: offline, every
+  /// window) and the first pass's decode time `decode_ms` (processing.decode_ms;
+  /// "auto", -1: every window, the frame rate being unknown offline).
   SessionLine(int width, int height, double blur_px, double electrons, reader::DecodeArea area,
-              const session::SecondPassTries& tries, double second_pass_ms);
+              const session::SecondPassTries& tries, double second_pass_ms, double decode_ms = -1);
 
   /// \brief The capture model the session builds for each of these frames:
   /// what a simulated frame must be recorded with.

@@ -18,6 +18,7 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -297,9 +298,11 @@ bool same_symbol(const DecodedCode& a, const DecodedCode& b) {
 }
 
 BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& symbologies,
-                             bool try_rotate, std::span<const DecodeWindow> windows) {
+                             bool try_rotate, std::span<const DecodeWindow> windows,
+                             double budget_ms) {
   BarcodeReadout out;
   if (latent.empty()) return out;
+  const auto started = std::chrono::steady_clock::now();
   std::vector<std::uint8_t> lum;       // one window at a time
   std::vector<std::uint8_t> zbar_lum;  // the window in zbar's view, made where a read needs it
   ZXing::DecodeHints hints;
@@ -319,8 +322,19 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
   matrix_hints.setFormats(matrix);
   const DecodeWindow whole{0, 0, latent.width, latent.height};
   std::vector<std::array<int, 4>> reading;  // windows that read a code: x0, y0, x1, y1
-  for (const DecodeWindow& w :
-       windows.empty() ? std::span<const DecodeWindow>(&whole, 1) : windows) {
+  const std::span<const DecodeWindow> to_read =
+      windows.empty() ? std::span<const DecodeWindow>(&whole, 1) : windows;
+  auto spent = [&] {
+    return budget_ms > 0 &&
+           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started)
+                   .count() >= budget_ms;
+  };
+  for (std::size_t i = 0; i < to_read.size(); ++i) {
+    const DecodeWindow& w = to_read[i];
+    if (i > 0 && spent()) {
+      out.windows_left.push_back(i);
+      continue;
+    }
     const int x0 = std::clamp(w.x, 0, latent.width), y0 = std::clamp(w.y, 0, latent.height);
     const int x1 = std::clamp(w.x + w.width, x0, latent.width),
               y1 = std::clamp(w.y + w.height, y0, latent.height);
@@ -345,8 +359,12 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
     constexpr std::array<LuminanceView, kLuminanceViews> kViews = {
         LuminanceView::kLinear, LuminanceView::kSrgb, LuminanceView::kSrgbFromBlack,
         LuminanceView::kSrgbToPaper, LuminanceView::kSmoothedFromBlack};
-    bool window_read = false;
+    bool window_read = false, cut = false;
     for (int v = 0; v < std::min(w.views, kLuminanceViews); ++v) {
+      if (v > 0 && spent()) {
+        cut = true;
+        break;
+      }
       const LuminanceView luminance = kViews[static_cast<std::size_t>(v)];
       const bool to_paper = luminance == LuminanceView::kSrgbToPaper;
       const bool smooth = luminance == LuminanceView::kSmoothedFromBlack;
@@ -393,6 +411,11 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
     }
     // Read nothing in every view: zbar, for the linear codes, finds a row's
     // edges where ZXing's one threshold per row found none.
+    if (!window_read &&
+        (cut || (w.second_decoder && !linear.empty() && w.views >= kLuminanceViews && spent()))) {
+      out.windows_left.push_back(i);
+      continue;
+    }
     if (window_read || linear.empty() || w.views < kLuminanceViews || !w.second_decoder) continue;
     to_luminance(latent, x0, y0, x1, y1, LuminanceView::kSrgbFromBlack, lum);
     bool any = false;

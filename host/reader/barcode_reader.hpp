@@ -102,6 +102,9 @@ struct BarcodeReadout {
   std::vector<DecodedCode> codes;
   /// Windows not decoded because three quarters of them lie in an earlier window that read a code.
   std::size_t windows_skipped = 0;
+  /// The windows (their indices in the order given) the decode's time budget
+  /// left: not started, or cut short after their first view with nothing read.
+  std::vector<std::size_t> windows_left;
   /// Values of weak-check symbologies a decoder read that no second reading
   /// backed (read_evidence.hpp): not reported as reads, only logged.
   std::vector<DecodedCode> unconfirmed;
@@ -169,10 +172,14 @@ struct DecodeWindow {
 /// passes its check). A value of a weak-check symbology counts only where a
 /// second reading backs it (read_evidence.hpp; else it goes to `unconfirmed`
 /// and the window is read on in its next view). Positions are the latent's. `try_rotate`: also look
-/// for 1-D codes turned by 90 degrees (about twice the decode time).
+/// for 1-D codes turned by 90 degrees (about twice the decode time). `budget_ms` > 0: a window
+/// is started, and read in a view after its first or by zbar, only while the decode has run
+/// less than that (the first window's first view always is); the windows it left with nothing
+/// read are listed (windows_left).
 BarcodeReadout read_barcodes(const imaging::Plane& latent,
                              const std::string& symbologies = kDefaultSymbologies,
-                             bool try_rotate = true, std::span<const DecodeWindow> windows = {});
+                             bool try_rotate = true, std::span<const DecodeWindow> windows = {},
+                             double budget_ms = 0);
 
 /// \brief Modules beyond each end of a linear symbol that quiet_zones_clear()
 /// judges: no more than any symbology's quiet zone (EAN-13 has 7 on its right,

@@ -20,7 +20,8 @@ CodeReading read_codes(const imaging::Plane& latent, std::span<const LabelRegion
   }
   out.windows = windows.size();
   if (!windows.empty())
-    out.readout = read_barcodes(latent, options.symbologies, options.try_rotate, windows);
+    out.readout =
+        read_barcodes(latent, options.symbologies, options.try_rotate, windows, options.budget_ms);
   return out;
 }
 

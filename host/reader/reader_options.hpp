@@ -29,6 +29,11 @@ struct ReaderOptions {
   /// session's cascade leaves it to its second pass, which reads those windows
   /// again under the frame's budget.
   bool second_decoder = true;
+  /// Area "labels": the decode's time, ms: windows are read in the order the
+  /// regions are given, each view only while the decode has run less (the first
+  /// window's first view always is); those left with nothing read are listed
+  /// (BarcodeReadout::windows_left). 0: every window in every view.
+  double budget_ms = 0;
 };
 
 /// \brief The default options, reading the whole frame: what the benches and

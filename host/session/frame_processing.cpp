@@ -178,13 +178,41 @@ struct Decoded {
   std::vector<reader::LabelRegion> code;   ///< where the latent looks like a code (motion frame)
   reader::BarcodeReadout readout;
   std::optional<std::size_t> windows;  ///< decode_area "labels": the windows read
+  /// Paper runs and code regions whose windows the decode's budget left: not
+  /// judged and not deblurred again in this frame; read first in a frame after.
+  std::vector<reader::LabelRegion> left;
+
+  bool was_left(const reader::LabelRegion& r) const {
+    return std::any_of(left.begin(), left.end(), [&](const reader::LabelRegion& l) {
+      return l.begin == r.begin && l.end == r.end && l.across_begin == r.across_begin &&
+             l.across_end == r.across_end;
+    });
+  }
 };
+
+/// The first pass's decode time for a frame whose conversion and deblur took
+/// `spent_ms` (processing.decode_ms; "auto": the frame's share of the workers'
+/// time less that, at least 1 ms: the first window; the frame rate unknown, no limit).
+double decode_budget_ms(const ProcessingConfig& processing, const WorkerShared& shared,
+                        double spent_ms) {
+  if (processing.decode_ms >= 0) return processing.decode_ms;
+  const double period = shared.second_pass.period_ms();
+  if (period <= 0) return 0;
+  return std::max(1.0, period * shared.second_pass.workers() * SecondPassBudget::kShare - spent_ms);
+}
+
+/// Where region `r` (motion frame) of a frame at belt travel `travel_px` lies on the belt.
+BeltBox on_belt(const reader::LabelRegion& r, double travel_px) {
+  return {r.begin - travel_px, r.end - travel_px, static_cast<double>(r.across_begin),
+          static_cast<double>(r.across_end)};
+}
 
 /// Step "decode": the paper and the code regions along the motion, then the
 /// codes in processing.decode_area (the paper runs and the code regions off
 /// them, widened; or the whole frame) with the session's reader options.
 Decoded decode(const Deblurred& image, imaging::Direction direction,
-               const ProcessingConfig& processing) {
+               const ProcessingConfig& processing, const FrameJob& job, WorkerShared& shared,
+               double spent_ms) {
   Decoded out;
   out.paper = reader::find_paper_runs(image.motion_latent);
   // Code regions serve only the labels area and the cascade's second pass.
@@ -194,8 +222,20 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
   // zbar (under the frame's budget); without it, this pass is the only one.
   reader::ReaderOptions options = reader_options(processing);
   options.second_decoder = !processing.cascade;
-  reader::CodeReading reading = reader::read_codes(
-      image.latent(), reader::regions_to_read(out.paper, out.code), direction, options);
+  // Within the frame's budget, the regions no frame tried lately first: what one
+  // frame leaves, the next reads (a label passes through several).
+  std::vector<reader::LabelRegion> regions = reader::regions_to_read(out.paper, out.code);
+  std::stable_partition(regions.begin(), regions.end(), [&](const reader::LabelRegion& r) {
+    return !shared.belt_tried.any_over(on_belt(r, job.travel_px));
+  });
+  options.budget_ms = decode_budget_ms(processing, shared, spent_ms);
+  reader::CodeReading reading = reader::read_codes(image.latent(), regions, direction, options);
+  const std::vector<std::size_t>& left = reading.readout.windows_left;
+  for (std::size_t i = 0; i < regions.size(); ++i)
+    if (std::find(left.begin(), left.end(), i) == left.end())
+      shared.belt_tried.add(on_belt(regions[i], job.travel_px));
+    else
+      out.left.push_back(regions[i]);
   out.readout = std::move(reading.readout);
   out.windows = reading.windows;
   return out;
@@ -215,7 +255,9 @@ int unsupported_columns(double blur_px) {
 std::vector<reader::LabelRegion> judged_regions(const Decoded& decoded, double blur_px) {
   std::vector<reader::LabelRegion> regions = decoded.paper;
   const int upstream = unsupported_columns(blur_px);
-  std::erase_if(regions, [&](const reader::LabelRegion& r) { return r.cut || r.begin < upstream; });
+  std::erase_if(regions, [&](const reader::LabelRegion& r) {
+    return r.cut || r.begin < upstream || decoded.was_left(r);
+  });
   return regions;
 }
 
@@ -231,6 +273,7 @@ std::vector<reader::LabelRegion> code_in_view(const Decoded& decoded, double blu
   std::vector<reader::LabelRegion> regions;
   entering = 0;
   for (reader::LabelRegion r : decoded.code) {
+    if (decoded.was_left(r)) continue;
     const bool on_entering_label =
         r.begin < upstream &&
         std::any_of(decoded.paper.begin(), decoded.paper.end(), [&](const reader::LabelRegion& p) {
@@ -458,8 +501,14 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config, WorkerSha
   out.log.update(deblurred.value().log);
 
   const imaging::CaptureModel& model = deblurred.value().model;
-  Decoded decoded = decode(deblurred.value(), model.direction, config.processing);
+  Decoded decoded = decode(deblurred.value(), model.direction, config.processing, job, shared,
+                           ms_between(t0, t2));
   if (decoded.windows) out.log["decode_windows"] = *decoded.windows;
+  if (!decoded.left.empty()) {
+    // Over the decode's budget: counted and flagged, read in a frame after.
+    out.log["decode_left"] = decoded.left.size();
+    flags.push_back("decode-budget");
+  }
   if (!decoded.readout.decoder_fault.empty()) {
     // ZXing failed an internal assertion on this image: nothing read, the session goes on.
     out.log["decoder_fault"] = decoded.readout.decoder_fault;

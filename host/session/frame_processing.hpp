@@ -34,6 +34,9 @@ struct WorkerShared {
   SecondPassBudget second_pass;
   /// Where codes were read lately on the belt: no second pass for an object read already.
   BeltReads belt_reads;
+  /// Where the first pass decoded windows lately on the belt: within a frame's
+  /// decode budget, the regions not tried yet go first.
+  BeltReads belt_tried;
 };
 
 /// \brief Whether a frame that left `waiting` frames in a queue of

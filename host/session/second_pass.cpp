@@ -106,6 +106,11 @@ double SecondPassBudget::estimate_ms(std::size_t pixels) const {
   return ms_per_megapixel_ * static_cast<double>(pixels) * 1e-6;
 }
 
+double SecondPassBudget::period_ms() const {
+  const std::lock_guard lock(mutex_);
+  return period_ms_;
+}
+
 double SecondPassBudget::credit_ms() const {
   const std::lock_guard lock(mutex_);
   return credit_ms_;

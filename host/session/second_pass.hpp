@@ -53,6 +53,10 @@ class SecondPassBudget {
   double estimate_ms(std::size_t pixels) const;
   /// \brief The credit left, ms.
   double credit_ms() const;
+  /// \brief The frame period the cameras' timestamps show, ms (0: not known yet).
+  double period_ms() const;
+  /// \brief The workers the budget shares.
+  int workers() const { return workers_; }
 
  private:
   mutable std::mutex mutex_;
@@ -79,9 +83,11 @@ struct BeltBox {
 BeltBox belt_box(const reader::DecodedCode& code, imaging::Direction direction, int width,
                  int height, double travel_px);
 
-/// \brief Where on the belt codes were read lately, shared by the workers: a
-/// window whose object was read in another frame needs no second pass, so the
-/// budget goes to the objects not read yet. Bounded: the last kKept reads.
+/// \brief Boxes on the belt seen lately, shared by the workers: where codes were
+/// read (a window whose object was read in another frame needs no second pass,
+/// so the budget goes to the objects not read yet) or where the first pass
+/// decoded windows (under its budget the regions not tried yet go first).
+/// Bounded: the last kKept boxes.
 class BeltReads {
  public:
   static constexpr std::size_t kKept = 256;

@@ -401,7 +401,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
   if (const toml::table* t = root["processing"].as_table()) {
     if (auto p = known_keys_problem(
             *t, "processing.",
-            {"method", "second_pass_ms", "workers", "threads_per_worker", "queue_depth",
+            {"method", "second_pass_ms", "decode_ms", "workers", "threads_per_worker", "queue_depth",
              "max_frames", "max_seconds", "match_tolerance_us", "object_match_px", "choose_model",
              "blur_check_every", "blur_tolerance", "refine_when_behind", "symbologies",
              "try_rotate", "decode_area", "second_pass_tries"},
@@ -414,14 +414,19 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
     if (!method.empty() && !set_processing_method(method, c.processing))
       return ConfigResult::failure(origin + ": processing.method '" + method + "' is none of " +
                                    kProcessingMethods);
-    if (const toml::node* budget = t->get("second_pass_ms"); budget && budget->is_string()) {
-      if (budget->value_exact<std::string>() != "auto")
-        return ConfigResult::failure(
-            origin + ":" + std::to_string(budget->source().begin.line) +
-            ": processing.second_pass_ms must be \"auto\" or a number of ms");
-      c.processing.second_pass_ms = -1;
-    } else {
-      r.get("second_pass_ms", c.processing.second_pass_ms);
+    // "auto" (-1) or a number of ms.
+    for (const auto& [key, ms] : {std::pair{"second_pass_ms", &c.processing.second_pass_ms},
+                                  std::pair{"decode_ms", &c.processing.decode_ms}}) {
+      if (const toml::node* budget = t->get(key); budget && budget->is_string()) {
+        if (budget->value_exact<std::string>() != "auto")
+          return ConfigResult::failure(origin + ":" +
+                                       std::to_string(budget->source().begin.line) +
+                                       ": processing." + key +
+                                       " must be \"auto\" or a number of ms");
+        *ms = -1;
+      } else {
+        r.get(key, *ms);
+      }
     }
     r.get("workers", c.processing.workers);
     r.get("threads_per_worker", c.processing.threads_per_worker);
@@ -639,6 +644,11 @@ std::string check_config(SessionConfig& c) {
     return outside("processing.second_pass_ms", c.processing.second_pass_ms,
                    "\"auto\" or [0, " + number_text(kMaxSecondPassMs) + "] ms per frame",
                    "the cascade's CPU budget for second passes");
+  if (!(c.processing.decode_ms == -1 ||
+        (c.processing.decode_ms >= 1 && c.processing.decode_ms <= kMaxDecodeMs)))
+    return outside("processing.decode_ms", c.processing.decode_ms,
+                   "\"auto\" or [1, " + number_text(kMaxDecodeMs) + "] ms per frame",
+                   "the first pass's decode time");
   if (c.processing.threads_per_worker < 1 || c.processing.threads_per_worker > 64)
     return problem("processing.threads_per_worker",
                    "must be within 1..64" + got(c.processing.threads_per_worker));

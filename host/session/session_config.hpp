@@ -78,6 +78,13 @@ struct ProcessingConfig {
   /// The cascade's CPU budget for second passes, ms per frame; < 0 ("auto"):
   /// from the frame rate and the workers, leaving 15% of their time spare.
   double second_pass_ms = -1;
+  /// The first pass's decode time per frame, ms: windows are read in turn
+  /// (those not tried on the belt lately first) while it lasts, and the rest
+  /// are left for the frames after (frame_processing.hpp); < 0 ("auto"): the
+  /// frame's share of the workers' time (period x workers, less 15% spare) less
+  /// its conversion and deblur, every window while the frame rate is unknown
+  /// (offline); kMaxDecodeMs: every window.
+  double decode_ms = -1;
   /// The cascade's second-pass tries beyond tv on the window (second_pass_tries.hpp).
   SecondPassTries second_pass_tries;
   int workers = 2;              ///< frames deblurred at once
@@ -178,6 +185,7 @@ inline constexpr double kMaxElectrons = 1e9;        ///< optics.electrons, full_
 inline constexpr std::size_t kMaxQueueDepth = 256;  ///< processing.queue_depth
 inline constexpr double kMaxDiskBudgetMb = 1e9;     ///< output.disk_budget_mb (a petabyte)
 inline constexpr double kMaxSecondPassMs = 1e6;     ///< processing.second_pass_ms
+inline constexpr double kMaxDecodeMs = 1e6;         ///< processing.decode_ms
 inline constexpr double kMaxCrosstalk = 100;        ///< each optics.crosstalk entry
 /// results.mqtt.queue_limit: below MQTT's 65535 message ids, each waiting result holding one.
 inline constexpr std::size_t kMaxMqttQueue = 50000;

@@ -15,6 +15,7 @@
 #include <thread>
 
 #include "reader/assertion_guard.hpp"
+#include "sim/scene.hpp"
 
 // glibc's assertion handler, which assert() calls (not declared under NDEBUG).
 extern "C" [[noreturn]] void __assert_fail(const char* assertion, const char* file,
@@ -58,6 +59,38 @@ TEST(AssertionGuard, EachThreadReturnsToItsOwnGuard) {
   other.join();
   EXPECT_NE(in_thread.find("a.cpp:1"), std::string::npos) << in_thread;
   EXPECT_NE(here.find("b.cpp:2"), std::string::npos) << here;
+}
+
+// A decode's time budget: the first window's first view is always read; past
+// the budget no window is started and none read in another view; every window
+// left with nothing read is listed, in the order given.
+TEST(BarcodeReader, WindowsBeyondTheTimeBudgetAreListedNotRead) {
+  auto spec = sim::parse_scene("code128:BUDGET-1");
+  ASSERT_TRUE(spec.ok());
+  spec.value().width = 400;
+  spec.value().height = 200;
+  spec.value().module_px = 2;
+  auto label = sim::render_scene(spec.value());
+  ASSERT_TRUE(label.ok()) << label.error();
+  // The label, then two windows of blank paper.
+  imaging::Plane frame(3 * 400, 200);
+  std::fill(frame.pixels.begin(), frame.pixels.end(), 0.9f);
+  for (int y = 0; y < 200; ++y)
+    for (int x = 0; x < 400; ++x) frame.at(x, y) = label.value().at(x, y);
+  const std::vector<DecodeWindow> windows = {
+      {0, 0, 400, 200}, {400, 0, 400, 200}, {800, 0, 400, 200}};
+  const BarcodeReadout every = read_barcodes(frame, kDefaultSymbologies, true, windows);
+  ASSERT_EQ(every.codes.size(), 1u);
+  EXPECT_TRUE(every.windows_left.empty());
+  const BarcodeReadout bounded = read_barcodes(frame, kDefaultSymbologies, true, windows, 1e-3);
+  ASSERT_EQ(bounded.codes.size(), 1u);
+  EXPECT_EQ(bounded.codes[0].text, "BUDGET-1");
+  EXPECT_EQ(bounded.windows_left, (std::vector<std::size_t>{1, 2}));
+  // The label last: the blank window's first view is read, nothing else.
+  const std::vector<DecodeWindow> label_last = {windows[1], windows[0]};
+  const BarcodeReadout late = read_barcodes(frame, kDefaultSymbologies, true, label_last, 1e-3);
+  EXPECT_TRUE(late.codes.empty());
+  EXPECT_EQ(late.windows_left, (std::vector<std::size_t>{0, 1}));
 }
 
 TEST(BarcodeReader, AnImageThatTripsZXingsMicroQrAssertionIsReportedNotFatal) {

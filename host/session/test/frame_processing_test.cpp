@@ -485,6 +485,58 @@ TEST(SecondPass, EachTryRunsInItsOrderChargedAndLoggedAndOnlyWhereSwitchedOn) {
     EXPECT_EQ(window, (std::vector<std::string>{"tv", "bar-sums"}));
 }
 
+// The decode's budget: a frame whose windows outlast it decodes some, counts
+// and flags the rest and judges none of them (no NO-READ for a label not
+// decoded); the next frame over the same belt reads those first, so the two
+// frames read all that one unbounded frame reads.
+TEST(FrameProcessing, WindowsOverTheDecodeBudgetAreLeftFlaggedUnjudgedAndReadNext) {
+  SessionConfig config = small_config();
+  config.processing.second_pass_ms = 0;  // the first pass alone
+  ASSERT_EQ(check_config(config), "");
+  // A frame with two windows or more, read whole.
+  std::optional<FrameJob> busy;
+  std::set<std::string> unbounded;
+  for (const FrameJob& job : belt_frames(
+           config, 40, [](const capture::Frame&f, int i) { return i >= 4 && !f.truth.empty(); },
+           12)) {
+    FrameJob copy = job;
+    WorkerShared shared(config);
+    const FrameOutcome out = process_frame(copy, config, shared, nullptr);
+    if (out.log.value("decode_windows", 0) < 2) continue;
+    for (const Sighting& s : out.sightings)
+      if (s.decoded) unbounded.insert(s.value);
+    EXPECT_FALSE(out.log.contains("decode_left")) << out.log.dump();
+    busy = job;
+    break;
+  }
+  ASSERT_TRUE(busy) << "no sim frame with two windows";
+  ASSERT_FALSE(unbounded.empty());
+  config.processing.decode_ms = 1;  // the first window's first view only
+  ASSERT_EQ(check_config(config), "");
+  WorkerShared shared(config);
+  std::set<std::string> read;
+  int left = 0;
+  for (int frame = 0; frame < 2; ++frame) {
+    FrameJob job = *busy;
+    const FrameOutcome out = process_frame(job, config, shared, nullptr);
+    ASSERT_TRUE(out.processed) << out.log.dump();
+    for (const Sighting& s : out.sightings)
+      if (s.decoded) read.insert(s.value);
+    if (frame == 0) {
+      left = out.log.value("decode_left", 0);
+      ASSERT_GE(left, 1) << out.log.dump();
+      EXPECT_LT(left, out.log["decode_windows"].get<int>());
+      EXPECT_NE(std::find(out.log["flags"].begin(), out.log["flags"].end(), "decode-budget"),
+                out.log["flags"].end());
+      // Only the windows decoded are judged.
+      EXPECT_LE(out.sightings.size(),
+                out.log["decode_windows"].get<std::size_t>() - static_cast<std::size_t>(left));
+    }
+  }
+  for (const std::string& value : unbounded)
+    EXPECT_TRUE(read.contains(value)) << value << " not read in two bounded frames";
+}
+
 TEST(SecondPassTries, NamedOneByOneNoneOrAllAndEachNeedsWhatItWorksOn) {
   std::string problem;
   const auto defaults = parse_second_pass_tries(kDefaultSecondPassTries, problem);

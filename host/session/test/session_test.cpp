@@ -388,6 +388,21 @@ TEST(SessionConfigFile, ReadsTheAnnotatedExampleAndNamesBadKeys) {
   SessionConfig negative;
   negative.processing.second_pass_ms = -5;
   EXPECT_NE(check_config(negative).find("processing.second_pass_ms"), std::string::npos);
+  // The first pass's decode budget: "auto" (the default) or ms per frame within 1..1e6.
+  EXPECT_EQ(config.processing.decode_ms, -1);
+  const auto decode_auto = parse_config("[processing]\ndecode_ms = \"auto\"\n", "line3.toml");
+  ASSERT_TRUE(decode_auto.ok()) << decode_auto.error();
+  EXPECT_EQ(decode_auto.value().processing.decode_ms, -1);
+  const auto decode_fixed = parse_config("[processing]\ndecode_ms = 12\n", "line3.toml");
+  ASSERT_TRUE(decode_fixed.ok()) << decode_fixed.error();
+  EXPECT_EQ(decode_fixed.value().processing.decode_ms, 12);
+  const auto decode_word = parse_config("[processing]\n\ndecode_ms = \"soon\"\n", "line3.toml");
+  ASSERT_FALSE(decode_word.ok());
+  EXPECT_NE(decode_word.error().find("line3.toml:3: processing.decode_ms"), std::string::npos)
+      << decode_word.error();
+  SessionConfig no_time;
+  no_time.processing.decode_ms = 0.5;
+  EXPECT_NE(check_config(no_time).find("processing.decode_ms"), std::string::npos);
   negative.processing.second_pass_ms = 2e6;
   EXPECT_NE(check_config(negative).find("processing.second_pass_ms"), std::string::npos);
 
