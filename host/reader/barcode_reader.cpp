@@ -413,7 +413,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
     // edges where ZXing's one threshold per row found none.
     if (!window_read &&
         (cut || (w.second_decoder && !linear.empty() && w.views >= kLuminanceViews && spent()))) {
-      out.windows_left.push_back(i);
+      out.windows_cut.push_back(i);
       continue;
     }
     if (window_read || linear.empty() || w.views < kLuminanceViews || !w.second_decoder) continue;

@@ -103,8 +103,10 @@ struct BarcodeReadout {
   /// Windows not decoded because three quarters of them lie in an earlier window that read a code.
   std::size_t windows_skipped = 0;
   /// The windows (their indices in the order given) the decode's time budget
-  /// left: not started, or cut short after their first view with nothing read.
+  /// left: not started (windows_left), or cut short after their first view with
+  /// nothing read (windows_cut).
   std::vector<std::size_t> windows_left;
+  std::vector<std::size_t> windows_cut;
   /// Values of weak-check symbologies a decoder read that no second reading
   /// backed (read_evidence.hpp): not reported as reads, only logged.
   std::vector<DecodedCode> unconfirmed;
@@ -174,8 +176,8 @@ struct DecodeWindow {
 /// and the window is read on in its next view). Positions are the latent's. `try_rotate`: also look
 /// for 1-D codes turned by 90 degrees (about twice the decode time). `budget_ms` > 0: a window
 /// is started, and read in a view after its first or by zbar, only while the decode has run
-/// less than that (the first window's first view always is); the windows it left with nothing
-/// read are listed (windows_left).
+/// less than that (the first window's first view always is); the windows it did not start and
+/// those it cut short with nothing read are listed (windows_left, windows_cut).
 BarcodeReadout read_barcodes(const imaging::Plane& latent,
                              const std::string& symbologies = kDefaultSymbologies,
                              bool try_rotate = true, std::span<const DecodeWindow> windows = {},

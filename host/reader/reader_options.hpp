@@ -31,8 +31,9 @@ struct ReaderOptions {
   bool second_decoder = true;
   /// Area "labels": the decode's time, ms: windows are read in the order the
   /// regions are given, each view only while the decode has run less (the first
-  /// window's first view always is); those left with nothing read are listed
-  /// (BarcodeReadout::windows_left). 0: every window in every view.
+  /// window's first view always is); those not started and those cut short with
+  /// nothing read are listed (BarcodeReadout::windows_left, windows_cut). 0:
+  /// every window in every view.
   double budget_ms = 0;
 };
 

@@ -230,12 +230,16 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
   });
   options.budget_ms = decode_budget_ms(processing, shared, spent_ms);
   reader::CodeReading reading = reader::read_codes(image.latent(), regions, direction, options);
-  const std::vector<std::size_t>& left = reading.readout.windows_left;
-  for (std::size_t i = 0; i < regions.size(); ++i)
-    if (std::find(left.begin(), left.end(), i) == left.end())
-      shared.belt_tried.add(on_belt(regions[i], job.travel_px));
-    else
+  // A window started counts as tried (the next frame starts with another); one
+  // not started or cut short with nothing read is left: not judged here.
+  const std::vector<std::size_t>& unstarted = reading.readout.windows_left;
+  const std::vector<std::size_t>& cut = reading.readout.windows_cut;
+  for (std::size_t i = 0; i < regions.size(); ++i) {
+    const bool started = std::find(unstarted.begin(), unstarted.end(), i) == unstarted.end();
+    if (started) shared.belt_tried.add(on_belt(regions[i], job.travel_px));
+    if (!started || std::find(cut.begin(), cut.end(), i) != cut.end())
       out.left.push_back(regions[i]);
+  }
   out.readout = std::move(reading.readout);
   out.windows = reading.windows;
   return out;

@@ -81,16 +81,18 @@ TEST(BarcodeReader, WindowsBeyondTheTimeBudgetAreListedNotRead) {
       {0, 0, 400, 200}, {400, 0, 400, 200}, {800, 0, 400, 200}};
   const BarcodeReadout every = read_barcodes(frame, kDefaultSymbologies, true, windows);
   ASSERT_EQ(every.codes.size(), 1u);
-  EXPECT_TRUE(every.windows_left.empty());
+  EXPECT_TRUE(every.windows_left.empty() && every.windows_cut.empty());
   const BarcodeReadout bounded = read_barcodes(frame, kDefaultSymbologies, true, windows, 1e-3);
   ASSERT_EQ(bounded.codes.size(), 1u);
   EXPECT_EQ(bounded.codes[0].text, "BUDGET-1");
   EXPECT_EQ(bounded.windows_left, (std::vector<std::size_t>{1, 2}));
+  EXPECT_TRUE(bounded.windows_cut.empty());
   // The label last: the blank window's first view is read, nothing else.
   const std::vector<DecodeWindow> label_last = {windows[1], windows[0]};
   const BarcodeReadout late = read_barcodes(frame, kDefaultSymbologies, true, label_last, 1e-3);
   EXPECT_TRUE(late.codes.empty());
-  EXPECT_EQ(late.windows_left, (std::vector<std::size_t>{0, 1}));
+  EXPECT_EQ(late.windows_cut, (std::vector<std::size_t>{0}));
+  EXPECT_EQ(late.windows_left, (std::vector<std::size_t>{1}));
 }
 
 TEST(BarcodeReader, AnImageThatTripsZXingsMicroQrAssertionIsReportedNotFatal) {
