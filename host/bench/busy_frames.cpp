@@ -164,17 +164,9 @@ Bands grey(Bands bands) {
 /// Photos in `dirs` with a .txt beside them (`with_code`) or without.
 std::vector<std::string> photos(const std::vector<std::string>& dirs, bool with_code) {
   std::vector<std::string> out;
-  for (const std::string& dir : dirs) {
-    std::error_code ec;
-    if (!fs::is_directory(dir, ec)) continue;
-    for (const auto& entry : fs::directory_iterator(dir, ec)) {
-      const std::string ext = entry.path().extension().string();
-      if (ext != ".png" && ext != ".jpg") continue;
-      if (fs::exists(fs::path(entry.path()).replace_extension(".txt")) == with_code)
-        out.push_back(entry.path().string());
-    }
-  }
-  std::sort(out.begin(), out.end());
+  for (const std::string& dir : dirs)
+    for (const std::string& file : bench::photo_files(dir))
+      if (fs::exists(fs::path(file).replace_extension(".txt")) == with_code) out.push_back(file);
   return out;
 }
 

@@ -126,19 +126,7 @@ struct FrameRun {
 /// The photos of `dir`: with a .txt (positives) and without (negatives).
 std::vector<Subject> photo_subjects(const std::string& dir) {
   std::vector<Subject> out;
-  std::error_code ec;
-  if (!fs::is_directory(dir, ec)) return out;
-  std::vector<fs::path> files;
-  for (const auto& entry : fs::directory_iterator(dir, ec)) {
-    std::string ext = entry.path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return std::tolower(c); });
-    if (entry.is_regular_file() &&
-        (ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" || ext == ".tiff"))
-      files.push_back(entry.path());
-  }
-  std::sort(files.begin(), files.end());
-  for (const fs::path& file : files) {
+  for (const fs::path file : bench::photo_files(dir)) {
     Subject s;
     s.name = fs::path(dir).filename().string() + "/" + file.stem().string();
     const fs::path txt = fs::path(file).replace_extension(".txt");

@@ -16,6 +16,22 @@ namespace flutterscan::bench {
 
 namespace fs = std::filesystem;
 
+std::vector<std::string> photo_files(const std::string& dir) {
+  std::vector<std::string> files;
+  std::error_code ec;
+  if (!fs::is_directory(dir, ec)) return files;
+  for (const auto& entry : fs::directory_iterator(dir, ec)) {
+    std::string ext = entry.path().extension().string();
+    std::transform(ext.begin(), ext.end(), ext.begin(),
+                   [](unsigned char c) { return std::tolower(c); });
+    const bool image =
+        ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" || ext == ".tiff";
+    if (image && entry.is_regular_file()) files.push_back(entry.path().string());
+  }
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
 Result<std::vector<RealPhoto>, std::string> real_photos(const std::string& dir, int every,
                                                         const std::string& match) {
   using Out = Result<std::vector<RealPhoto>, std::string>;
@@ -23,21 +39,10 @@ Result<std::vector<RealPhoto>, std::string> real_photos(const std::string& dir, 
   if (!fs::is_directory(dir, ec))
     return Out::failure("no photo folder at '" + dir +
                         "' (set FLUTTERSCAN_REAL_LABELS or give --photos)");
-  std::vector<fs::path> files;
-  for (const auto& entry : fs::directory_iterator(dir, ec)) {
-    std::string ext = entry.path().extension().string();
-    std::transform(ext.begin(), ext.end(), ext.begin(),
-                   [](unsigned char c) { return std::tolower(c); });
-    const bool image =
-        ext == ".png" || ext == ".jpg" || ext == ".jpeg" || ext == ".tif" || ext == ".tiff";
-    if (image && entry.is_regular_file() &&
-        fs::exists(fs::path(entry.path()).replace_extension(".txt")))
-      files.push_back(entry.path());
-  }
-  std::sort(files.begin(), files.end());
   std::vector<RealPhoto> photos;
   int seen = 0;
-  for (const fs::path& file : files) {
+  for (const fs::path file : photo_files(dir)) {
+    if (!fs::exists(fs::path(file).replace_extension(".txt"))) continue;
     const std::string name = file.stem().string();
     if (name.find(match) == std::string::npos) continue;
     if (seen++ % std::max(1, every) != 0) continue;

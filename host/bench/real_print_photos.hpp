@@ -18,6 +18,10 @@ struct RealPhoto {
   std::string text;  ///< what the code encodes, byte for byte
 };
 
+/// \brief The photo files in `dir` (.png, .jpg, .jpeg, .tif, .tiff, any case),
+/// with a .txt beside them or not, in name order; none where there is no folder.
+std::vector<std::string> photo_files(const std::string& dir);
+
 /// \brief The photos in `dir` (.png, .jpg, .jpeg, .tif, .tiff with a .txt
 /// beside them), in name order, every `every`-th of those whose name contains
 /// `match`. The error says why there are none (no folder, no photos).
