@@ -1,4 +1,4 @@
-#include "session/bench/soak_run.hpp"
+#include "bench/soak_run.hpp"
 
 #include <malloc.h>
 #include <unistd.h>

@@ -1,4 +1,4 @@
-#include "session/bench/live_view_runs.hpp"
+#include "bench/live_view_runs.hpp"
 
 #include <httplib.h>
 
