@@ -28,6 +28,7 @@
 #include "reader/code_reading.hpp"
 #include "reader/code_regions.hpp"
 #include "reader/reader_options.hpp"
+#include "session/read_record.hpp"
 #include "session/second_pass.hpp"
 #include "sim/scene.hpp"
 
@@ -371,18 +372,11 @@ void run(const DeblurFlags& f) {
       // Each value with the evidence that backs it: the decoder, and the latent it was read on.
       nlohmann::json codes = nlohmann::json::array();
       for (const reader::DecodedCode& code : decoded.codes)
-        codes.push_back({{"text", code.text},
-                         {"format", code.format},
-                         {"decoder", code.decoder},
-                         {"pass", code.pass},
-                         {"evidence", code.evidence}});
+        codes.push_back(session::value_json(code));
       report["codes"] = std::move(codes);
       nlohmann::json unconfirmed = nlohmann::json::array();
       for (const reader::DecodedCode& code : decoded.unconfirmed)
-        unconfirmed.push_back({{"text", code.text},
-                               {"format", code.format},
-                               {"decoder", code.decoder},
-                               {"pass", code.pass}});
+        unconfirmed.push_back(session::value_json(code));
       report["unconfirmed"] = std::move(unconfirmed);
     }
     if (!f.truth.empty()) report["truth"] = {{"psnr_db", psnr_db}, {"ssim", ssim_index}};

@@ -369,14 +369,10 @@ nlohmann::json decoded_json(const std::vector<reader::DecodedCode>& codes,
                             double travel_px) {
   nlohmann::json decoded = nlohmann::json::array();
   for (const reader::DecodedCode& code : codes) {
-    nlohmann::json entry = {{"text", code.text},
-                            {"format", code.format},
-                            {"x", std::lround(code.centre_x)},
-                            {"y", std::lround(code.centre_y)},
-                            {"view", reader::luminance_view_name(code.luminance)},
-                            {"decoder", code.decoder},
-                            {"pass", code.pass},
-                            {"evidence", code.evidence}};
+    nlohmann::json entry = value_json(code);
+    entry["x"] = std::lround(code.centre_x);
+    entry["y"] = std::lround(code.centre_y);
+    entry["view"] = reader::luminance_view_name(code.luminance);
     entry.update(code_record(code));
     const double along = imaging::position_along_motion(direction, code.centre_x, code.centre_y,
                                                         latent.width, latent.height);
@@ -531,13 +527,12 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config, WorkerSha
   out.log["decoded"] = decoded_json(decoded.readout.codes, model.direction, latent, job.travel_px);
   if (!decoded.readout.unconfirmed.empty()) {
     nlohmann::json unconfirmed = nlohmann::json::array();
-    for (const reader::DecodedCode& code : decoded.readout.unconfirmed)
-      unconfirmed.push_back({{"text", code.text},
-                             {"format", code.format},
-                             {"x", std::lround(code.centre_x)},
-                             {"y", std::lround(code.centre_y)},
-                             {"decoder", code.decoder},
-                             {"pass", code.pass}});
+    for (const reader::DecodedCode& code : decoded.readout.unconfirmed) {
+      nlohmann::json value = value_json(code);
+      value["x"] = std::lround(code.centre_x);
+      value["y"] = std::lround(code.centre_y);
+      unconfirmed.push_back(std::move(value));
+    }
     out.log["unconfirmed"] = std::move(unconfirmed);
   }
   out.log["labels_in_view"] = out.sightings.size();

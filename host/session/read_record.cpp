@@ -43,6 +43,15 @@ std::string iso8601_utc(std::int64_t utc_ms) {
   return text;
 }
 
+nlohmann::json value_json(const reader::DecodedCode& code) {
+  nlohmann::json value = {{"text", code.text},
+                          {"format", code.format},
+                          {"decoder", code.decoder},
+                          {"pass", code.pass}};
+  if (!code.evidence.empty()) value["evidence"] = code.evidence;
+  return value;
+}
+
 nlohmann::json code_record(const reader::DecodedCode& code) {
   const reader::CodeQuality& q = code.quality;
   nlohmann::json record;

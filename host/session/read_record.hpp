@@ -34,6 +34,10 @@ std::string iso8601_utc(std::int64_t utc_ms);
 /// and quality of one code read (also each `decoded` entry of session.jsonl).
 nlohmann::json code_record(const reader::DecodedCode& code);
 
+/// \brief A value and what it was read by: {"text", "format", "decoder", "pass"}
+/// and "evidence" where it has any (reader/read_evidence.hpp; none: unconfirmed).
+nlohmann::json value_json(const reader::DecodedCode& code);
+
 /// \brief The record of one finished object.
 nlohmann::json read_record(const ObjectResult& object);
 
