@@ -409,13 +409,14 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
         break;
       }
     }
-    // Read nothing in every view: zbar, for the linear codes, finds a row's
-    // edges where ZXing's one threshold per row found none.
+    // Cut short by the budget with nothing read (its views, or zbar's turn): left.
     if (!window_read &&
         (cut || (w.second_decoder && !linear.empty() && w.views >= kLuminanceViews && spent()))) {
       out.windows_cut.push_back(i);
       continue;
     }
+    // Read nothing in every view: zbar, for the linear codes, finds a row's
+    // edges where ZXing's one threshold per row found none.
     if (window_read || linear.empty() || w.views < kLuminanceViews || !w.second_decoder) continue;
     to_luminance(latent, x0, y0, x1, y1, LuminanceView::kSrgbFromBlack, lum);
     bool any = false;

@@ -645,9 +645,9 @@ std::string check_config(SessionConfig& c) {
                    "\"auto\" or [0, " + number_text(kMaxSecondPassMs) + "] ms per frame",
                    "the cascade's CPU budget for second passes");
   if (!(c.processing.decode_ms == -1 ||
-        (c.processing.decode_ms >= 1 && c.processing.decode_ms <= kMaxDecodeMs)))
+        (c.processing.decode_ms > 0 && c.processing.decode_ms <= kMaxDecodeMs)))
     return outside("processing.decode_ms", c.processing.decode_ms,
-                   "\"auto\" or [1, " + number_text(kMaxDecodeMs) + "] ms per frame",
+                   "\"auto\" or (0, " + number_text(kMaxDecodeMs) + "] ms per frame",
                    "the first pass's decode time");
   if (c.processing.threads_per_worker < 1 || c.processing.threads_per_worker > 64)
     return problem("processing.threads_per_worker",

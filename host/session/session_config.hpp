@@ -83,7 +83,7 @@ struct ProcessingConfig {
   /// are left for the frames after (frame_processing.hpp); < 0 ("auto"): the
   /// frame's share of the workers' time (period x workers, less 15% spare) less
   /// its conversion and deblur, every window while the frame rate is unknown
-  /// (offline); kMaxDecodeMs: every window.
+  /// (offline); > 0: that many ms; kMaxDecodeMs: every window.
   double decode_ms = -1;
   /// The cascade's second-pass tries beyond tv on the window (second_pass_tries.hpp).
   SecondPassTries second_pass_tries;

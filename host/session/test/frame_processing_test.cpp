@@ -511,7 +511,7 @@ TEST(FrameProcessing, WindowsOverTheDecodeBudgetAreLeftFlaggedUnjudgedAndReadNex
   }
   ASSERT_TRUE(busy) << "no sim frame with two windows";
   ASSERT_FALSE(unbounded.empty());
-  config.processing.decode_ms = 1;  // the first window's first view only
+  config.processing.decode_ms = 1e-3;  // the first window's first view only
   ASSERT_EQ(check_config(config), "");
   WorkerShared shared(config);
   std::set<std::string> read;

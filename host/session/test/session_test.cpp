@@ -388,7 +388,7 @@ TEST(SessionConfigFile, ReadsTheAnnotatedExampleAndNamesBadKeys) {
   SessionConfig negative;
   negative.processing.second_pass_ms = -5;
   EXPECT_NE(check_config(negative).find("processing.second_pass_ms"), std::string::npos);
-  // The first pass's decode budget: "auto" (the default) or ms per frame within 1..1e6.
+  // The first pass's decode budget: "auto" (the default) or ms per frame within (0, 1e6].
   EXPECT_EQ(config.processing.decode_ms, -1);
   const auto decode_auto = parse_config("[processing]\ndecode_ms = \"auto\"\n", "line3.toml");
   ASSERT_TRUE(decode_auto.ok()) << decode_auto.error();
@@ -401,7 +401,7 @@ TEST(SessionConfigFile, ReadsTheAnnotatedExampleAndNamesBadKeys) {
   EXPECT_NE(decode_word.error().find("line3.toml:3: processing.decode_ms"), std::string::npos)
       << decode_word.error();
   SessionConfig no_time;
-  no_time.processing.decode_ms = 0.5;
+  no_time.processing.decode_ms = 0;
   EXPECT_NE(check_config(no_time).find("processing.decode_ms"), std::string::npos);
   negative.processing.second_pass_ms = 2e6;
   EXPECT_NE(check_config(negative).find("processing.second_pass_ms"), std::string::npos);
