@@ -80,7 +80,7 @@ struct ProcessingConfig {
   double second_pass_ms = -1;
   /// The first pass's decode time per frame, ms: windows are read in turn
   /// (those not tried on the belt lately first) while it lasts, and the rest
-  /// are left for the frames after (frame_processing.hpp); < 0 ("auto"): the
+  /// are left for the frames after (docs/session.md, "The decode budget"); < 0 ("auto"): the
   /// frame's share of the workers' time (period x workers, less 15% spare) less
   /// its conversion and deblur, every window while the frame rate is unknown
   /// (offline); > 0: that many ms; kMaxDecodeMs: every window.
