@@ -328,7 +328,9 @@ Replay replay(const ReplayOptions& o, session::SessionConfig config,
   std::map<fs::path, const KeptFrame*> by_path;
   for (const KeptFrame& k : kept) by_path[k.image] = &k;
 
-  // Offline, no line to keep up with: every second pass the cascade wants runs.
+  // Offline, no line to keep up with: every window is decoded and every second
+  // pass the cascade wants runs.
+  if (config.processing.decode_ms < 0) config.processing.decode_ms = session::kMaxDecodeMs;
   if (config.processing.second_pass_ms < 0)
     config.processing.second_pass_ms = session::kMaxSecondPassMs;
   session::WorkerShared shared(config);
