@@ -108,7 +108,7 @@ struct Subject {
 
 /// One reported value.
 struct Report {
-  std::string subject, scene, motion, path, tries, text, format, decoder, pass, verdict;
+  std::string subject, scene, motion, path, tries, text, format, decoder, pass, evidence, verdict;
   double electrons = 0, turn = 0;
   int seed = 0;
   bool held = false;  ///< logged as unconfirmed, not reported (read_evidence.hpp)
@@ -442,10 +442,10 @@ int run(const Options& o) {
                                   << subject.name << " " << scene << " " << electrons << " e- "
                                   << motion << " seed " << seed << ": " << code.text << " ("
                                   << code.format << ", " << code.decoder << ", " << code.pass
-                                  << ")\n";
+                                  << ", evidence " << code.evidence << ")\n";
                       reports.push_back({subject.name, scene, motion, path, tries_name, code.text,
-                                         code.format, code.decoder, code.pass, verdict, electrons,
-                                         turn, seed, held});
+                                         code.format, code.decoder, code.pass, code.evidence,
+                                         verdict, electrons, turn, seed, held});
                     }
                   runs.push_back(run);
                 }
@@ -527,7 +527,8 @@ int run(const Options& o) {
               << counts["held wrong"] << " |\n";
   std::cout << "\nEvery misread and unexpected read\n\n"
                "| path | tries | subject | scene | e- | motion | seed | turn | read | format | "
-               "decoder | pass | truth |\n|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
+               "decoder | pass | evidence | truth |\n"
+               "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|\n";
   std::map<std::string, std::string> truth;
   for (const Subject& s : mine) truth[s.name] = s.text;
   for (const Report& r : reports)
@@ -535,7 +536,7 @@ int run(const Options& o) {
       std::cout << "| " << r.path << " | " << r.tries << " | " << r.subject << " | " << r.scene
                 << " | " << r.electrons << " | " << r.motion << " | " << r.seed << " | " << r.turn
                 << " | " << r.text << " | " << r.format << " | " << r.decoder << " | " << r.pass
-                << " | " << truth[r.subject] << " |\n";
+                << " | " << r.evidence << " | " << truth[r.subject] << " |\n";
   if (!o.csv.empty()) {
     std::ofstream csv(o.csv);
     csv << "kind,path,tries,subject,scene,electrons,motion,seed,turn,text,format,decoder,pass,"

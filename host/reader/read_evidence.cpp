@@ -70,10 +70,6 @@ std::string corroboration(const DecodedCode& code, const LumWindow& window,
   const int gap = std::max(0, independent_apart - 1);
   const int end_a = cut - gap / 2, begin_b = cut + (gap - gap / 2);
   if (independent_apart > 0 && end_a > 0 && begin_b < across) {
-    // Each half is one reading: a row that reads the value is enough (ZXing
-    // asks two rows of a symbol by default, which may lie side by side).
-    ZXing::DecodeHints one_row = hints;
-    one_row.setMinLineCount(1);
     bool both = true;
     for (const auto& [from, to] : {std::pair{0, end_a}, std::pair{begin_b, across}}) {
       // The half as packed rows (a half of columns is copied out).
@@ -90,7 +86,7 @@ std::string corroboration(const DecodedCode& code, const LumWindow& window,
         }
       }
       const bool reads =
-          zxing ? zxing_reads(ZXing::ImageView(half.data(), w, h, ZXing::ImageFormat::Lum), one_row,
+          zxing ? zxing_reads(ZXing::ImageView(half.data(), w, h, ZXing::ImageFormat::Lum), hints,
                               code)
                 : zbar_reads(half, w, h, symbologies, try_rotate, code);
       if (!reads) {

@@ -44,9 +44,9 @@ struct LumWindow {
 /// code.decoder in `window`): "halves" where the window cut in two across the
 /// symbol's bars at its centre, `independent_apart` - 1 rows left out at the
 /// cut (DecodeWindow's: so that no sample of the frame is in both), reads the
-/// same value in each half, on one row at least (by ZXing with `hints`, or by
-/// zbar for a value zbar read): two readings with independent noise on either
-/// side of the symbol's centre; "decoders" where the other decoder reads it in
+/// same value in each half (by ZXing with `hints`, on the rows ZXing asks to
+/// agree, two by default; or by zbar for a value zbar read): two readings with
+/// independent noise on either side of the symbol's centre; "decoders" where the other decoder reads it in
 /// the window (zbar, in the view ZXing read it in or in its own, for a value
 /// ZXing read); else empty: nothing does, and the value is not reported. No
 /// halves where `independent_apart` is 0. `symbologies` and `try_rotate` as
