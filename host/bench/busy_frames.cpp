@@ -4,7 +4,7 @@
 // frame session_bench's stage table measures), and frames whose every row holds
 // print: rendered text of several sizes filling the frame, without and with a
 // label among it, and photos filling the frame (the shared photo sets: their
-// photos with no code, and product photos with their labels), colour and grey.
+// photos with no code, and photos with a code), colour and grey.
 // Each frame is captured as the misread benchmark captures its scenes
 // (seed-maxmin-1, c = 3, read noise 4 e-, 12 bits, 52 px along +x, the scene
 // moving continuously within each slot). Not a test: `make bench` part `busy`.
@@ -206,14 +206,14 @@ int run(const Options& o) {
     Bands print = photo_print(codeless, o.width, o.height);
     frames.emplace_back("photos with no code, grey", grey(print));
     frames.emplace_back("photos with no code, colour", std::move(print));
-    // Product photos (each with its code) spread over the set.
+    // Photos with a code, twelve spread over the set.
     std::vector<std::string> spread;
     for (std::size_t i = 0; i < labelled.size();
          i += std::max<std::size_t>(1, labelled.size() / 12))
       spread.push_back(labelled[i]);
-    Bands products = photo_print(spread, o.width, o.height);
-    frames.emplace_back("product photos with codes, grey", grey(products));
-    frames.emplace_back("product photos with codes, colour", std::move(products));
+    Bands coded = photo_print(spread, o.width, o.height);
+    frames.emplace_back("photos with codes, grey", grey(coded));
+    frames.emplace_back("photos with codes, colour", std::move(coded));
   }
 
   // Each frame read with every window decoded, then as a line at 60 fps on two
