@@ -39,23 +39,6 @@ std::uint64_t longest_joined_run_us(const std::vector<sim::LedTransition>& log, 
   return longest;
 }
 
-/// LED `led`'s on-time in `log` from `from_us` to `to_us`.
-std::uint64_t on_time_us(const std::vector<sim::LedTransition>& log, int led, std::uint64_t from_us,
-                         std::uint64_t to_us) {
-  std::uint64_t total = 0;
-  bool on = false;
-  std::uint64_t since = from_us;
-  for (const auto& w : log) {
-    const std::uint64_t t = std::min(std::max(w.time_us, from_us), to_us);
-    const bool now_on = ((w.led_mask >> led) & 1u) != 0;
-    if (on && !now_on) total += t - since;
-    if (!on && now_on) since = t;
-    on = now_on;
-  }
-  if (on) total += to_us - since;
-  return total;
-}
-
 proto::SetGuardRequest guard(std::uint32_t on_us, std::uint16_t duty) {
   proto::SetGuardRequest r{};
   r.max_on_time_us.fill(on_us);
@@ -138,8 +121,7 @@ TEST(Ceiling, APowerOnResetForgetsNoHeat) {
             Status::kAboveCeiling);  // 256 ms is above the 100 ms ceiling
   ASSERT_EQ(rig.send(Command::kSetGuard, guard(100'000, 100)).status(), Status::kOk);
   // 52 slots at 1 ms, LED 0 lit in 40 of them in runs of 10 ms: 77 % of the exposure.
-  ASSERT_EQ(rig.upload(0, "1111111111011111111110111111111101111111111000000000", 1),
-            Status::kOk);
+  ASSERT_EQ(rig.upload(0, "1111111111011111111110111111111101111111111000000000", 1), Status::kOk);
   ASSERT_EQ(rig.select(0), Status::kOk);
   ASSERT_EQ(rig.set_timing(1'000), Status::kOk);
   ASSERT_EQ(rig.send(Command::kSaveConfig).status(), Status::kOk);
@@ -227,7 +209,7 @@ TEST(Ceiling, BrightnessCountsAsEnergyAndCannotExceedTheCeilingCurrent) {
   ASSERT_EQ(rig.set_timing(1'000, 4'000), Status::kOk);
   ASSERT_EQ(rig.set_mode(proto::SyncMode::kFreeRun), Status::kOk);
   ASSERT_EQ(rig.arm(), Status::kOk);
-  rig.port.run_for(41'500);  // between two exposures
+  rig.port.run_for(41'500);              // between two exposures
   bright.permille = {700, 350, 350, 0};  // more current while armed: refused
   EXPECT_EQ(rig.send(Command::kSetBrightness, bright).status(), Status::kBadState);
   EXPECT_EQ(rig.port.led_brightness(0), 350u);

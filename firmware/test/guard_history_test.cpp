@@ -14,23 +14,6 @@ namespace {
 using proto::Command;
 using proto::Status;
 
-/// LED `led`'s on-time in `log` between `from_us` and `to_us`.
-std::uint64_t on_time_us(const std::vector<sim::LedTransition>& log, int led, std::uint64_t from_us,
-                         std::uint64_t to_us) {
-  std::uint64_t total = 0;
-  bool on = false;
-  std::uint64_t since = from_us;
-  for (const auto& w : log) {
-    const std::uint64_t t = std::min(std::max(w.time_us, from_us), to_us);
-    const bool now_on = ((w.led_mask >> led) & 1u) != 0;
-    if (on && !now_on) total += t - since;
-    if (!on && now_on) since = t;
-    on = now_on;
-  }
-  if (on) total += to_us - since;
-  return total;
-}
-
 /// A guard with a 10 % duty cap on every LED, on-time unlimited.
 proto::SetGuardRequest ten_percent_guard() {
   proto::SetGuardRequest guard = permissive_guard();

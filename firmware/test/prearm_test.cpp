@@ -24,23 +24,6 @@ LedCode code3(std::string_view digits) {
   return LedCode::parse(digits, 3).value();
 }
 
-/// LED `led`'s on-time in `log` from `from_us` on.
-std::uint64_t on_time_us(const std::vector<sim::LedTransition>& log, int led, std::uint64_t from_us,
-                         std::uint64_t to_us) {
-  std::uint64_t total = 0;
-  bool on = false;
-  std::uint64_t since = 0;
-  for (const auto& w : log) {
-    if (w.time_us < from_us) continue;
-    const bool now_on = ((w.led_mask >> led) & 1u) != 0;
-    if (on && !now_on) total += w.time_us - since;
-    if (!on && now_on) since = w.time_us;
-    on = now_on;
-  }
-  if (on) total += to_us - since;
-  return total;
-}
-
 // A code the guard allows only every 10 ms (10 % duty): strobes every 1 ms.
 // With the pre-arm decided before the edge, every refused exposure stays
 // completely dark, also with 30 us of interrupt latency; the lit ones start on

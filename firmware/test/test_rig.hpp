@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cstdint>
 #include <memory>
@@ -84,6 +85,24 @@ inline proto::SetGuardRequest permissive_guard() {
   r.max_on_time_us.fill(proto::kMaxGuardOnTimeUs);
   r.max_duty_permille.fill(proto::kDutyFullScale);
   return r;
+}
+
+/// \brief LED `led`'s on-time in `log` between `from_us` and `to_us` (transitions
+/// outside the span clamped to it: an LED lit before `from_us` counts from there).
+inline std::uint64_t on_time_us(const std::vector<sim::LedTransition>& log, int led,
+                                std::uint64_t from_us, std::uint64_t to_us) {
+  std::uint64_t total = 0;
+  bool on = false;
+  std::uint64_t since = from_us;
+  for (const auto& w : log) {
+    const std::uint64_t t = std::min(std::max(w.time_us, from_us), to_us);
+    const bool now_on = ((w.led_mask >> led) & 1u) != 0;
+    if (on && !now_on) total += t - since;
+    if (!on && now_on) since = t;
+    on = now_on;
+  }
+  if (on) total += to_us - since;
+  return total;
 }
 
 class Rig {
