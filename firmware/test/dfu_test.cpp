@@ -39,6 +39,17 @@ class DfuTest : public ::testing::Test {
     EXPECT_EQ(board_.usb().ep0_protocol_errors(), 0);
   }
 
+  /// Downloads `image` in blocks of `transfer` bytes: it lands whole and contiguous in
+  /// the application region and passes the manifest check.
+  void download_whole(const std::vector<std::uint8_t>& image, std::size_t transfer) {
+    const DownloadLog log = dfu_download(board_, image, transfer);
+    ASSERT_FALSE(log.dnload_stalled);
+    EXPECT_EQ(log.final_status.state, DfuState::kDfuIdle);
+    EXPECT_EQ(log.final_status.status, DfuStatus::kOk);
+    EXPECT_EQ(board_.bootloader()->dfu().downloaded_bytes(), image.size());
+    EXPECT_EQ(region(image.size()), image);
+    EXPECT_EQ(board_.bootloader()->dfu().last_manifest_check(), ImageCheck::kOk);
+  }
   std::vector<std::uint8_t> region(std::size_t size) {
     const auto bytes = board_.flash().read(kAppBase, size);
     return {bytes.begin(), bytes.end()};
@@ -270,13 +281,7 @@ TEST_F(DfuTest, SmallerTransferSizesGiveAContiguousImage) {
     SCOPED_TRACE(transfer);
     const auto image = sim::make_application_image(kBoardIdStm32f405, 3, 0, 0, 9 * 1024 + 77,
                                                    static_cast<std::uint8_t>(transfer));
-    const DownloadLog log = dfu_download(board_, image, transfer);
-    ASSERT_FALSE(log.dnload_stalled);
-    EXPECT_EQ(log.final_status.state, DfuState::kDfuIdle);
-    EXPECT_EQ(log.final_status.status, DfuStatus::kOk);
-    EXPECT_EQ(board_.bootloader()->dfu().downloaded_bytes(), image.size());
-    EXPECT_EQ(region(image.size()), image);
-    EXPECT_EQ(board_.bootloader()->dfu().last_manifest_check(), ImageCheck::kOk);
+    ASSERT_NO_FATAL_FAILURE(download_whole(image, transfer));
     // Uploaded back in blocks of the same size.
     std::vector<std::uint8_t> read;
     for (std::uint16_t block = 0; block < 200; ++block) {
@@ -301,13 +306,7 @@ TEST_F(DfuTest, TransferSizesThatAreNotAMultipleOfFourGiveTheImage) {
     SCOPED_TRACE(transfer);
     const auto image = sim::make_application_image(kBoardIdStm32f405, 3, 0, 0, 5 * 1024 + 77,
                                                    static_cast<std::uint8_t>(transfer));
-    const DownloadLog log = dfu_download(board_, image, transfer);
-    ASSERT_FALSE(log.dnload_stalled);
-    EXPECT_EQ(log.final_status.state, DfuState::kDfuIdle);
-    EXPECT_EQ(log.final_status.status, DfuStatus::kOk);
-    EXPECT_EQ(board_.bootloader()->dfu().downloaded_bytes(), image.size());
-    EXPECT_EQ(region(image.size()), image);
-    EXPECT_EQ(board_.bootloader()->dfu().last_manifest_check(), ImageCheck::kOk);
+    ASSERT_NO_FATAL_FAILURE(download_whole(image, transfer));
   }
 }
 
