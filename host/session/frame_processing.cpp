@@ -224,11 +224,15 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
   options.second_decoder = !processing.cascade;
   // Within the frame's budget, the regions no frame tried lately first: what one
   // frame leaves, the next reads (a label passes through several).
-  std::vector<reader::LabelRegion> regions = reader::regions_to_read(out.paper, out.code);
-  std::stable_partition(regions.begin(), regions.end(), [&](const reader::LabelRegion& r) {
-    return !shared.belt_tried.any_over(on_belt(r, job.travel_px));
-  });
-  options.budget_ms = decode_budget_ms(processing, shared, spent_ms);
+  // Area "frame" reads the whole frame as one window: no regions, no budget.
+  std::vector<reader::LabelRegion> regions;
+  if (processing.decode_area == reader::DecodeArea::kLabels) {
+    regions = reader::regions_to_read(out.paper, out.code);
+    std::stable_partition(regions.begin(), regions.end(), [&](const reader::LabelRegion& r) {
+      return !shared.belt_tried.any_over(on_belt(r, job.travel_px));
+    });
+    options.budget_ms = decode_budget_ms(processing, shared, spent_ms);
+  }
   reader::CodeReading reading = reader::read_codes(image.latent(), regions, direction, options);
   // A window started counts as tried (the next frame starts with another); one
   // not started or cut short with nothing read is left: not judged here.
