@@ -33,7 +33,6 @@
 #include "bench/real_print_photos.hpp"
 #include "bench/real_print_session.hpp"
 #include "imaging/exposure_timeline.hpp"
-#include "session/second_pass.hpp"
 #include "session/session_config.hpp"
 #include "sim/colour_scene.hpp"
 #include "sim/forward_model.hpp"
@@ -180,7 +179,7 @@ int run(const Options& o) {
   std::cout << "CPU: " << bench::cpu_model() << " (one thread)\n";
   const double credit_ms = o.second_pass_ms >= 0
                                ? o.second_pass_ms
-                               : 1000.0 / 60 * 2 * session::SecondPassBudget::kShare;
+                               : bench::line_credit_ms(60, 2);
   const bench::SessionLine line(o.width, o.height, kBlurPx, o.electrons);  // its model
   std::cout << o.width << " x " << o.height << ", " << o.electrons << " e-, " << kBlurPx
             << " px along +x; second-pass credit " << std::lround(credit_ms)

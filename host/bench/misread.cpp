@@ -271,13 +271,11 @@ bench::SessionRead cascade_read(const imaging::Image& dn, imaging::CaptureModel 
 }
 
 /// A session path's second-pass credit per frame: offline every window; at a
-/// frame rate, what the line's two workers leave spare at that rate
-/// (session::SecondPassBudget: period x workers x its share; the first pass's
-/// own time is not taken off, so this is the most a frame can get in a steady run).
+/// frame rate, what the line's two workers leave at that rate (bench::line_credit_ms).
 double second_pass_credit_ms(const std::string& path) {
   constexpr int kWorkers = 2;
-  if (path == "session-30fps") return 1000.0 / 30 * kWorkers * session::SecondPassBudget::kShare;
-  if (path == "session-60fps") return 1000.0 / 60 * kWorkers * session::SecondPassBudget::kShare;
+  if (path == "session-30fps") return bench::line_credit_ms(30, kWorkers);
+  if (path == "session-60fps") return bench::line_credit_ms(60, kWorkers);
   return session::kMaxSecondPassMs;
 }
 

@@ -13,6 +13,7 @@
 
 #include "imaging/image.hpp"
 #include "reader/barcode_reader.hpp"
+#include "session/second_pass.hpp"
 #include "session/session_config.hpp"
 
 namespace flutterscan::bench {
@@ -26,6 +27,13 @@ struct SessionRead {
   int windows = 0;
   nlohmann::json log;  ///< the frame's line of session.jsonl (times_ms: its stages)
 };
+
+/// \brief The second-pass credit a line's `workers` leave each frame at `fps` frames a
+/// second (session::SecondPassBudget: period x workers x its share; the first pass's
+/// own time not taken off: the most a frame gets in a steady run), ms.
+inline double line_credit_ms(double fps, int workers) {
+  return 1000.0 / fps * workers * session::SecondPassBudget::kShare;
+}
 
 class SessionLine {
  public:

@@ -196,9 +196,9 @@ struct Decoded {
 double decode_budget_ms(const ProcessingConfig& processing, const WorkerShared& shared,
                         double spent_ms) {
   if (processing.decode_ms >= 0) return processing.decode_ms;
-  const double period = shared.second_pass.period_ms();
-  if (period <= 0) return 0;
-  return std::max(1.0, period * shared.second_pass.workers() * SecondPassBudget::kShare - spent_ms);
+  const double share = shared.second_pass.frame_share_ms();
+  if (share <= 0) return 0;
+  return std::max(1.0, share - spent_ms);
 }
 
 /// Where region `r` (motion frame) of a frame at belt travel `travel_px` lies on the belt.

@@ -79,7 +79,7 @@ void SecondPassBudget::add_frame(std::uint64_t index, std::int64_t camera_ns,
     added = per_frame_ms_;
     bound = 2 * per_frame_ms_;
   } else if (period_ms_ > 0) {
-    const double available = period_ms_ * workers_ * kShare;  // per frame, all workers
+    const double available = share_locked();  // per frame, all workers
     added = available - first_pass_ms;
     bound = 2 * available;
   }
@@ -106,9 +106,9 @@ double SecondPassBudget::estimate_ms(std::size_t pixels) const {
   return ms_per_megapixel_ * static_cast<double>(pixels) * 1e-6;
 }
 
-double SecondPassBudget::period_ms() const {
+double SecondPassBudget::frame_share_ms() const {
   const std::lock_guard lock(mutex_);
-  return period_ms_;
+  return share_locked();
 }
 
 double SecondPassBudget::credit_ms() const {

@@ -53,10 +53,10 @@ class SecondPassBudget {
   double estimate_ms(std::size_t pixels) const;
   /// \brief The credit left, ms.
   double credit_ms() const;
-  /// \brief The frame period the cameras' timestamps show, ms (0: not known yet).
-  double period_ms() const;
-  /// \brief The workers the budget shares.
-  int workers() const { return workers_; }
+  /// \brief The workers' time a frame has, all workers together: the frame period
+  /// the cameras' timestamps show times the workers times kShare, ms (0: the
+  /// period is not known yet).
+  double frame_share_ms() const;
 
  private:
   mutable std::mutex mutex_;
@@ -68,6 +68,8 @@ class SecondPassBudget {
   std::int64_t last_camera_ns_ = 0;
   bool seen_frame_ = false;
   double ms_per_megapixel_ = 80;  ///< tv-40 on one thread, updated by every window
+  /// frame_share_ms() with the mutex held.
+  double share_locked() const { return period_ms_ * workers_ * kShare; }
 };
 
 /// \brief Where something lies on the belt: [begin, end) along the motion in
