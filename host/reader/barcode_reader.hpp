@@ -74,7 +74,7 @@ struct DecodedCode {
   /// "tv", "bar-sums", "tv-on-sums", "fit", "isotropic-tv").
   std::string pass = "first";
   /// What backs the value (read_evidence.hpp): "check" (its symbology's own
-  /// check is strong), "halves" (a weak-check symbology read alike on both
+  /// check is strong), "halves" (an EAN or UPC read alike on both
   /// halves of its bars, each on its own; for an EAN-13 read by fit, two rows
   /// of its bar sums that share no row), or "decoders" (read alike by ZXing and zbar).
   std::string evidence;

@@ -50,6 +50,10 @@ bool weak_check(const std::string& format) {
   return std::find(kWeak.begin(), kWeak.end(), format) != kWeak.end();
 }
 
+bool no_check(const std::string& format) {
+  return format == "ITF" || format == "Code39" || format == "Codabar";
+}
+
 std::string symbology_family(const std::string& format) {
   if (format == "EAN-13" || format == "EAN-8" || format == "UPC-A" || format == "UPC-E")
     return "EAN/UPC";
@@ -69,7 +73,8 @@ std::string corroboration(const DecodedCode& code, const LumWindow& window,
   // Left out at the cut: the rows that share samples with rows across it.
   const int gap = std::max(0, independent_apart - 1);
   const int end_a = cut - gap / 2, begin_b = cut + (gap - gap / 2);
-  if (independent_apart > 0 && end_a > 0 && begin_b < across) {
+  // Halves rule out noise only: no halves for a symbology with no check at all.
+  if (!no_check(code.format) && independent_apart > 0 && end_a > 0 && begin_b < across) {
     bool both = true;
     for (const auto& [from, to] : {std::pair{0, end_a}, std::pair{begin_b, across}}) {
       // The half as packed rows (a half of columns is copied out).

@@ -9,7 +9,11 @@
 // bars into two halves, each read on its own, gives the same value in both (the
 // deblur works row by row, so the halves' noise is independent: a misread that
 // noise makes would have to repeat on other noise), or the other decoder reads
-// the same value in the window. Used by read_barcodes() only.
+// the same value in the window. Halves do not back a symbology with no check
+// at all: its misreads are not only noise's but other print's (bars another
+// symbol really has, an EAN add-on's, parse as a short one), which both halves
+// hold alike; two decoders parse bars by different rules. Used by
+// read_barcodes() only.
 
 #include <ZXing/DecodeHints.h>
 
@@ -24,6 +28,11 @@ namespace flutterscan::reader {
 /// \brief Whether `format` (ZXing's name) has only a weak check (EAN-13, EAN-8,
 /// UPC-A, UPC-E, ITF, Code 39, Codabar): its values need a second reading.
 bool weak_check(const std::string& format);
+
+/// \brief Whether `format` (ZXing's name) carries no check at all (ITF, Code
+/// 39, Codabar: their optional check characters are not verified): its halves
+/// do not back its values, only the other decoder does.
+bool no_check(const std::string& format);
 
 /// \brief The symbology family `format` belongs to: "EAN/UPC" for EAN-13,
 /// EAN-8, UPC-A and UPC-E (one symbol's bars can decode as more than one of
@@ -46,7 +55,8 @@ struct LumWindow {
 /// cut (DecodeWindow's: so that no sample of the frame is in both), reads the
 /// same value in each half (by ZXing with `hints`, on the rows ZXing asks to
 /// agree, two by default; or by zbar for a value zbar read): two readings with
-/// independent noise on either side of the symbol's centre; "decoders" where the other decoder reads it in
+/// independent noise on either side of the symbol's centre (not for no_check()
+/// symbologies); "decoders" where the other decoder reads it in
 /// the window (zbar, in the view ZXing read it in or in its own, for a value
 /// ZXing read); else empty: nothing does, and the value is not reported. No
 /// halves where `independent_apart` is 0. `symbologies` and `try_rotate` as

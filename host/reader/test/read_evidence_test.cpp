@@ -1,5 +1,8 @@
 // What backs a value: a weak-check symbology's read counts only where a second
 // reading agrees (read_evidence.hpp).
+// ZXing 1.4 returns UTF-8 std::string from Result::text() only with ZX_USE_UTF8.
+#define ZX_USE_UTF8 1
+
 #include "reader/read_evidence.hpp"
 
 #include <gtest/gtest.h>
@@ -11,7 +14,11 @@
 #include <string>
 #include <vector>
 
+#include <ZXing/BitMatrix.h>
 #include <ZXing/DecodeHints.h>
+#include <ZXing/ImageView.h>
+#include <ZXing/MultiFormatWriter.h>
+#include <ZXing/ReadBarcode.h>
 
 #include "reader/barcode_reader.hpp"
 #include "sim/scene.hpp"
@@ -86,6 +93,38 @@ TEST(ReadEvidence, AValueTheHalvesDoNotReadIsNotBacked) {
   DecodedCode off = read.codes[0];
   off.centre_y = -5;
   EXPECT_EQ(corroboration(off, window, hints, kDefaultSymbologies, true), "decoders");
+}
+
+TEST(ReadEvidence, ASymbologyWithNoCheckIsBackedByTheOtherDecoderNotByItsHalves) {
+  // A clean Code 39 (no check character): both halves read it, as they read an
+  // EAN-13; only zbar's reading backs it.
+  const int width = 480, height = 240;
+  const ZXing::BitMatrix bits = ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code39)
+                                    .setMargin(20)
+                                    .encode(L"PARCEL42", width, height);
+  std::vector<std::uint8_t> lum(static_cast<std::size_t>(width) * height);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      lum[static_cast<std::size_t>(y) * width + x] = bits.get(x, y) ? 0 : 255;
+  ZXing::DecodeHints hints;
+  hints.setFormats(ZXing::BarcodeFormat::LinearCodes).setTryHarder(true);
+  const ZXing::Results results = ZXing::ReadBarcodes(
+      ZXing::ImageView(lum.data(), width, height, ZXing::ImageFormat::Lum), hints);
+  ASSERT_EQ(results.size(), 1u);
+  DecodedCode code;
+  code.text = results[0].text();
+  code.format = ZXing::ToString(results[0].format());
+  code.decoder = "zxing";
+  code.centre_x = width / 2.0;
+  code.centre_y = height / 2.0;
+  ASSERT_EQ(code.format, "Code39");
+  ASSERT_EQ(code.text, "PARCEL42");
+  EXPECT_TRUE(no_check(code.format));
+  const LumWindow window{lum, width, height, 0, 0, {}};
+  EXPECT_EQ(corroboration(code, window, hints, kDefaultSymbologies, true), "decoders");
+  // zbar told to read EAN-13 only: nothing backs the value, though both halves read it.
+  EXPECT_EQ(corroboration(code, window, hints, "EAN-13", true), "");
+  for (const char* checked : {"EAN-13", "UPC-E", "Code128"}) EXPECT_FALSE(no_check(checked));
 }
 
 /// `plane` as 8-bit luminance, clamped to [0, 1].
