@@ -538,17 +538,17 @@ int run(const Options& o) {
   if (!o.csv.empty()) {
     std::ofstream csv(o.csv);
     csv << "kind,path,tries,subject,scene,electrons,motion,seed,turn,text,format,decoder,pass,"
-           "verdict,ms,ceiling,windows\n";
+           "verdict,ms,ceiling,windows,evidence\n";
     for (const Report& r : reports)
       csv << (r.held ? "held," : "read,") << r.path << ",\"" << r.tries << "\"," << r.subject << ","
           << r.scene << "," << r.electrons << "," << r.motion << "," << r.seed << "," << r.turn
           << ",\"" << r.text << "\"," << r.format << "," << r.decoder << "," << r.pass << ","
-          << r.verdict << ",,,\n";
+          << r.verdict << ",,,," << r.evidence << "\n";
     for (const FrameRun& r : runs)
       csv << "frame," << r.path << ",\"" << r.tries << "\"," << r.subject << "," << r.scene << ","
           << r.electrons << "," << r.motion << ",,,,,,,"
           << (r.positive ? (r.read_right ? "read" : "no-read") : "negative") << "," << r.ms << ","
-          << r.ceiling << "," << r.windows << "\n";
+          << r.ceiling << "," << r.windows << ",\n";
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
