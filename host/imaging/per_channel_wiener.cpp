@@ -92,10 +92,12 @@ struct BandBasis {
 };
 
 /// Solves for the K latents of `basis` per frequency from the three channels
-/// (motion-frame rows); returns them as planes (motion frame).
+/// (motion-frame rows); returns them as planes (motion frame). With `mix` (K
+/// weights), one plane instead: sum_i mix[i] a_i, filtered as one (the sum is
+/// linear in each bin, so one inverse transform a row serves it).
 std::vector<Plane> solve_latents(const std::vector<Plane>& rows, const CaptureModel& model,
                                  std::span<const double> noise_variance, const BandBasis& bands,
-                                 double lambda, int threads) {
+                                 double lambda, int threads, std::span<const double> mix = {}) {
   const int width = rows[0].width, height = rows[0].height;
   const int latents = static_cast<int>(bands.basis.size());
   const auto segments = slot_segments(model);
@@ -161,8 +163,20 @@ std::vector<Plane> solve_latents(const std::vector<Plane>& rows, const CaptureMo
             std::complex<float>(x[i][c] / static_cast<double>(n));
   }
 
+  if (!mix.empty()) {
+    for (auto& f : filter) {
+      std::array<std::complex<float>, 9> mixed{};
+      for (int i = 0; i < latents; ++i)
+        for (int c = 0; c < 3; ++c)
+          mixed[static_cast<std::size_t>(c)] +=
+              static_cast<float>(mix[static_cast<std::size_t>(i)]) *
+              f[static_cast<std::size_t>(i * 3 + c)];
+      f = mixed;
+    }
+  }
+  const int outputs = mix.empty() ? latents : 1;
   const std::vector<float> blend = periodic_blend(width, n);
-  std::vector<Plane> out(static_cast<std::size_t>(latents), Plane(width, height));
+  std::vector<Plane> out(static_cast<std::size_t>(outputs), Plane(width, height));
   RowPool pool(std::max(1, std::min(threads, height)));
   pool.run(height, [&](int first, int last, int) {
     std::vector<AlignedFloats> padded, spectra;
@@ -181,7 +195,7 @@ std::vector<Plane> solve_latents(const std::vector<Plane>& rows, const CaptureMo
         extend_row_periodically(padded[cu].span(), width, blend);
         fft.forward(padded[cu].data(), spectra[cu].complex());
       }
-      for (int i = 0; i < latents; ++i) {
+      for (int i = 0; i < outputs; ++i) {
         std::complex<float>* spectrum = latent_spectrum.complex();
         for (std::size_t j = 0; j < bins; ++j) {
           std::complex<float> sum = 0;
@@ -259,7 +273,8 @@ BandBasis print_plane(const std::vector<Plane>& bands, double blur_px) {
 
 Result<PerChannelResult, std::string> deblur_per_channel(const MotionFrame& frame,
                                                          const CaptureModel& model, double lambda,
-                                                         int threads, ColourPrior prior) {
+                                                         int threads, ColourPrior prior,
+                                                         PerChannelOutput output) {
   using Out = Result<PerChannelResult, std::string>;
   if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
   if (model.channels != 3 || model.leds != 3)
@@ -277,15 +292,25 @@ Result<PerChannelResult, std::string> deblur_per_channel(const MotionFrame& fram
   PerChannelResult result;
   for (const auto& r : rows)
     result.noise_variance.push_back(channel_noise_variance(model, noise_level_mean(r)));
-  BandBasis three;
-  three.basis = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  std::vector<Plane> bands =
-      solve_latents(rows, model, result.noise_variance, three, lambda, threads);
-  if (prior == ColourPrior::kPrintPlane) {
-    const BandBasis plane = print_plane(bands, model.blur_px);
-    bands =
-        to_bands(solve_latents(rows, model, result.noise_variance, plane, lambda, threads), plane);
+  BandBasis basis;
+  basis.basis = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  if (prior == ColourPrior::kPrintPlane)
+    basis = print_plane(solve_latents(rows, model, result.noise_variance, basis, lambda, threads),
+                        model.blur_px);
+  if (output == PerChannelOutput::kGreyOnly) {
+    // grey = mean_k r_k = mean_k offset_k + sum_i (mean_k basis[i][k]) a_i.
+    std::vector<double> mix;
+    for (const auto& b : basis.basis) mix.push_back((b[0] + b[1] + b[2]) / 3);
+    result.grey = std::move(
+        solve_latents(rows, model, result.noise_variance, basis, lambda, threads, mix).front());
+    const auto offset =
+        static_cast<float>((basis.offset[0] + basis.offset[1] + basis.offset[2]) / 3);
+    for (float& p : result.grey.pixels) p += offset;
+    return Out::success(std::move(result));
   }
+  std::vector<Plane> bands =
+      solve_latents(rows, model, result.noise_variance, basis, lambda, threads);
+  if (prior == ColourPrior::kPrintPlane) bands = to_bands(bands, basis);
   result.grey = Plane(rows[0].width, rows[0].height);
   for (const auto& band : bands)
     for (std::size_t i = 0; i < band.pixels.size(); ++i)

@@ -34,9 +34,14 @@ namespace flutterscan::imaging {
 /// channel's good frequencies cover another's nulls, as in the grey model.
 enum class ColourPrior { kThreeBands, kPrintPlane };
 
+/// \brief What deblur_per_channel() returns: the bands and their mean, or the
+/// mean alone (what decoding reads; one inverse transform a row instead of one
+/// a band).
+enum class PerChannelOutput { kBands, kGreyOnly };
+
 struct PerChannelResult {
-  std::vector<Plane> bands;            ///< reflectance under each LED (LED 0 first)
-  Plane grey;                          ///< mean of the bands, for decoding and scoring
+  std::vector<Plane> bands;  ///< reflectance under each LED (LED 0 first); none for kGreyOnly
+  Plane grey;                ///< mean of the bands, for decoding and scoring
   std::vector<double> noise_variance;  ///< per channel, e-^2, at the frame's mean signal
 };
 
@@ -45,6 +50,7 @@ struct PerChannelResult {
 /// the gradient prior of every band (1 / kLabelGradientVariance in deblur()).
 Result<PerChannelResult, std::string> deblur_per_channel(
     const MotionFrame& frame, const CaptureModel& model, double lambda, int threads = 2,
-    ColourPrior prior = ColourPrior::kThreeBands);
+    ColourPrior prior = ColourPrior::kThreeBands,
+    PerChannelOutput output = PerChannelOutput::kBands);
 
 }  // namespace flutterscan::imaging
