@@ -371,11 +371,18 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
       if ((to_paper && linear.empty()) || (smooth && matrix.empty())) continue;
       const ZXing::DecodeHints& view_hints =
           to_paper ? linear_hints : (smooth ? matrix_hints : hints);
+      const auto view_started = std::chrono::steady_clock::now();
       to_luminance(latent, x0, y0, x1, y1, luminance, lum);
       const ZXing::ImageView view(lum.data(), x1 - x0, y1 - y0, ZXing::ImageFormat::Lum);
       ZXing::Results results;
       out.decoder_fault =
           run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, view_hints); });
+      if (v == 0) {
+        out.first_view_ms += std::chrono::duration<double, std::milli>(
+                                 std::chrono::steady_clock::now() - view_started)
+                                 .count();
+        out.first_view_px += area;
+      }
       if (!out.decoder_fault.empty()) {
         // ZXing 1.4 fails an assertion comparing two equal linear symbols in one
         // image (Result::operator==: a label that repeats its barcode): the

@@ -201,6 +201,17 @@ double decode_budget_ms(const ProcessingConfig& processing, const WorkerShared& 
   return std::max(1.0, share - spent_ms);
 }
 
+/// Keeps what a window's first view costs a megapixel lately (a moving mean
+/// over frames, a fifth the newest's): the decode cuts regions to what its
+/// budget reads in one view by it. Frames whose views saw less than a tenth of
+/// a megapixel are not weighed (their time is mostly fixed costs).
+void note_decode_rate(const reader::BarcodeReadout& readout, WorkerShared& shared) {
+  if (readout.first_view_px < 100000) return;
+  const double rate = readout.first_view_ms / (static_cast<double>(readout.first_view_px) / 1e6);
+  const double before = shared.decode_ms_per_mpx.load();
+  shared.decode_ms_per_mpx.store(before > 0 ? 0.8 * before + 0.2 * rate : rate);
+}
+
 /// Where region `r` (motion frame) of a frame at belt travel `travel_px` lies on the belt.
 BeltBox on_belt(const reader::LabelRegion& r, double travel_px) {
   return {r.begin - travel_px, r.end - travel_px, static_cast<double>(r.across_begin),
@@ -225,25 +236,37 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
   // Within the frame's budget, the regions no frame tried lately first: what one
   // frame leaves, the next reads (a label passes through several).
   // Area "frame" reads the whole frame as one window: no regions, no budget.
-  std::vector<reader::LabelRegion> regions;
+  // A region larger than one view of the budget is read as tiles of that size.
+  std::vector<reader::LabelRegion> regions_whole;
+  std::vector<reader::RegionTile> tiles;
   if (processing.decode_area == reader::DecodeArea::kLabels) {
-    regions = reader::regions_to_read(out.paper, out.code);
-    std::stable_partition(regions.begin(), regions.end(), [&](const reader::LabelRegion& r) {
-      return !shared.belt_tried.any_over(on_belt(r, job.travel_px));
-    });
+    regions_whole = reader::regions_to_read(out.paper, out.code);
     options.budget_ms = decode_budget_ms(processing, shared, spent_ms);
+    const double ms_per_mpx = shared.decode_ms_per_mpx.load();
+    const auto tile_px = options.budget_ms > 0 && ms_per_mpx > 0
+                             ? static_cast<long long>(options.budget_ms / ms_per_mpx * 1e6)
+                             : 0LL;
+    tiles = reader::cut_to_tiles(regions_whole, image.motion_latent.height, tile_px);
+    std::stable_partition(tiles.begin(), tiles.end(), [&](const reader::RegionTile& t) {
+      return !shared.belt_tried.any_over(on_belt(t.tile, job.travel_px));
+    });
   }
+  std::vector<reader::LabelRegion> regions;
+  for (const reader::RegionTile& t : tiles) regions.push_back(t.tile);
   reader::CodeReading reading = reader::read_codes(image.latent(), regions, direction, options);
+  note_decode_rate(reading.readout, shared);
   // A window started counts as tried (the next frame starts with another); one
-  // not started or cut short with nothing read is left: not judged here.
+  // not started or cut short with nothing read leaves its region: not judged here.
   const std::vector<std::size_t>& unstarted = reading.readout.windows_left;
   const std::vector<std::size_t>& cut = reading.readout.windows_cut;
-  for (std::size_t i = 0; i < regions.size(); ++i) {
+  std::vector<bool> left(regions_whole.size(), false);
+  for (std::size_t i = 0; i < tiles.size(); ++i) {
     const bool started = std::find(unstarted.begin(), unstarted.end(), i) == unstarted.end();
-    if (started) shared.belt_tried.add(on_belt(regions[i], job.travel_px));
-    if (!started || std::find(cut.begin(), cut.end(), i) != cut.end())
-      out.left.push_back(regions[i]);
+    if (started) shared.belt_tried.add(on_belt(tiles[i].tile, job.travel_px));
+    if (!started || std::find(cut.begin(), cut.end(), i) != cut.end()) left[tiles[i].region] = true;
   }
+  for (std::size_t r = 0; r < regions_whole.size(); ++r)
+    if (left[r]) out.left.push_back(regions_whole[r]);
   out.readout = std::move(reading.readout);
   out.windows = reading.windows;
   return out;

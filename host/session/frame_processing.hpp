@@ -12,6 +12,7 @@
 
 #include "imaging/deblur.hpp"
 #include "imaging/flat_field.hpp"
+#include "reader/region_tiles.hpp"
 #include "session/pipeline.hpp"
 #include "session/second_pass.hpp"
 #include "session/session_config.hpp"
@@ -22,7 +23,11 @@ namespace flutterscan::session {
 struct WorkerShared {
   explicit WorkerShared(const SessionConfig& config)
       : last_blur_px(config.optics.nominal_blur_px),
-        second_pass(config.processing.second_pass_ms, config.processing.workers) {}
+        second_pass(config.processing.second_pass_ms, config.processing.workers),
+        decode_ms_per_mpx(config.processing.decode_area == reader::DecodeArea::kLabels
+                              ? reader::view_cost_ms_per_mpx(config.processing.symbologies,
+                                                             config.processing.try_rotate)
+                              : 0) {}
   /// The last confident blur estimate: read when a frame without an encoder has
   /// no edges along the motion, updated by each new estimate.
   std::atomic<double> last_blur_px;
@@ -37,6 +42,10 @@ struct WorkerShared {
   /// Where the first pass decoded windows lately on the belt: within a frame's
   /// decode budget, the regions not tried yet go first.
   BeltReads belt_tried;
+  /// What a window's first view has cost a megapixel lately, ms (from
+  /// reader::view_cost_ms_per_mpx() until frames say; 0 for decode area
+  /// "frame"): the first pass's decode cuts regions to its budget by it.
+  std::atomic<double> decode_ms_per_mpx;
 };
 
 /// \brief Whether a frame that left `waiting` frames in a queue of
