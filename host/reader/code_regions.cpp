@@ -26,6 +26,10 @@ constexpr int kMinCells = 6;
 /// seldom to look busy, and the code fell into pieces none of which holds it.
 constexpr int kJoinGap = 8 * kCell;
 
+/// bar_likeness()'s lag: bars run on this far; noise (each row deblurred on
+/// its own) and text's strokes (a letter's height, a few times this) less.
+constexpr int kLag = 8;
+
 /// Rows sampled: every kRowStep-th, each averaged with the row after it.
 constexpr int kRowStep = 4;
 
@@ -206,6 +210,39 @@ std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent) {
       }
   }
   return regions;
+}
+
+std::vector<double> bar_likeness(const imaging::Plane& latent,
+                                 std::span<const LabelRegion> regions) {
+  constexpr int kStep = 4;
+  std::vector<double> out;
+  for (const LabelRegion& r : regions) {
+    const int top = r.rows_measured() ? r.across_begin : 0;
+    const int bottom = r.rows_measured() ? r.across_end : latent.height;
+    const int x0 = std::max(1, r.begin), x1 = std::min(latent.width - 1, r.end);
+    const int y0 = std::max(1, top), y1 = std::min(latent.height - 1, bottom);
+    // Steps along the rows against the same kLag rows on, and across against kLag columns on.
+    double gx_cross = 0, gx_here = 0, gx_there = 0, gy_cross = 0, gy_here = 0, gy_there = 0;
+    for (int y = y0; y + kLag < y1; y += kStep)
+      for (int x = x0; x + kLag < x1; x += kStep) {
+        const double gx = latent.at(x + 1, y) - latent.at(x - 1, y);
+        const double gx_on = latent.at(x + 1, y + kLag) - latent.at(x - 1, y + kLag);
+        const double gy = latent.at(x, y + 1) - latent.at(x, y - 1);
+        const double gy_on = latent.at(x + kLag, y + 1) - latent.at(x + kLag, y - 1);
+        gx_cross += gx * gx_on;
+        gx_here += gx * gx;
+        gx_there += gx_on * gx_on;
+        gy_cross += gy * gy_on;
+        gy_here += gy * gy;
+        gy_there += gy_on * gy_on;
+      }
+    const double bars_across =
+        gx_here > 0 && gx_there > 0 ? gx_cross / std::sqrt(gx_here * gx_there) : 0;
+    const double bars_along =
+        gy_here > 0 && gy_there > 0 ? gy_cross / std::sqrt(gy_here * gy_there) : 0;
+    out.push_back(std::max({0.0, bars_across, bars_along}));
+  }
+  return out;
 }
 
 std::vector<LabelRegion> regions_to_read(std::span<const LabelRegion> paper,

@@ -30,6 +30,17 @@ namespace flutterscan::reader {
 /// first or last column.
 std::vector<LabelRegion> find_code_regions(const imaging::Plane& latent);
 
+/// \brief How much each of `regions` (of `latent`, motion frame) looks like a
+/// linear code, 0 to 1: the correlation of the steps along the rows with the
+/// same steps 8 rows on, or of the steps across the rows with those 8 columns
+/// on, whichever is the greater (every 4th px each way). Bars run on in their
+/// direction at any lean but the steepest, so their steps repeat 8 px on; a
+/// line of text's strokes are a letter high, and the deblur's noise, each row
+/// deblurred on its own, does not repeat from row to row. 0 where nothing
+/// changes.
+std::vector<double> bar_likeness(const imaging::Plane& latent,
+                                 std::span<const LabelRegion> regions);
+
 /// \brief Where to read: the paper runs, and the code regions that do not lie
 /// inside one of them (a run whose rows were not measured spans every row).
 std::vector<LabelRegion> regions_to_read(std::span<const LabelRegion> paper,

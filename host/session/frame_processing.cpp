@@ -4,6 +4,7 @@
 #include <cmath>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <utility>
 #include <vector>
 
@@ -247,9 +248,21 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
                              ? static_cast<long long>(options.budget_ms / ms_per_mpx * 1e6)
                              : 0LL;
     tiles = reader::cut_to_tiles(regions_whole, image.motion_latent.height, tile_px);
-    std::stable_partition(tiles.begin(), tiles.end(), [&](const reader::RegionTile& t) {
-      return !shared.belt_tried.any_over(on_belt(t.tile, job.travel_px));
+  }
+  // Within a budget: those no frame tried lately first, each group the most like a linear code
+  // first.
+  if (options.budget_ms > 0) {
+    std::vector<reader::LabelRegion> cut;
+    for (const reader::RegionTile& t : tiles) cut.push_back(t.tile);
+    const std::vector<double> likeness = reader::bar_likeness(image.motion_latent, cut);
+    std::vector<std::tuple<bool, double, reader::RegionTile>> ranked;
+    for (std::size_t i = 0; i < tiles.size(); ++i)
+      ranked.emplace_back(shared.belt_tried.any_over(on_belt(tiles[i].tile, job.travel_px)),
+                          -likeness[i], tiles[i]);
+    std::stable_sort(ranked.begin(), ranked.end(), [](const auto& a, const auto& b) {
+      return std::tie(std::get<0>(a), std::get<1>(a)) < std::tie(std::get<0>(b), std::get<1>(b));
     });
+    for (std::size_t i = 0; i < tiles.size(); ++i) tiles[i] = std::get<2>(ranked[i]);
   }
   std::vector<reader::LabelRegion> regions;
   for (const reader::RegionTile& t : tiles) regions.push_back(t.tile);

@@ -7,11 +7,13 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <random>
 #include <string>
 #include <vector>
 
 #include "reader/code_reading.hpp"
+#include "sim/scene.hpp"
 
 namespace flutterscan::reader {
 namespace {
@@ -170,6 +172,46 @@ TEST(CodeRegions, TheBeltBesideALabelInABandOfDeblurredRowsIsNotBusy) {
     EXPECT_GE(r.begin, 300 - 32) << r.begin << ".." << r.end;
     EXPECT_LE(r.end, 640 + 32) << r.begin << ".." << r.end;
   }
+}
+
+/// A `kind` scene ("code128", "qr", "text") of `content`, `width` x `height`, with noise of 0.02.
+imaging::Plane scene(sim::SceneKind kind, const std::string& content, int width, int height) {
+  sim::SceneSpec spec;
+  spec.kind = kind;
+  spec.content = content;
+  spec.width = width;
+  spec.height = height;
+  spec.module_px = 2.5;
+  auto plane = sim::render_scene(spec);
+  EXPECT_TRUE(plane.ok()) << plane.error();
+  add_noise(plane.value(), 0.02, 3);
+  return plane.value();
+}
+
+TEST(CodeRegions, BarsLookMoreLikeALinearCodeThanTextAMatrixCodeOrNoise) {
+  const int w = 480, h = 240;
+  const LabelRegion whole{0, w, false, 0, 0};
+  auto likeness = [&](const imaging::Plane& p) { return bar_likeness(p, {&whole, 1}).front(); };
+  const imaging::Plane bars = scene(sim::SceneKind::kCode128, "PARCEL-0042", w, h);
+  const imaging::Plane text = scene(sim::SceneKind::kText, "SHIP TO 4410 RIVERSIDE DR", w, h);
+  const imaging::Plane qr = scene(sim::SceneKind::kQr, "https://example.com/parcel/0042", w, h);
+  imaging::Plane noise(w, h, 0.5f);
+  add_noise(noise, 0.1, 5);
+  // The same bars turned a quarter: steps across the rows, repeating along them.
+  imaging::Plane turned(h, w);
+  for (int y = 0; y < w; ++y)
+    for (int x = 0; x < h; ++x) turned.at(x, y) = bars.at(y, h - 1 - x);
+  const LabelRegion turned_whole{0, h, false, 0, 0};
+  const double along = bar_likeness(turned, {&turned_whole, 1}).front();
+  std::printf("bar likeness: bars %.2f, turned %.2f, text %.2f, qr %.2f, noise %.2f\n",
+              likeness(bars), along, likeness(text), likeness(qr), likeness(noise));
+  EXPECT_GT(likeness(bars), 0.8);
+  EXPECT_GT(along, 0.8);
+  for (const double other : {likeness(text), likeness(qr), likeness(noise)})
+    EXPECT_LT(other, likeness(bars) - 0.2);
+  EXPECT_LT(likeness(noise), 0.1);
+  const imaging::Plane flat(w, h, 0.5f);
+  EXPECT_EQ(likeness(flat), 0.0);
 }
 
 }  // namespace
