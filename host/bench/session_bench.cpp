@@ -8,6 +8,8 @@
 //                 [--stage-repeats N]   (the stage table's runs, default 9; more for `perf`)
 //                 [--stage-electrons E] (the stage frame's light, e-; default the sim's 3000)
 //                 [--cascade]           (only the cascade against tv on every frame, dim light)
+//                 [--busy RUNS]         (only a belt printed all over: RUNS runs at 60 fps, and
+//                                        the same frames offline with every window decoded)
 //                 [--live-view]         (only the live view's cost: live_view_runs.hpp)
 //                 [--soak MINUTES]      (only memory over a long 60 fps session: soak_run.hpp)
 
@@ -26,6 +28,8 @@
 #include <vector>
 
 #include "bench/cpu_model.hpp"
+#include "bench/live_view_runs.hpp"
+#include "bench/soak_run.hpp"
 #include "capture/frame_pixels.hpp"
 #include "capture/sim_camera.hpp"
 #include "device/controller_client.hpp"
@@ -42,8 +46,6 @@
 #include "reader/code_reading.hpp"
 #include "reader/code_regions.hpp"
 #include "reader/reader_options.hpp"
-#include "bench/live_view_runs.hpp"
-#include "bench/soak_run.hpp"
 #include "session/frame_memory.hpp"
 #include "session/frame_processing.hpp"
 #include "session/read_record.hpp"
@@ -166,6 +168,65 @@ int cascade_against_tv(int width, int height, int frames, const fs::path& out) {
       else
         std::cout << "- | -";
       std::cout << " |\n" << std::flush;
+    }
+  }
+  fs::remove_all(out);
+  return 0;
+}
+
+/// Frames full of print: the sim line with its belt printed all over (belt=print),
+/// at 60 fps input on two workers with the decode budget (`runs` runs, paced,
+/// the line's config), against the same frames read offline with every window
+/// decoded (unpaced, a queue that drops nothing): objects read, the labels
+/// whole in a processed frame that were read, drops, latency p99, and the
+/// frames the budget cut (flag decode-budget).
+int busy_belt(int width, int height, int frames, int runs, const fs::path& out) {
+  std::cout << "frames full of print: the sim line, belt=print, " << width << "x" << height << ", "
+            << frames << " frames a run\n\n"
+            << "| e- | run | objects read | labels whole in a processed frame (sim truth), read | "
+               "dropped | latency p50, p99 ms | frames cut by the decode budget |\n"
+            << "|---|---|---|---|---|---|---|\n";
+  for (const double electrons : {300.0, 1000.0, 3000.0}) {
+    for (int run = 0; run <= runs; ++run) {
+      const bool offline = run == runs;
+      fs::remove_all(out);
+      session::SessionConfig c = bench_config(width, height, frames, !offline, 16667, out);
+      c.camera.options.push_back({"electrons", std::to_string(electrons)});
+      c.camera.options.push_back({"belt", "print"});
+      c.camera.options.push_back({"seed", std::to_string(run + 1)});
+      for (auto& [key, value] : c.camera.options)  // every frame rendered once: no object repeats
+        if (key == "ring_frames") value = std::to_string(frames);
+      c.optics.electrons = electrons;
+      if (offline) {
+        c.processing.decode_ms = session::kMaxDecodeMs;
+        c.processing.queue_depth = static_cast<std::size_t>(frames);
+      }
+      if (auto problem = session::check_config(c); !problem.empty()) {
+        std::cerr << "session_bench: " << problem << "\n";
+        return 1;
+      }
+      std::atomic<bool> stop{false};
+      const auto outcome = session::run_session(c, stop, {});
+      if (!outcome.error.empty()) {
+        std::cerr << "session_bench: busy: " << outcome.error << "\n";
+        return 1;
+      }
+      int cut = 0;
+      std::ifstream log(out / "session.jsonl");
+      for (std::string line; std::getline(log, line);) {
+        const auto j = nlohmann::json::parse(line, nullptr, false);
+        if (!j.is_discarded() && j.value("decode_left", 0) > 0) ++cut;
+      }
+      const auto& s = outcome.summary;
+      const auto truth = s.value("ground_truth", nlohmann::json::object());
+      std::cout << "| " << electrons << " | "
+                << (offline ? std::string("offline, every window")
+                            : "60 fps, " + std::to_string(run + 1))
+                << " | " << s["objects_read"] << " of " << s["objects"] << " | "
+                << truth.value("labels_fully_in_view", 0) << ", " << truth.value("labels_read", 0)
+                << " | " << s["frames_dropped"] << " | " << s["latency_ms_p50"] << ", "
+                << s["latency_ms_p99"] << " | " << cut << " |\n"
+                << std::flush;
     }
   }
   fs::remove_all(out);
@@ -365,6 +426,7 @@ int main(int argc, char** argv) {
   int stage_repeats = 9;
   double stage_electrons = 0;
   bool cascade_only = false;
+  int busy_runs = 0;
   bool live_view = false;
   double soak_minutes = 0;
   for (int i = 1; i < argc; ++i) {
@@ -392,6 +454,8 @@ int main(int argc, char** argv) {
       stage_electrons = std::atof(next().c_str());
     else if (arg == "--cascade")
       cascade_only = true;
+    else if (arg == "--busy")
+      busy_runs = std::atoi(next().c_str());
     else if (arg == "--live-view")
       live_view = true;
     else if (arg == "--soak")
@@ -412,6 +476,7 @@ int main(int argc, char** argv) {
       fs::temp_directory_path() / ("flutterscan_session_bench." + std::to_string(getpid()));
   std::cout << "CPU: " << bench::cpu_model() << "\n\n";
   if (cascade_only) return cascade_against_tv(width, height, std::min(frames, 120), out);
+  if (busy_runs > 0) return busy_belt(width, height, std::min(frames, 120), busy_runs, out);
   if (soak_minutes > 0) {
     const int soak_frames = static_cast<int>(soak_minutes * 60 * 60);
     auto config = bench_config(width, height, soak_frames, true, 16667, out);

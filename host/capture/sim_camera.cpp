@@ -1,6 +1,7 @@
 #include "capture/sim_camera.hpp"
 
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <charconv>
 #include <cmath>
@@ -164,6 +165,8 @@ class SimCamera final : public CameraSource {
 
   std::string start() override {
     if (auto problem = open(); !problem.empty()) return problem;
+    if (o_.belt == "print" && belt_print_.empty())
+      if (auto problem = render_belt_print(); !problem.empty()) return problem;
     counters_ = {};
     sequence_ = 0;
     delivered_ = 0;
@@ -444,12 +447,21 @@ class SimCamera final : public CameraSource {
         }
       }
       if (tile == nullptr) column_value = static_cast<float>(kBelt);
+      // The printed belt repeats every belt_print_.width px of belt; it shows
+      // wherever the belt does (around a tile's label too).
+      const double period = belt_print_.width;
+      const double b = belt_print_.empty() ? 0 : std::fmod(std::fmod(u, period) + period, period);
+      const int b0 = static_cast<int>(b), b1 = b0 + 1 < belt_print_.width ? b0 + 1 : 0;
+      const float g = static_cast<float>(b - b0);
       const int k0 = static_cast<int>(k);
       const float f = static_cast<float>(k - k0);
-      for (int y = 0; y < o_.height; ++y)
-        window.at(x, y) = tile == nullptr
-                              ? column_value
-                              : tile->plane.at(k0, y) * (1 - f) + tile->plane.at(k0 + 1, y) * f;
+      for (int y = 0; y < o_.height; ++y) {
+        float v = tile == nullptr ? column_value
+                                  : tile->plane.at(k0, y) * (1 - f) + tile->plane.at(k0 + 1, y) * f;
+        if (!belt_print_.empty() && v == static_cast<float>(kBelt))
+          v = belt_print_.at(b0, y) * (1 - g) + belt_print_.at(b1, y) * g;
+        window.at(x, y) = v;
+      }
     }
     // Labels a deblur can recover whole: the tile stays in view from the first
     // slot to the last, and starts at least one blur length from the upstream
@@ -541,7 +553,47 @@ class SimCamera final : public CameraSource {
     return tile;
   }
 
+  /// The printed belt (option belt=print): kPrintPeriod px of belt, four pieces
+  /// of text a band, bands of module 1.5, 2.5 and 3.5 px in turn (a piece at
+  /// most 21 characters: 3.5 px modules fill a quarter of the period), ink on
+  /// the belt's 0.35.
+  std::string render_belt_print() {
+    constexpr int kPrintPeriod = 2048;
+    static const std::array<std::string, 8> kLines = {
+        "FRAGILE THIS SIDE UP", "SHIP TO 4410 RIVER DR", "LOT 2026-11 B 88213",
+        "MADE IN EU 24x330 ml", "www.example.com/ret",   "KEEP DRY STACK 4",
+        "NET 12.4 kg",          "REF 00713 0800 123"};
+    belt_print_ = imaging::Plane(kPrintPeriod, o_.height, static_cast<float>(kBelt));
+    int line = 0;
+    // Each line in a band of its text's height and 8 px of belt above and below
+    // (the last band that does not fit left plain).
+    for (int y = 0;; ++line) {
+      const double module = 1.5 + (line % 3);
+      const int row_height = static_cast<int>(std::lround(module * 20)) + 16;
+      if (y + row_height > o_.height) break;
+      for (int x = 0; x < kPrintPeriod; x += kPrintPeriod / 4) {
+        sim::SceneSpec spec;
+        spec.kind = sim::SceneKind::kText;
+        spec.content =
+            kLines[static_cast<std::size_t>(line * 3 + x / (kPrintPeriod / 4)) % kLines.size()];
+        spec.module_px = module;
+        spec.width = kPrintPeriod / 4;
+        spec.height = row_height;
+        spec.paper = kBelt;
+        spec.belt = kBelt;
+        auto text = sim::render_scene(spec);
+        if (!text.ok()) return "camera sim: belt print: " + text.error();
+        for (int ty = 0; ty < row_height; ++ty)
+          for (int tx = 0; tx < spec.width; ++tx)
+            belt_print_.at(x + tx, y + ty) = text.value().at(tx, ty);
+      }
+      y += row_height;
+    }
+    return {};
+  }
+
   static constexpr double kBelt = 0.35;
+  imaging::Plane belt_print_;  ///< option belt=print; empty: a plain belt
 
   device::VirtualController& controller_;
   SimConveyorOptions o_;
@@ -667,6 +719,9 @@ std::string apply_sim_options(const std::vector<std::pair<std::string, std::stri
       }
       ok = ok && matrix.size() == 9;
       if (ok) o.crosstalk = matrix;
+    } else if (key == "belt") {
+      ok = value == "plain" || value == "print";
+      if (ok) o.belt = value;
     } else if (key == "pace_realtime") {
       ok = value == "true" || value == "false";
       o.pace_realtime = value == "true";

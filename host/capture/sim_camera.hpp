@@ -8,9 +8,9 @@
 // exposure events carry the true encoder delta. The frame is rendered through
 // host/sim's forward model (crosstalk, EMVA 1288 noise) as 16-bit RGB DN.
 //
-// Geometry: the belt moves toward +x; label i (0 first) starts at belt
-// coordinate -(i + 1) * pitch and is `tile_width` wide; image column x shows
-// belt coordinate x - travel, travel being the belt's motion since start.
+// Geometry: the belt (plain, or printed all over: option belt) moves toward +x; label i (0 first)
+// starts at belt coordinate -(i + 1) * pitch and is `tile_width` wide; image column x shows belt
+// coordinate x - travel, travel being the belt's motion since start.
 //
 // Ground truth (Frame::truth): the labels a deblur can recover whole, whose
 // tile stays in view through the exposure and starts at least one blur
@@ -73,6 +73,10 @@ struct SimConveyorOptions {
   int render_threads = 2;
   /// "labels" (the conveyor) or "white[:REFLECTANCE]" (a static white card).
   std::string target = "labels";
+  /// The belt between the labels: "plain" (reflectance 0.35) or "print": lines
+  /// of text in every row, of three sizes, dark on the belt's brown, moving with
+  /// it (a printed carton's sides; no code in them).
+  std::string belt = "plain";
   /// Static target only: relative light lost at the frame's corners (0..0.9).
   double falloff = 0;
 };

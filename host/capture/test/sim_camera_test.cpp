@@ -4,7 +4,10 @@
 #include "capture/sim_camera.hpp"
 
 #include <gtest/gtest.h>
+
+#include <cmath>
 #include <nlohmann/json.hpp>
+#include <vector>
 
 #include "capture/frame_pixels.hpp"
 #include "device/virtual_controller.hpp"
@@ -161,6 +164,46 @@ TEST(SimCamera, RefusesBadOptionsNamingThem) {
   EXPECT_NE(make_sim_camera(vc, o)->open().find("jitter"), std::string::npos);
 }
 
+/// Standard deviation of the row means of `channel` (DN): print in bands of
+/// rows shows there, noise averages out along each row.
+double row_means_spread(const imaging::Image& dn, int channel) {
+  const imaging::Plane& p = dn.channels[static_cast<std::size_t>(channel)];
+  std::vector<double> rows;
+  for (int y = 0; y < p.height; ++y) {
+    double sum = 0;
+    for (int x = 0; x < p.width; ++x) sum += p.at(x, y);
+    rows.push_back(sum / p.width);
+  }
+  double mean = 0, square = 0;
+  for (double r : rows) mean += r / rows.size();
+  for (double r : rows) square += (r - mean) * (r - mean) / rows.size();
+  return std::sqrt(square);
+}
+
+TEST(SimCamera, APrintedBeltShowsBandsOfPrintWhereThePlainOneIsFlat) {
+  // The first frame: no label has come into view yet, only belt.
+  double spread[2] = {0, 0};
+  for (const bool print : {false, true}) {
+    device::VirtualController vc;
+    arm(vc);
+    SimConveyorOptions o = small_options();
+    ASSERT_EQ(apply_sim_options({{"belt", print ? "print" : "plain"}}, o), "");
+    auto camera = make_sim_camera(vc, o);
+    ASSERT_EQ(camera->start(), "");
+    Frame frame;
+    std::string error;
+    ASSERT_EQ(camera->next_frame(frame, 1000ms, error), FrameWait::kFrame) << error;
+    EXPECT_TRUE(frame.truth.empty());
+    const auto dn = frame_to_dn(frame);
+    ASSERT_TRUE(dn.ok());
+    spread[print] = row_means_spread(dn.value(), 1);
+  }
+  EXPECT_LT(spread[0], 2.0);  // noise of ~20 DN a pixel, averaged over 640
+  EXPECT_GT(spread[1], 5 * spread[0] + 5.0);
+  SimConveyorOptions o;
+  EXPECT_NE(apply_sim_options({{"belt", "carpet"}}, o).find("belt"), std::string::npos);
+}
+
 /// Mean DN of `channel` over the frame's middle (a quarter of the width and height).
 double middle_mean(const imaging::Image& dn, int channel) {
   const imaging::Plane& p = dn.channels[static_cast<std::size_t>(channel)];
@@ -225,8 +268,11 @@ TEST(SimCamera, FalloffDimsTheCornersOfTheStaticTarget) {
   device::VirtualController vc;
   arm(vc);
   SimConveyorOptions o;
-  ASSERT_EQ(apply_sim_options({{"width", "200"}, {"height", "100"}, {"target", "white"},
-                               {"falloff", "0.3"}, {"read_noise", "0"}},
+  ASSERT_EQ(apply_sim_options({{"width", "200"},
+                               {"height", "100"},
+                               {"target", "white"},
+                               {"falloff", "0.3"},
+                               {"read_noise", "0"}},
                               o),
             "");
   auto camera = make_sim_camera(vc, o);
