@@ -1,5 +1,7 @@
 #include "reader/bar_pattern_fit.hpp"
 
+#include "imaging/bilinear.hpp"
+
 #include <ZXing/BarcodeFormat.h>
 #include <ZXing/BitMatrix.h>
 #include <ZXing/MultiFormatWriter.h>
@@ -122,19 +124,6 @@ std::vector<Modules> characters_allowed(bool bar_first, bool both_parities) {
     if (both_parities) add({w[3], w[2], w[1], w[0]});
   }
   return out;
-}
-
-/// Bilinear value at (x, y), nullopt outside the plane (not clamped: a
-/// deblurred latent overshoots).
-std::optional<double> sample(const imaging::Plane& p, double x, double y) {
-  if (!(x >= 0 && y >= 0 && x <= p.width - 1 && y <= p.height - 1) || p.width < 2 || p.height < 2)
-    return std::nullopt;
-  const int x0 = std::min(static_cast<int>(x), p.width - 2);
-  const int y0 = std::min(static_cast<int>(y), p.height - 2);
-  const double fx = x - x0, fy = y - y0;
-  const double top = p.at(x0, y0) * (1 - fx) + p.at(x0 + 1, y0) * fx;
-  const double bottom = p.at(x0, y0 + 1) * (1 - fx) + p.at(x0 + 1, y0 + 1) * fx;
-  return top * (1 - fy) + bottom * fy;
 }
 
 /// Where the symbol's modules lie along the line and how blurred: its first
@@ -700,7 +689,7 @@ BarPatternFit fit_bar_pattern(const imaging::Plane& latent, const DecodedCode& c
   Profile profile;
   profile.span = span;
   for (double t = -margin; t <= span + margin; t += 1) {
-    const auto v = sample(latent, lx + t * ux, ly + t * uy);
+    const auto v = imaging::bilinear(latent, lx + t * ux, ly + t * uy);
     if (v) {
       if (profile.values.empty()) profile.t0 = t;
       profile.values.push_back(*v);

@@ -1,5 +1,7 @@
 #include "reader/code_measure.hpp"
 
+#include "imaging/bilinear.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -28,17 +30,12 @@ CodePoint midpoint(CodePoint a, CodePoint b) {
   return 0.5 * (a + b);
 }
 
-/// Bilinear reflectance at (x, y); nullopt outside the image.
+/// The reflectance at `p` (imaging::bilinear, clamped to [0, 1]: a deblurred
+/// latent's overshoot is no reflectance ISO/IEC 15416 grades); nullopt off the image.
 std::optional<double> sample(const imaging::Plane& latent, CodePoint p) {
-  if (!(p.x >= 0 && p.y >= 0 && p.x <= latent.width - 1 && p.y <= latent.height - 1))
-    return std::nullopt;
-  const int x0 = std::min(static_cast<int>(p.x), latent.width - 2 < 0 ? 0 : latent.width - 2);
-  const int y0 = std::min(static_cast<int>(p.y), latent.height - 2 < 0 ? 0 : latent.height - 2);
-  const int x1 = std::min(x0 + 1, latent.width - 1), y1 = std::min(y0 + 1, latent.height - 1);
-  const double fx = p.x - x0, fy = p.y - y0;
-  const double top = latent.at(x0, y0) * (1 - fx) + latent.at(x1, y0) * fx;
-  const double bottom = latent.at(x0, y1) * (1 - fx) + latent.at(x1, y1) * fx;
-  return std::clamp(top * (1 - fy) + bottom * fy, 0.0, 1.0);
+  const auto v = imaging::bilinear(latent, p.x, p.y);
+  if (!v) return std::nullopt;
+  return std::clamp(*v, 0.0, 1.0);
 }
 
 /// ISO/IEC 15416's grade thresholds (4 = A ... 0 = F) for a parameter that is
