@@ -7,6 +7,7 @@
 #include "imaging/frame_conversion.hpp"
 #include "imaging/motion_frame.hpp"
 #include "reader/assertion_guard.hpp"
+#include "reader/ean_upc_layout.hpp"
 #include "reader/read_evidence.hpp"
 #include "reader/zbar_reader.hpp"
 
@@ -497,8 +498,7 @@ bool quiet_zones_clear(const DecodedCode& code, const imaging::Plane& latent) {
   // Each end (0: left, 1: right): from the symbol's edge on each line, away from it along the line.
   for (const int end : {0, 1}) {
     // An EAN/UPC's add-on may follow its right end: less of that side judged.
-    const bool add_on_side =
-        end == 1 && (code.format.starts_with("EAN") || code.format.starts_with("UPC"));
+    const bool add_on_side = end == 1 && is_ean_upc(code.format);
     const int steps = static_cast<int>(
         std::ceil((add_on_side ? kAddOnQuietModules : kQuietModules) * q.module_px));
     std::vector<double> profile(static_cast<std::size_t>(steps), 0.0);

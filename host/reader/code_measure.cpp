@@ -1,6 +1,7 @@
 #include "reader/code_measure.hpp"
 
 #include "imaging/bilinear.hpp"
+#include "reader/ean_upc_layout.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -125,10 +126,9 @@ std::vector<Element> elements(const std::vector<double>& p, double threshold, do
 /// Elements (bars and spaces, first bar to last) and modules of every symbol of
 /// `format`, for the symbologies of one length; {0, 0} for the others.
 std::pair<std::size_t, int> fixed_structure(const std::string& format) {
-  if (format == "EAN-13" || format == "UPC-A") return {59, 95};
-  if (format == "EAN-8") return {43, 67};
-  if (format == "UPC-E") return {33, 51};
-  return {0, 0};
+  const std::optional<EanUpcLayout> layout = ean_upc_layout(format);
+  if (!layout) return {0, 0};
+  return {layout->elements, layout->modules};
 }
 
 /// Modules of a linear symbol of `format` with `count` elements, where the
