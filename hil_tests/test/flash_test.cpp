@@ -8,6 +8,8 @@
 #include <filesystem>
 #include <fstream>
 #include <random>
+#include <string>
+#include <vector>
 
 #include "hil_run.hpp"
 
@@ -50,48 +52,40 @@ void expect_flashed(const HarnessRun& run, std::size_t transfer = 1024) {
             static_cast<int>((kImageSize + transfer - 1) / transfer) + 1);
 }
 
-TEST(HilFlash, DfuUtilDownloadsThroughDetachAndManifest) {
-  const auto dir = make_work_dir("dfu_util");
+/// Stock dfu-util flashes a new image through detach, download and manifest,
+/// in blocks of `transfer` bytes (its -t; 0: its default, the bootloader's
+/// 1024), in work directory `name`.
+void expect_dfu_util_flashes(const std::string& name, std::size_t transfer = 0) {
+  const auto dir = make_work_dir(name);
   const auto image = make_image(dir, "app020.bin");
-  const auto run = run_harness({"--timeout-s", "90"},
-                               {DFU_UTIL, "-d", "1209:0001,1209:0002", "-D", image, "-R"}, dir);
+  std::vector<std::string> dfu_util{DFU_UTIL, "-d", "1209:0001,1209:0002", "-D", image, "-R"};
+  if (transfer != 0) dfu_util.insert(dfu_util.begin() + 3, {"-t", std::to_string(transfer)});
+  const auto run = run_harness({"--timeout-s", "90"}, dfu_util, dir);
   if (run.exit_code == 77) GTEST_SKIP() << run.output;
   // dfu-util 0.11 returns libusb's LIBUSB_ERROR_NOT_FOUND (-5 -> 251) when the
   // final reset makes the device re-enumerate as the application, as it does
   // with real hardware; "Done!" says the download and manifest succeeded.
   EXPECT_TRUE(run.exit_code == 0 || run.exit_code == 251) << run.output;
   EXPECT_NE(run.output.find("Done!"), std::string::npos) << run.output;
-  expect_flashed(run);
+  expect_flashed(run, transfer == 0 ? 1024 : transfer);
+}
+
+TEST(HilFlash, DfuUtilDownloadsThroughDetachAndManifest) {
+  expect_dfu_util_flashes("dfu_util");
 }
 
 // Issue 15 finding 8: the bootloader placed block n at n x 1024, so a host
 // using a smaller transfer size (dfu-util -t 512) left gaps and was refused at
 // the manifest. Blocks now go where the bytes received so far end.
 TEST(HilFlash, DfuUtilWith512ByteTransfersDownloadsAContiguousImage) {
-  const auto dir = make_work_dir("dfu_util_t512");
-  const auto image = make_image(dir, "app020.bin");
-  const auto run =
-      run_harness({"--timeout-s", "90"},
-                  {DFU_UTIL, "-d", "1209:0001,1209:0002", "-t", "512", "-D", image, "-R"}, dir);
-  if (run.exit_code == 77) GTEST_SKIP() << run.output;
-  EXPECT_TRUE(run.exit_code == 0 || run.exit_code == 251) << run.output;
-  EXPECT_NE(run.output.find("Done!"), std::string::npos) << run.output;
-  expect_flashed(run, 512);
+  expect_dfu_util_flashes("dfu_util_t512", 512);
 }
 
 // Issue 46 defect 6: with -t 1022 every block after the first starts at an
 // address that is not a multiple of 4, which the product's flash programming
 // refuses (and now the simulated flash too); the bootloader programs whole words.
 TEST(HilFlash, DfuUtilWith1022ByteTransfersDownloadsTheImage) {
-  const auto dir = make_work_dir("dfu_util_t1022");
-  const auto image = make_image(dir, "app020.bin");
-  const auto run =
-      run_harness({"--timeout-s", "90"},
-                  {DFU_UTIL, "-d", "1209:0001,1209:0002", "-t", "1022", "-D", image, "-R"}, dir);
-  if (run.exit_code == 77) GTEST_SKIP() << run.output;
-  EXPECT_TRUE(run.exit_code == 0 || run.exit_code == 251) << run.output;
-  EXPECT_NE(run.output.find("Done!"), std::string::npos) << run.output;
-  expect_flashed(run, 1022);
+  expect_dfu_util_flashes("dfu_util_t1022", 1022);
 }
 
 TEST(HilFlash, FlutterscanFlashUpdatesTheApplication) {

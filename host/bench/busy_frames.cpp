@@ -261,7 +261,7 @@ int run(const Options& o) {
                 << median(stage["decode"]) << " | " << before_decode + median(stage["decode"])
                 << " | " << median(stage["second_pass"]) << " | "
                 << before_decode + median(stage["decode"]) + median(stage["second_pass"]) << " | "
-                << read.windows << " | " << read.log.value("decode_left", 0) << " | "
+                << read.windows() << " | " << read.log.value("decode_left", 0) << " | "
                 << (values.empty() ? "none" : values) << " |\n"
                 << std::defaultfloat << std::flush;
     }

@@ -241,7 +241,8 @@ std::optional<imaging::Image> kept_frame(const fs::path& path) {
   return dn;
 }
 
-/// `flutterscan deblur --decode`'s reading of a frame (its picture beyond the windows aside).
+/// `flutterscan deblur --decode`'s reading of a frame (its picture beyond the windows aside),
+/// its log the session's shape: the second pass's line under "second_pass".
 bench::SessionRead cascade_read(const imaging::Image& dn, imaging::CaptureModel model,
                                 const session::SecondPassTries& tries) {
   auto frame = imaging::MotionFrame::make(imaging::dn_to_electrons(dn, model), model.direction);
@@ -266,7 +267,7 @@ bench::SessionRead cascade_read(const imaging::Image& dn, imaging::CaptureModel 
   bench::SessionRead read;
   read.readout = session::read_with_cascade({frame.value(), model, motion_latent, &camera_latent},
                                             imaging::Plane{}, reader_options, tries, log);
-  read.windows = 1 + static_cast<int>(log.value("windows", nlohmann::json::array()).size());
+  read.log["second_pass"] = std::move(log);  // as a session's line holds it
   return read;
 }
 
@@ -413,7 +414,7 @@ int run(const Options& o) {
                                !subject.text.empty(),
                                false,
                                subject.original_reads};
-                  run.windows = read.windows;
+                  run.windows = read.windows();
                   run.ms = std::chrono::duration<double, std::milli>(
                                std::chrono::steady_clock::now() - t0)
                                .count();

@@ -51,6 +51,14 @@ SessionLine::SessionLine(int width, int height, double blur_px, double electrons
   model_ = std::move(model.value());
 }
 
+int SessionRead::windows() const {
+  if (log.contains("error")) return 0;
+  int n = log.value("decode_windows", 1);
+  if (log.contains("second_pass") && log["second_pass"].contains("windows"))
+    n += static_cast<int>(log["second_pass"]["windows"].size());
+  return n;
+}
+
 SessionRead SessionLine::read(const imaging::Image& dn) const {
   session::FrameJob job;
   job.event = event(config_, encoder_counts_);
@@ -76,9 +84,6 @@ SessionRead SessionLine::read(const imaging::Image& dn) const {
   reader::BarcodeReadout& readout = read.readout;
   for (const session::Sighting& s : out.sightings)
     if (s.decoded) readout.codes.push_back(s.code);
-  read.windows = out.log.value("decode_windows", 1);
-  if (out.log.contains("second_pass") && out.log["second_pass"].contains("windows"))
-    read.windows += static_cast<int>(out.log["second_pass"]["windows"].size());
   for (const auto& logged : out.log.value("unconfirmed", nlohmann::json::array())) {
     reader::DecodedCode code;
     code.text = logged.at("text").get<std::string>();

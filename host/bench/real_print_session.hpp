@@ -23,9 +23,12 @@ struct SessionRead {
   /// Its codes, each as its sighting reports it (value, format, decoder, pass),
   /// and the values it logged as unconfirmed (value, format, decoder, pass).
   reader::BarcodeReadout readout;
-  /// The windows it decoded: the first pass's (1: the whole frame) and the second pass's.
-  int windows = 0;
   nlohmann::json log;  ///< the frame's line of session.jsonl (times_ms: its stages)
+
+  /// \brief The windows it decoded, from its log: the first pass's (decode_windows;
+  /// 1, the whole frame, where it has none) and the second pass's; none where the
+  /// session stopped on the frame (its log's error).
+  int windows() const;
 };
 
 /// \brief The second-pass credit a line's `workers` leave each frame at `fps` frames a

@@ -1,5 +1,8 @@
 #include "reader/bar_pattern_fit.hpp"
 
+#include "imaging/bilinear.hpp"
+#include "reader/ean_upc_layout.hpp"
+
 #include <ZXing/BarcodeFormat.h>
 #include <ZXing/BitMatrix.h>
 #include <ZXing/MultiFormatWriter.h>
@@ -20,61 +23,25 @@
 namespace flutterscan::reader {
 namespace {
 
-/// The widths of the ten EAN/UPC "L" characters (digits 0-9; space, bar,
-/// space, bar: ISO/IEC 15420). An "R" character has the same widths starting
-/// with a bar, a "G" character them reversed starting with a space.
-constexpr std::array<std::array<int, 4>, 10> kLWidths = {{{3, 2, 1, 1},
-                                                          {2, 2, 2, 1},
-                                                          {2, 1, 2, 2},
-                                                          {1, 4, 1, 1},
-                                                          {1, 1, 3, 2},
-                                                          {1, 2, 3, 1},
-                                                          {1, 1, 1, 4},
-                                                          {1, 3, 1, 2},
-                                                          {1, 2, 1, 3},
-                                                          {3, 1, 1, 2}}};
-constexpr int kCharacterModules = 7;
-/// An EAN-13's guards: the modules that are bars, and the spaces between them.
-constexpr std::array<int, 6> kGuardBars = {0, 2, 46, 48, 92, 94};
-constexpr std::array<int, 5> kGuardSpaces = {1, 45, 47, 49, 93};
 /// The places read_ean13_by_fit() tries, best first.
 constexpr std::size_t kPlacesTried = 5;
 
 using Modules = std::vector<std::uint8_t>;  ///< 1: bar
 
-/// Where an EAN/UPC symbol's characters lie: the module each starts at, and
-/// whether a left-half character may take either parity (EAN-13's first digit
-/// is told by its left half's parities; UPC-A is an EAN-13 that starts with 0,
-/// judged the same way).
-struct Layout {
-  int modules = 0;
-  std::vector<int> starts;
-  int left_characters = 0;
-  bool both_parities = false;
+/// A symbology the fit reads (EAN-13, UPC-A, EAN-8): its layout and ZXing's
+/// writer for it. EAN-13's first digit is told by its left half's parities;
+/// UPC-A is an EAN-13 that starts with 0, judged the same way.
+struct Layout : EanUpcLayout {
   ZXing::BarcodeFormat writer_format = ZXing::BarcodeFormat::None;
 };
 
 std::optional<Layout> layout_of(const std::string& format) {
-  Layout l;
-  int per_half = 0;
-  if (format == "EAN-13" || format == "UPC-A") {
-    per_half = 6;
-    l.both_parities = true;
-    l.writer_format = format == "EAN-13" ? ZXing::BarcodeFormat::EAN13 : ZXing::BarcodeFormat::UPCA;
-  } else if (format == "EAN-8") {
-    per_half = 4;
-    l.writer_format = ZXing::BarcodeFormat::EAN8;
-  } else {
-    return std::nullopt;
-  }
-  // Start guard (3 modules), the left half, the centre guard (5), the right half, the end guard
-  // (3).
-  l.modules = 3 + 2 * per_half * kCharacterModules + 5 + 3;
-  l.left_characters = per_half;
-  for (int i = 0; i < per_half; ++i) l.starts.push_back(3 + i * kCharacterModules);
-  for (int i = 0; i < per_half; ++i)
-    l.starts.push_back(3 + per_half * kCharacterModules + 5 + i * kCharacterModules);
-  return l;
+  const ZXing::BarcodeFormat writer = format == "EAN-13"  ? ZXing::BarcodeFormat::EAN13
+                                      : format == "UPC-A" ? ZXing::BarcodeFormat::UPCA
+                                      : format == "EAN-8" ? ZXing::BarcodeFormat::EAN8
+                                                          : ZXing::BarcodeFormat::None;
+  if (writer == ZXing::BarcodeFormat::None) return std::nullopt;
+  return Layout{{*ean_upc_layout(format)}, writer};
 }
 
 /// The read value's modules, ZXing's writer's (empty if it refuses the value).
@@ -91,19 +58,6 @@ Modules modules_of(const Layout& layout, const std::string& text) {
   }
 }
 
-/// The left half's parities (L or G, 1 for G) of an EAN-13 of each first
-/// digit (ISO/IEC 15420).
-constexpr std::array<std::array<int, 6>, 10> kFirstDigitParities = {{{0, 0, 0, 0, 0, 0},
-                                                                     {0, 0, 1, 0, 1, 1},
-                                                                     {0, 0, 1, 1, 0, 1},
-                                                                     {0, 0, 1, 1, 1, 0},
-                                                                     {0, 1, 0, 0, 1, 1},
-                                                                     {0, 1, 1, 0, 0, 1},
-                                                                     {0, 1, 1, 1, 0, 0},
-                                                                     {0, 1, 0, 1, 0, 1},
-                                                                     {0, 1, 0, 1, 1, 0},
-                                                                     {0, 1, 1, 0, 1, 0}}};
-
 /// The characters allowed at a place: the L widths from a space (left half) or
 /// a bar (right half), and the G widths too where `both_parities`.
 std::vector<Modules> characters_allowed(bool bar_first, bool both_parities) {
@@ -117,24 +71,11 @@ std::vector<Modules> characters_allowed(bool bar_first, bool both_parities) {
     }
     out.push_back(std::move(m));
   };
-  for (const auto& w : kLWidths) {
+  for (const auto& w : kEanLWidths) {
     add(w);
     if (both_parities) add({w[3], w[2], w[1], w[0]});
   }
   return out;
-}
-
-/// Bilinear value at (x, y), nullopt outside the plane (not clamped: a
-/// deblurred latent overshoots).
-std::optional<double> sample(const imaging::Plane& p, double x, double y) {
-  if (!(x >= 0 && y >= 0 && x <= p.width - 1 && y <= p.height - 1) || p.width < 2 || p.height < 2)
-    return std::nullopt;
-  const int x0 = std::min(static_cast<int>(x), p.width - 2);
-  const int y0 = std::min(static_cast<int>(y), p.height - 2);
-  const double fx = x - x0, fy = y - y0;
-  const double top = p.at(x0, y0) * (1 - fx) + p.at(x0 + 1, y0) * fx;
-  const double bottom = p.at(x0, y0 + 1) * (1 - fx) + p.at(x0 + 1, y0 + 1) * fx;
-  return top * (1 - fy) + bottom * fy;
 }
 
 /// Where the symbol's modules lie along the line and how blurred: its first
@@ -309,7 +250,7 @@ std::vector<CharacterChoice> compare_characters(const Profile& p, const Layout& 
   for (std::size_t i = 0; i < layout.starts.size(); ++i) {
     const auto first = static_cast<std::size_t>(layout.starts[i]);
     const bool left = static_cast<int>(i) < layout.left_characters;
-    const double a = edges[first] - reach, b = edges[first + kCharacterModules] + reach;
+    const double a = edges[first] - reach, b = edges[first + kEanCharacterModules] + reach;
     const auto k0 = static_cast<std::size_t>(std::clamp(std::floor(a - p.t0), 0.0, n));
     const auto k1 = static_cast<std::size_t>(std::clamp(std::ceil(b - p.t0) + 1, 0.0, n));
     CharacterChoice choice;
@@ -324,7 +265,8 @@ std::vector<CharacterChoice> compare_characters(const Profile& p, const Layout& 
         choice.other = ch;
       }
     }
-    std::copy(modules.begin() + at, modules.begin() + at + kCharacterModules, trial.begin() + at);
+    std::copy(modules.begin() + at, modules.begin() + at + kEanCharacterModules,
+              trial.begin() + at);
     out.push_back(std::move(choice));
   }
   return out;
@@ -339,7 +281,7 @@ double noise_of(const Profile& p, const Fit& fit) {
 /// guards, and characters to start from.
 Modules ean13_start(const Layout& layout) {
   Modules m(static_cast<std::size_t>(layout.modules), 0);
-  for (const int i : kGuardBars) m[static_cast<std::size_t>(i)] = 1;
+  for (const int i : layout.guard_bars) m[static_cast<std::size_t>(i)] = 1;
   const Modules left = characters_allowed(false, false)[0],
                 right = characters_allowed(true, false)[0];
   for (std::size_t i = 0; i < layout.starts.size(); ++i) {
@@ -369,7 +311,7 @@ std::string ean13_text(const Layout& layout, const Modules& modules) {
     if (is_left) parities[i] = static_cast<int>(index % 2);
   }
   for (int first = 0; first < 10; ++first)
-    if (kFirstDigitParities[static_cast<std::size_t>(first)] == parities)
+    if (kEan13FirstDigitParities[static_cast<std::size_t>(first)] == parities)
       return static_cast<char>('0' + first) + digits;
   return "";
 }
@@ -437,7 +379,8 @@ std::vector<std::pair<double, double>> ean13_places(const Layout& layout,
   struct Place {
     double score, begin, module;
   };
-  std::array<double, 95> centre{};
+  const auto n = static_cast<std::size_t>(layout.modules);
+  std::vector<double> centre(n);
   // A straight line through points (u, v): its values at u = 0 and 1.
   struct Line {
     double n = 0, su = 0, suu = 0, sv = 0, suv = 0;
@@ -455,7 +398,7 @@ std::vector<std::pair<double, double>> ean13_places(const Layout& layout,
       return {at0, at0 + slope};
     }
   };
-  std::array<double, 95> dark{}, light{};
+  std::vector<double> dark(n), light(n);
   auto score = [&](double begin, double module) {
     for (std::size_t i = 0; i < centre.size(); ++i)
       centre[i] = at(begin + (static_cast<double>(i) + 0.5) * module);
@@ -463,13 +406,13 @@ std::vector<std::pair<double, double>> ean13_places(const Layout& layout,
     // the bars' through the guards' bars, the paper's through the guards'
     // spaces and the quiet zones (a label lit unevenly).
     Line bars, paper;
-    auto u_of = [](double module_index) { return (module_index + 0.5) / 95; };
-    for (const int i : kGuardBars) bars.add(u_of(i), centre[static_cast<std::size_t>(i)]);
-    for (const int i : kGuardSpaces) paper.add(u_of(i), centre[static_cast<std::size_t>(i)]);
+    auto u_of = [&](double module_index) { return (module_index + 0.5) / layout.modules; };
+    for (const int i : layout.guard_bars) bars.add(u_of(i), centre[static_cast<std::size_t>(i)]);
+    for (const int i : layout.guard_spaces) paper.add(u_of(i), centre[static_cast<std::size_t>(i)]);
     std::array<std::pair<double, bool>, 10> quiet{};  // the sample, and whether it is on the right
     int n_quiet = 0;
     for (int q = 1; q <= 5; ++q)
-      for (const int m : {-q, 94 + q}) {
+      for (const int m : {-q, layout.modules - 1 + q}) {
         const double x = begin + (m + 0.5) * module;
         if (x < 0 || x > last) continue;
         quiet[static_cast<std::size_t>(n_quiet++)] = {at(x), m > 0};
@@ -488,11 +431,11 @@ std::vector<std::pair<double, double>> ean13_places(const Layout& layout,
       return e * e;
     };
     double residual = 0;
-    for (const int i : kGuardBars) {
+    for (const int i : layout.guard_bars) {
       const auto k = static_cast<std::size_t>(i);
       residual += miss(k, centre[k], 1);
     }
-    for (const int i : kGuardSpaces) {
+    for (const int i : layout.guard_spaces) {
       const auto k = static_cast<std::size_t>(i);
       residual += miss(k, centre[k], 0);
     }
@@ -517,7 +460,7 @@ std::vector<std::pair<double, double>> ean13_places(const Layout& layout,
   };
   std::vector<Place> coarse;
   for (double module = 1.2; module <= 6.0; module *= 1.03)
-    for (double begin = from; begin + 95 * module <= to; begin += 2)
+    for (double begin = from; begin + layout.modules * module <= to; begin += 2)
       coarse.push_back({score(begin, module), begin, module});
   const std::size_t refined = std::min(coarse.size(), 8 * count);
   std::partial_sort(coarse.begin(), coarse.begin() + static_cast<std::ptrdiff_t>(refined),
@@ -527,7 +470,7 @@ std::vector<std::pair<double, double>> ean13_places(const Layout& layout,
     for (const double m : {0.99, 1.0, 1.01})
       for (const double db : {-1.0, 0.0, 1.0}) {
         const double module = coarse[i].module * m, begin = coarse[i].begin + db;
-        if (begin >= from && begin + 95 * module <= to)
+        if (begin >= from && begin + layout.modules * module <= to)
           places.push_back({score(begin, module), begin, module});
       }
   std::sort(places.begin(), places.end(),
@@ -536,10 +479,10 @@ std::vector<std::pair<double, double>> ean13_places(const Layout& layout,
   for (const Place& p : places) {
     if (out.size() >= count) break;
     const bool near = std::any_of(out.begin(), out.end(), [&](const auto& o) {
-      const double module = (o.second - o.first) / 95;
+      const double module = (o.second - o.first) / layout.modules;
       return std::abs(p.begin - o.first) < 3 * module && std::abs(p.module / module - 1) < 0.05;
     });
-    if (!near) out.emplace_back(p.begin, p.begin + 95 * p.module);
+    if (!near) out.emplace_back(p.begin, p.begin + layout.modules * p.module);
   }
   return out;
 }
@@ -700,7 +643,7 @@ BarPatternFit fit_bar_pattern(const imaging::Plane& latent, const DecodedCode& c
   Profile profile;
   profile.span = span;
   for (double t = -margin; t <= span + margin; t += 1) {
-    const auto v = sample(latent, lx + t * ux, ly + t * uy);
+    const auto v = imaging::bilinear(latent, lx + t * ux, ly + t * uy);
     if (v) {
       if (profile.values.empty()) profile.t0 = t;
       profile.values.push_back(*v);

@@ -3,9 +3,11 @@
 
 #include "reader/barcode_reader.hpp"
 
+#include "imaging/bilinear.hpp"
 #include "imaging/frame_conversion.hpp"
 #include "imaging/motion_frame.hpp"
 #include "reader/assertion_guard.hpp"
+#include "reader/ean_upc_layout.hpp"
 #include "reader/read_evidence.hpp"
 #include "reader/zbar_reader.hpp"
 
@@ -22,6 +24,7 @@
 #include <cmath>
 #include <cstdint>
 #include <numbers>
+#include <optional>
 #include <stdexcept>
 #include <utility>
 
@@ -498,21 +501,11 @@ bool quiet_zones_clear(const DecodedCode& code, const imaging::Plane& latent) {
   auto lerp = [](const CodePoint& a, const CodePoint& b, double t) {
     return CodePoint{a.x + (b.x - a.x) * t, a.y + (b.y - a.y) * t};
   };
-  auto sample = [&](double x, double y, double& value) {
-    if (x < 0 || y < 0 || x > latent.width - 1 || y > latent.height - 1) return false;
-    const int ix = std::min(static_cast<int>(x), latent.width - 2);
-    const int iy = std::min(static_cast<int>(y), latent.height - 2);
-    const double fx = x - ix, fy = y - iy;
-    value = (1 - fy) * ((1 - fx) * latent.at(ix, iy) + fx * latent.at(ix + 1, iy)) +
-            fy * ((1 - fx) * latent.at(ix, iy + 1) + fx * latent.at(ix + 1, iy + 1));
-    return true;
-  };
   const CodeCorners& c = q.corners;
   // Each end (0: left, 1: right): from the symbol's edge on each line, away from it along the line.
   for (const int end : {0, 1}) {
     // An EAN/UPC's add-on may follow its right end: less of that side judged.
-    const bool add_on_side =
-        end == 1 && (code.format.starts_with("EAN") || code.format.starts_with("UPC"));
+    const bool add_on_side = end == 1 && is_ean_upc(code.format);
     const int steps = static_cast<int>(
         std::ceil((add_on_side ? kAddOnQuietModules : kQuietModules) * q.module_px));
     std::vector<double> profile(static_cast<std::size_t>(steps), 0.0);
@@ -524,9 +517,10 @@ bool quiet_zones_clear(const DecodedCode& code, const imaging::Plane& latent) {
       const double ux = dx / length, uy = dy / length, away = end == 0 ? -1.0 : 1.0;
       const CodePoint& from = end == 0 ? left : right;
       for (int i = 0; i < steps && inside; ++i) {
-        double v = 0;
-        inside = sample(from.x + away * ux * (i + 1), from.y + away * uy * (i + 1), v);
-        profile[static_cast<std::size_t>(i)] += v / 3;
+        const auto v =
+            imaging::bilinear(latent, from.x + away * ux * (i + 1), from.y + away * uy * (i + 1));
+        inside = v.has_value();
+        profile[static_cast<std::size_t>(i)] += v.value_or(0.0) / 3;
       }
     }
     if (!inside) continue;

@@ -1,5 +1,8 @@
 #include "reader/code_measure.hpp"
 
+#include "imaging/bilinear.hpp"
+#include "reader/ean_upc_layout.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <complex>
@@ -28,17 +31,12 @@ CodePoint midpoint(CodePoint a, CodePoint b) {
   return 0.5 * (a + b);
 }
 
-/// Bilinear reflectance at (x, y); nullopt outside the image.
+/// The reflectance at `p` (imaging::bilinear, clamped to [0, 1]: a deblurred
+/// latent's overshoot is no reflectance ISO/IEC 15416 grades); nullopt off the image.
 std::optional<double> sample(const imaging::Plane& latent, CodePoint p) {
-  if (!(p.x >= 0 && p.y >= 0 && p.x <= latent.width - 1 && p.y <= latent.height - 1))
-    return std::nullopt;
-  const int x0 = std::min(static_cast<int>(p.x), latent.width - 2 < 0 ? 0 : latent.width - 2);
-  const int y0 = std::min(static_cast<int>(p.y), latent.height - 2 < 0 ? 0 : latent.height - 2);
-  const int x1 = std::min(x0 + 1, latent.width - 1), y1 = std::min(y0 + 1, latent.height - 1);
-  const double fx = p.x - x0, fy = p.y - y0;
-  const double top = latent.at(x0, y0) * (1 - fx) + latent.at(x1, y0) * fx;
-  const double bottom = latent.at(x0, y1) * (1 - fx) + latent.at(x1, y1) * fx;
-  return std::clamp(top * (1 - fy) + bottom * fy, 0.0, 1.0);
+  const auto v = imaging::bilinear(latent, p.x, p.y);
+  if (!v) return std::nullopt;
+  return std::clamp(*v, 0.0, 1.0);
 }
 
 /// ISO/IEC 15416's grade thresholds (4 = A ... 0 = F) for a parameter that is
@@ -128,10 +126,9 @@ std::vector<Element> elements(const std::vector<double>& p, double threshold, do
 /// Elements (bars and spaces, first bar to last) and modules of every symbol of
 /// `format`, for the symbologies of one length; {0, 0} for the others.
 std::pair<std::size_t, int> fixed_structure(const std::string& format) {
-  if (format == "EAN-13" || format == "UPC-A") return {59, 95};
-  if (format == "EAN-8") return {43, 67};
-  if (format == "UPC-E") return {33, 51};
-  return {0, 0};
+  const std::optional<EanUpcLayout> layout = ean_upc_layout(format);
+  if (!layout) return {0, 0};
+  return {layout->elements, layout->modules};
 }
 
 /// Modules of a linear symbol of `format` with `count` elements, where the

@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "reader/assertion_guard.hpp"
+#include "reader/ean_upc_layout.hpp"
 #include "reader/zbar_reader.hpp"
 
 namespace flutterscan::reader {
@@ -55,8 +56,7 @@ bool no_check(const std::string& format) {
 }
 
 std::string symbology_family(const std::string& format) {
-  if (format == "EAN-13" || format == "EAN-8" || format == "UPC-A" || format == "UPC-E")
-    return "EAN/UPC";
+  if (is_ean_upc(format)) return "EAN/UPC";
   return format;
 }
 

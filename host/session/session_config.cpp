@@ -11,8 +11,10 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <functional>
 #include <limits>
 #include <sstream>
+#include <type_traits>
 #include <utility>
 
 #include "codes/library.hpp"
@@ -25,11 +27,50 @@ namespace {
 
 using ConfigResult = Result<SessionConfig, std::string>;
 
+class TableReader;
+
+/// \brief One key a table may hold and how it is read: by TableReader::get's type rules
+/// into a value; by a reader of its own, whose problem (not empty) ends the parse; or,
+/// with neither, by the caller after TableReader::read().
+struct Field {
+  template <typename T>
+  requires(!std::is_invocable_v<T&, TableReader&>) Field(const char* k, T& value);
+  Field(const char* k, std::function<std::string(TableReader&)> own)
+      : key(k), read(std::move(own)) {}
+  explicit Field(const char* k) : key(k) {}
+
+  const char* key;
+  std::function<std::string(TableReader&)> read;
+};
+
 /// Reads typed values out of one table, remembering the first problem.
 class TableReader {
  public:
   TableReader(const toml::table* table, std::string prefix, std::string origin, std::string& error)
       : table_(table), prefix_(std::move(prefix)), origin_(std::move(origin)), error_(error) {}
+  /// [`name`] of `parent` (none: nothing is read), "NAME." in messages.
+  TableReader(const toml::table& parent, const std::string& name, std::string origin,
+              std::string& error)
+      : TableReader(parent[name].as_table(), name + ".", std::move(origin), error) {}
+
+  /// Every field in turn, once no key of the table is unknown to `fields`: the problem
+  /// that ends the parse (an unknown key, or one a field's own reader found), else "". A
+  /// value of the wrong type does not end it: the first such problem waits in `error`.
+  std::string read(std::initializer_list<Field> fields) {
+    if (table_ == nullptr) return {};
+    for (const auto& [key, node] : *table_)
+      if (std::none_of(fields.begin(), fields.end(),
+                       [&](const Field& f) { return key.str() == f.key; })) {
+        std::ostringstream where;
+        where << origin_ << ":" << node.source().begin.line << ": unknown key " << prefix_
+              << key.str();
+        return where.str();
+      }
+    for (const Field& f : fields)
+      if (f.read)
+        if (auto problem = f.read(*this); !problem.empty()) return problem;
+    return {};
+  }
 
   template <typename T>
   void get(const char* key, T& value) {
@@ -38,25 +79,24 @@ class TableReader {
     if (node == nullptr) return;
     if constexpr (std::is_same_v<T, bool>) {
       if (auto v = node->value_exact<bool>()) return void(value = *v);
-      fail(key, *node, "true or false");
+      fail(key, "true or false");
     } else if constexpr (std::is_same_v<T, std::string>) {
       if (auto v = node->value_exact<std::string>()) return void(value = *v);
-      fail(key, *node, "a string");
+      fail(key, "a string");
     } else if constexpr (std::is_floating_point_v<T>) {
       if (auto v = node->value<double>(); v && std::isfinite(*v)) return void(value = *v);
-      fail(key, *node, "a number");
+      fail(key, "a number");
     } else {
       if (auto v = node->value_exact<std::int64_t>()) {
-        if (*v < 0 && std::is_unsigned_v<T>) return fail(key, *node, "an integer >= 0");
+        if (*v < 0 && std::is_unsigned_v<T>) return fail(key, "an integer >= 0");
         // A value the field cannot hold is refused, never truncated into range.
         if (!std::in_range<T>(*v))
-          return fail(key, *node,
-                      "an integer within " + std::to_string(std::numeric_limits<T>::min()) + ".." +
-                          std::to_string(std::numeric_limits<T>::max()) + " (got " +
-                          std::to_string(*v) + ")");
+          return fail(key, "an integer within " + std::to_string(std::numeric_limits<T>::min()) +
+                               ".." + std::to_string(std::numeric_limits<T>::max()) + " (got " +
+                               std::to_string(*v) + ")");
         return void(value = static_cast<T>(*v));
       }
-      fail(key, *node, "an integer");
+      fail(key, "an integer");
     }
   }
 
@@ -68,12 +108,41 @@ class TableReader {
     if (error_.empty()) value = v;
   }
 
-  void fail(const char* key, const toml::node& node, const std::string& wanted) {
-    if (!error_.empty()) return;
+  /// A field whose string names a value: `set` takes the name (false: it names none) and
+  /// "ORIGIN: KEY " + `what` of the name is the problem where it names none. A value of
+  /// another type waits in `error`, as get's do.
+  static Field name(const char* key, std::function<bool(const std::string&)> set,
+                    std::function<std::string(const std::string&)> what) {
+    return Field(key, [key, set = std::move(set), what = std::move(what)](TableReader& r) {
+      std::string given;
+      r.get(key, given);
+      if (given.empty() || set(given)) return std::string();
+      return r.without_line(key, " " + what(given));
+    });
+  }
+
+  /// The table's node at `key` (nullptr: none, or no table).
+  const toml::node* node(const char* key) const {
+    return table_ == nullptr ? nullptr : table_->get(key);
+  }
+
+  /// "ORIGIN:LINE: KEY" and `rest`, the line of `key` (of the table where it has none).
+  std::string at(const char* key, const std::string& rest) const {
+    const toml::node* n = node(key);
     std::ostringstream where;
-    where << origin_ << ":" << node.source().begin.line << ": " << prefix_ << key << " must be "
-          << wanted;
-    error_ = where.str();
+    where << origin_ << ":" << (n ? n->source().begin.line : table_->source().begin.line) << ": "
+          << prefix_ << key << rest;
+    return where.str();
+  }
+
+  /// "ORIGIN: KEY" and `rest`: the problems that name no line.
+  std::string without_line(const char* key, const std::string& rest) const {
+    return origin_ + ": " + prefix_ + key + rest;
+  }
+
+ private:
+  void fail(const char* key, const std::string& wanted) {
+    if (error_.empty()) error_ = at(key, " must be " + wanted);
   }
 
   const toml::table* table_;
@@ -82,19 +151,12 @@ class TableReader {
   std::string& error_;
 };
 
-std::string known_keys_problem(const toml::table& table, const std::string& prefix,
-                               std::initializer_list<const char*> keys, const std::string& origin) {
-  for (const auto& [key, node] : table) {
-    bool known = false;
-    for (const char* k : keys) known |= key.str() == k;
-    if (!known) {
-      std::ostringstream where;
-      where << origin << ":" << node.source().begin.line << ": unknown key " << prefix << key.str();
-      return where.str();
-    }
-  }
-  return {};
-}
+template <typename T>
+requires(!std::is_invocable_v<T&, TableReader&>) Field::Field(const char* k, T& value)
+    : key(k), read([k, &value](TableReader& r) {
+        r.get(k, value);
+        return std::string();
+      }) {}
 
 /// A number as the config would show it (shortest form that reads back).
 std::string number_text(double value) {
@@ -114,16 +176,6 @@ std::string outside(const std::string& key, double value, const std::string& ran
                     const std::string& why = {}) {
   return key + " = " + number_text(value) + " is outside " + range + (why.empty() ? "" : ": ") +
          why;
-}
-
-/// "FILE:LINE: results.mqtt.KEY WHAT": a problem with one key of [results.mqtt].
-std::string mqtt_problem(const std::string& origin, const toml::table& table, const char* key,
-                         const std::string& what) {
-  const toml::node* node = table.get(key);
-  std::ostringstream where;
-  where << origin << ":" << (node ? node->source().begin.line : table.source().begin.line)
-        << ": results.mqtt." << key << " " << what;
-  return where.str();
 }
 
 /// The broker URL "mqtt://HOST[:PORT]" or "mqtts://HOST[:PORT]" (HOST may be "[v6]") into
@@ -186,29 +238,24 @@ std::string read_password_file(const std::string& path, std::string& password) {
 
 /// [results.mqtt]: every key checked where it is (the error names the file, line and key).
 std::string parse_mqtt(const toml::table& t, const std::string& origin, MqttConfig& m) {
-  if (auto p =
-          known_keys_problem(t, "results.mqtt.",
-                             {"broker", "topic", "qos", "client_id", "queue_limit", "username",
-                              "password_file", "password_env", "ca_file", "cert_file", "key_file"},
-                             origin);
-      !p.empty())
-    return p;
   std::string error, broker, password_file, password_env;
   TableReader r(&t, "results.mqtt.", origin, error);
-  r.get("broker", broker);
-  r.get("topic", m.topic);
-  r.get("qos", m.qos);
-  r.get("client_id", m.client_id);
-  r.get("queue_limit", m.queue_limit);
-  r.get("username", m.username);
-  r.get("password_file", password_file);
-  r.get("password_env", password_env);
-  r.get("ca_file", m.ca_file);
-  r.get("cert_file", m.cert_file);
-  r.get("key_file", m.key_file);
+  if (auto p = r.read({{"broker", broker},
+                       {"topic", m.topic},
+                       {"qos", m.qos},
+                       {"client_id", m.client_id},
+                       {"queue_limit", m.queue_limit},
+                       {"username", m.username},
+                       {"password_file", password_file},
+                       {"password_env", password_env},
+                       {"ca_file", m.ca_file},
+                       {"cert_file", m.cert_file},
+                       {"key_file", m.key_file}});
+      !p.empty())
+    return p;
   if (!error.empty()) return error;
   const auto problem = [&](const char* key, const std::string& what) {
-    return mqtt_problem(origin, t, key, what);
+    return r.at(key, " " + what);
   };
   if (broker.empty())
     return problem("broker", "must be given: \"mqtt://HOST[:PORT]\" or \"mqtts://HOST[:PORT]\"");
@@ -280,223 +327,188 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
   }
   SessionConfig c;
   std::string error;
-  if (auto p = known_keys_problem(
-          root, "", {"camera", "controller", "optics", "processing", "output", "results"}, origin);
+  if (auto p = TableReader(&root, "", origin, error)
+                   .read({Field("camera"), Field("controller"), Field("optics"),
+                          Field("processing"), Field("output"), Field("results")});
       !p.empty())
     return ConfigResult::failure(p);
-  const toml::table* camera = root["camera"].as_table();
-  if (camera != nullptr) {
-    if (auto p = known_keys_problem(*camera, "camera.",
-                                    {"spec", "width", "height", "pixel_format", "exposure_us",
-                                     "gain_db", "frame_rate_hz", "trigger", "options"},
-                                    origin);
-        !p.empty())
-      return ConfigResult::failure(p);
-    TableReader r(camera, "camera.", origin, error);
-    r.get("spec", c.camera.spec);
-    r.get("width", c.camera.settings.width);
-    r.get("height", c.camera.settings.height);
-    r.get("exposure_us", c.camera.settings.exposure_us);
-    r.get("gain_db", c.camera.settings.gain_db);
-    r.get("frame_rate_hz", c.camera.settings.frame_rate_hz);
-    std::string pixel_format, trigger;
-    r.get("pixel_format", pixel_format);
-    r.get("trigger", trigger);
-    if (!error.empty()) return ConfigResult::failure(error);
-    if (!pixel_format.empty()) {
-      c.camera.settings.pixel_format = capture::pixel_format_from_name(pixel_format);
-      if (!c.camera.settings.pixel_format)
-        return ConfigResult::failure(origin + ": camera.pixel_format '" + pixel_format +
-                                     "' is not a known format");
-    }
-    if (!trigger.empty()) {
-      auto mode = capture::trigger_mode_from_name(trigger);
-      if (!mode)
-        return ConfigResult::failure(origin +
-                                     ": camera.trigger must be free-run, software or line0");
-      c.camera.settings.trigger = *mode;
-    }
-    if (const toml::table* options = (*camera)["options"].as_table()) {
-      for (const auto& [key, node] : *options) {
-        std::string value;
-        if (auto s = node.value_exact<std::string>())
-          value = *s;
-        else if (auto i = node.value_exact<std::int64_t>())
-          value = std::to_string(*i);
-        else if (auto d = node.value_exact<double>()) {
-          std::ostringstream number;
-          number.precision(17);
-          number << *d;
-          value = number.str();
-        } else if (auto b = node.value_exact<bool>())
-          value = *b ? "true" : "false";
-        else
-          return ConfigResult::failure(origin + ": camera.options." + std::string(key.str()) +
-                                       " must be a string, number or boolean");
-        c.camera.options.emplace_back(std::string(key.str()), value);
-      }
+  TableReader camera(root, "camera", origin, error);
+  std::string pixel_format, trigger;
+  if (auto p = camera.read({{"spec", c.camera.spec},
+                            {"width", c.camera.settings.width},
+                            {"height", c.camera.settings.height},
+                            {"exposure_us", c.camera.settings.exposure_us},
+                            {"gain_db", c.camera.settings.gain_db},
+                            {"frame_rate_hz", c.camera.settings.frame_rate_hz},
+                            {"pixel_format", pixel_format},
+                            {"trigger", trigger},
+                            Field("options")});
+      !p.empty())
+    return ConfigResult::failure(p);
+  if (!error.empty()) return ConfigResult::failure(error);
+  if (!pixel_format.empty()) {
+    c.camera.settings.pixel_format = capture::pixel_format_from_name(pixel_format);
+    if (!c.camera.settings.pixel_format)
+      return ConfigResult::failure(
+          camera.without_line("pixel_format", " '" + pixel_format + "' is not a known format"));
+  }
+  if (!trigger.empty()) {
+    auto mode = capture::trigger_mode_from_name(trigger);
+    if (!mode)
+      return ConfigResult::failure(
+          camera.without_line("trigger", " must be free-run, software or line0"));
+    c.camera.settings.trigger = *mode;
+  }
+  if (const toml::node* options = camera.node("options"); options && options->is_table()) {
+    for (const auto& [key, node] : *options->as_table()) {
+      std::string value;
+      if (auto s = node.value_exact<std::string>())
+        value = *s;
+      else if (auto i = node.value_exact<std::int64_t>())
+        value = std::to_string(*i);
+      else if (auto d = node.value_exact<double>()) {
+        std::ostringstream number;
+        number.precision(17);
+        number << *d;
+        value = number.str();
+      } else if (auto b = node.value_exact<bool>())
+        value = *b ? "true" : "false";
+      else
+        return ConfigResult::failure(camera.without_line(
+            "options", "." + std::string(key.str()) + " must be a string, number or boolean"));
+      c.camera.options.emplace_back(std::string(key.str()), value);
     }
   }
-  if (const toml::table* t = root["controller"].as_table()) {
-    if (auto p = known_keys_problem(
-            *t, "controller.",
-            {"spec", "code", "slot_time_us", "sync", "frame_period_us", "probe_frames"}, origin);
-        !p.empty())
-      return ConfigResult::failure(p);
-    TableReader r(t, "controller.", origin, error);
-    r.get("spec", c.controller.spec);
-    r.get("code", c.controller.code);
-    r.get("slot_time_us", c.controller.slot_time_us);
-    r.get("sync", c.controller.sync);
-    r.get("frame_period_us", c.controller.frame_period_us);
-    r.get("probe_frames", c.controller.probe_frames);
-  }
-  if (const toml::table* t = root["optics"].as_table()) {
-    if (auto p = known_keys_problem(
-            *t, "optics.",
-            {"px_per_count", "direction", "crosstalk", "electrons", "cap", "read_noise_e",
-             "full_well_e", "black_level_dn", "gain_e_per_dn", "bit_depth", "encoder",
-             "nominal_blur_px", "line_time_us", "flat_field", "paper_reflectance"},
-            origin);
-        !p.empty())
-      return ConfigResult::failure(p);
-    TableReader r(t, "optics.", origin, error);
-    r.get("px_per_count", c.optics.px_per_count);
-    r.get("direction", c.optics.direction);
-    r.get("electrons", c.optics.electrons);
-    c.optics.electrons_given = t->contains("electrons");
-    r.get("paper_reflectance", c.optics.paper_reflectance);
-    r.get("cap", c.optics.cap);
-    r.get("read_noise_e", c.optics.read_noise_e);
-    r.get("full_well_e", c.optics.full_well_e);
-    r.get("black_level_dn", c.optics.black_level_dn);
-    r.get("gain_e_per_dn", c.optics.gain_e_per_dn);
-    r.get("bit_depth", c.optics.bit_depth);
-    r.get("encoder", c.optics.encoder);
-    r.get("nominal_blur_px", c.optics.nominal_blur_px);
-    r.get("line_time_us", c.optics.line_time_us);
-    r.get("flat_field", c.optics.flat_field);
-    if (const toml::node* node = t->get("crosstalk")) {
-      const toml::array* rows = node->as_array();
-      std::vector<double> values;
-      bool ok = rows != nullptr && rows->size() == 3;
-      for (std::size_t i = 0; ok && i < 3; ++i) {
-        const toml::array* row = rows->get(i)->as_array();
-        ok = row != nullptr && row->size() == 3;
-        for (std::size_t j = 0; ok && j < 3; ++j) {
-          auto v = row->get(j)->value<double>();
-          ok = v.has_value() && *v >= 0;
-          if (ok) values.push_back(*v);
-        }
+  TableReader controller(root, "controller", origin, error);
+  if (auto p = controller.read({{"spec", c.controller.spec},
+                                {"code", c.controller.code},
+                                {"slot_time_us", c.controller.slot_time_us},
+                                {"sync", c.controller.sync},
+                                {"frame_period_us", c.controller.frame_period_us},
+                                {"probe_frames", c.controller.probe_frames}});
+      !p.empty())
+    return ConfigResult::failure(p);
+  TableReader optics(root, "optics", origin, error);
+  // Three rows (camera channels) of three numbers >= 0.
+  auto crosstalk = [&](TableReader& r) -> std::string {
+    const toml::node* node = r.node("crosstalk");
+    if (node == nullptr) return {};
+    const toml::array* rows = node->as_array();
+    std::vector<double> values;
+    bool ok = rows != nullptr && rows->size() == 3;
+    for (std::size_t i = 0; ok && i < 3; ++i) {
+      const toml::array* row = rows->get(i)->as_array();
+      ok = row != nullptr && row->size() == 3;
+      for (std::size_t j = 0; ok && j < 3; ++j) {
+        auto v = row->get(j)->value<double>();
+        ok = v.has_value() && *v >= 0;
+        if (ok) values.push_back(*v);
       }
-      if (!ok) {
-        std::ostringstream where;
-        where << origin << ":" << node->source().begin.line
-              << ": optics.crosstalk must be 3 rows of 3 numbers >= 0 (rows = camera channels)";
-        return ConfigResult::failure(where.str());
-      }
-      c.optics.crosstalk = values;
     }
-  }
-  if (const toml::table* t = root["processing"].as_table()) {
-    if (auto p = known_keys_problem(
-            *t, "processing.",
-            {"method", "second_pass_ms", "decode_ms", "workers", "threads_per_worker", "queue_depth",
-             "max_frames", "max_seconds", "match_tolerance_us", "object_match_px", "choose_model",
-             "blur_check_every", "blur_tolerance", "refine_when_behind", "symbologies",
-             "try_rotate", "decode_area", "second_pass_tries"},
-            origin);
-        !p.empty())
-      return ConfigResult::failure(p);
-    TableReader r(t, "processing.", origin, error);
-    std::string method;
-    r.get("method", method);
-    if (!method.empty() && !set_processing_method(method, c.processing))
-      return ConfigResult::failure(origin + ": processing.method '" + method + "' is none of " +
-                                   kProcessingMethods);
-    // "auto" (-1) or a number of ms.
-    for (const auto& [key, ms] : {std::pair{"second_pass_ms", &c.processing.second_pass_ms},
-                                  std::pair{"decode_ms", &c.processing.decode_ms}}) {
-      if (const toml::node* budget = t->get(key); budget && budget->is_string()) {
+    if (!ok) return r.at("crosstalk", " must be 3 rows of 3 numbers >= 0 (rows = camera channels)");
+    c.optics.crosstalk = values;
+    return {};
+  };
+  if (auto p = optics.read({{"px_per_count", c.optics.px_per_count},
+                            {"direction", c.optics.direction},
+                            {"electrons", c.optics.electrons},
+                            {"paper_reflectance", c.optics.paper_reflectance},
+                            {"cap", c.optics.cap},
+                            {"read_noise_e", c.optics.read_noise_e},
+                            {"full_well_e", c.optics.full_well_e},
+                            {"black_level_dn", c.optics.black_level_dn},
+                            {"gain_e_per_dn", c.optics.gain_e_per_dn},
+                            {"bit_depth", c.optics.bit_depth},
+                            {"encoder", c.optics.encoder},
+                            {"nominal_blur_px", c.optics.nominal_blur_px},
+                            {"line_time_us", c.optics.line_time_us},
+                            {"flat_field", c.optics.flat_field},
+                            {"crosstalk", crosstalk}});
+      !p.empty())
+    return ConfigResult::failure(p);
+  c.optics.electrons_given = optics.node("electrons") != nullptr;
+  TableReader processing(root, "processing", origin, error);
+  // "auto" (-1) or a number of ms.
+  auto auto_or_ms = [](const char* key, double& ms) {
+    return Field(key, [key, &ms](TableReader& r) -> std::string {
+      if (const toml::node* budget = r.node(key); budget && budget->is_string()) {
         if (budget->value_exact<std::string>() != "auto")
-          return ConfigResult::failure(origin + ":" +
-                                       std::to_string(budget->source().begin.line) +
-                                       ": processing." + key +
-                                       " must be \"auto\" or a number of ms");
-        *ms = -1;
+          return r.at(key, " must be \"auto\" or a number of ms");
+        ms = -1;
       } else {
-        r.get(key, *ms);
+        r.get(key, ms);
       }
-    }
-    r.get("workers", c.processing.workers);
-    r.get("threads_per_worker", c.processing.threads_per_worker);
-    r.get("queue_depth", c.processing.queue_depth);
-    r.get("max_frames", c.processing.max_frames);
-    r.get("max_seconds", c.processing.max_seconds);
-    r.get("match_tolerance_us", c.processing.match_tolerance_us);
-    r.get("object_match_px", c.processing.object_match_px);
-    r.get("choose_model", c.processing.choose_model);
-    r.get("blur_check_every", c.processing.blur_check_every);
-    r.get("blur_tolerance", c.processing.blur_tolerance_pct);
-    r.get("refine_when_behind", c.processing.refine_when_behind);
-    r.get("symbologies", c.processing.symbologies);
-    r.get("try_rotate", c.processing.try_rotate);
-    std::string tries;
-    r.get("second_pass_tries", tries);
-    if (error.empty() && t->get("second_pass_tries") != nullptr) {
-      std::string problem;
-      const auto parsed = parse_second_pass_tries(tries, problem);
-      if (!parsed)
-        return ConfigResult::failure(
-            origin + ":" + std::to_string(t->get("second_pass_tries")->source().begin.line) +
-            ": processing.second_pass_tries: " + problem);
-      c.processing.second_pass_tries = *parsed;
-    }
-    std::string area;
-    r.get("decode_area", area);
-    if (!area.empty()) {
-      const auto a = reader::decode_area_from_name(area);
-      if (!a)
-        return ConfigResult::failure(origin + ": processing.decode_area '" + area +
-                                     "' is neither labels nor frame");
-      c.processing.decode_area = *a;
-    }
-  }
-  if (const toml::table* t = root["output"].as_table()) {
-    if (auto p = known_keys_problem(*t, "output.",
-                                    {"dir", "timestamped_subfolder", "keep_first_frames",
-                                     "keep_failed_frames", "disk_budget_mb", "report"},
-                                    origin);
-        !p.empty())
-      return ConfigResult::failure(p);
-    TableReader r(t, "output.", origin, error);
-    r.get("dir", c.output.dir);
-    r.get("timestamped_subfolder", c.output.timestamped_subfolder);
-    r.get("keep_first_frames", c.output.keep_first_frames);
-    r.get("keep_failed_frames", c.output.keep_failed_frames);
-    r.get("disk_budget_mb", c.output.disk_budget_mb);
-    r.get("report", c.output.report);
-  }
-  if (const toml::table* t = root["results"].as_table()) {
-    if (auto p = known_keys_problem(
-            *t, "results.", {"tcp_port", "tcp_bind", "serial", "serial_baud", "mqtt"}, origin);
-        !p.empty())
-      return ConfigResult::failure(p);
-    TableReader r(t, "results.", origin, error);
-    r.get("tcp_port", c.results.tcp_port);
-    r.get("tcp_bind", c.results.tcp_bind);
-    r.get("serial", c.results.serial);
-    r.get("serial_baud", c.results.serial_baud);
-    if (const toml::node* mqtt = t->get("mqtt")) {
-      if (!mqtt->is_table())
-        return ConfigResult::failure(origin + ":" + std::to_string(mqtt->source().begin.line) +
-                                     ": results.mqtt must be a table ([results.mqtt])");
-      MqttConfig m;
-      if (auto p = parse_mqtt(*mqtt->as_table(), origin, m); !p.empty())
-        return ConfigResult::failure(p);
-      c.results.mqtt = std::move(m);
-    }
-  }
+      return {};
+    });
+  };
+  // A list of second-pass tries, its problem on its line.
+  auto tries = [&](TableReader& r) -> std::string {
+    std::string names;
+    r.get("second_pass_tries", names);
+    if (!error.empty() || r.node("second_pass_tries") == nullptr) return {};
+    std::string problem;
+    const auto parsed = parse_second_pass_tries(names, problem);
+    if (!parsed) return r.at("second_pass_tries", ": " + problem);
+    c.processing.second_pass_tries = *parsed;
+    return {};
+  };
+  if (auto p = processing.read(
+          {TableReader::name(
+               "method",
+               [&](const std::string& n) { return set_processing_method(n, c.processing); },
+               [](const std::string& n) { return "'" + n + "' is none of " + kProcessingMethods; }),
+           auto_or_ms("second_pass_ms", c.processing.second_pass_ms),
+           auto_or_ms("decode_ms", c.processing.decode_ms),
+           {"workers", c.processing.workers},
+           {"threads_per_worker", c.processing.threads_per_worker},
+           {"queue_depth", c.processing.queue_depth},
+           {"max_frames", c.processing.max_frames},
+           {"max_seconds", c.processing.max_seconds},
+           {"match_tolerance_us", c.processing.match_tolerance_us},
+           {"object_match_px", c.processing.object_match_px},
+           {"choose_model", c.processing.choose_model},
+           {"blur_check_every", c.processing.blur_check_every},
+           {"blur_tolerance", c.processing.blur_tolerance_pct},
+           {"refine_when_behind", c.processing.refine_when_behind},
+           {"symbologies", c.processing.symbologies},
+           {"try_rotate", c.processing.try_rotate},
+           {"second_pass_tries", tries},
+           TableReader::name(
+               "decode_area",
+               [&](const std::string& n) {
+                 const auto area = reader::decode_area_from_name(n);
+                 if (area) c.processing.decode_area = *area;
+                 return area.has_value();
+               },
+               [](const std::string& n) { return "'" + n + "' is neither labels nor frame"; })});
+      !p.empty())
+    return ConfigResult::failure(p);
+  TableReader output(root, "output", origin, error);
+  if (auto p = output.read({{"dir", c.output.dir},
+                            {"timestamped_subfolder", c.output.timestamped_subfolder},
+                            {"keep_first_frames", c.output.keep_first_frames},
+                            {"keep_failed_frames", c.output.keep_failed_frames},
+                            {"disk_budget_mb", c.output.disk_budget_mb},
+                            {"report", c.output.report}});
+      !p.empty())
+    return ConfigResult::failure(p);
+  TableReader results(root, "results", origin, error);
+  auto mqtt = [&](TableReader& r) -> std::string {
+    const toml::node* node = r.node("mqtt");
+    if (node == nullptr) return {};
+    if (!node->is_table()) return r.at("mqtt", " must be a table ([results.mqtt])");
+    MqttConfig m;
+    if (auto p = parse_mqtt(*node->as_table(), origin, m); !p.empty()) return p;
+    c.results.mqtt = std::move(m);
+    return {};
+  };
+  if (auto p = results.read({{"tcp_port", c.results.tcp_port},
+                             {"tcp_bind", c.results.tcp_bind},
+                             {"serial", c.results.serial},
+                             {"serial_baud", c.results.serial_baud},
+                             {"mqtt", mqtt}});
+      !p.empty())
+    return ConfigResult::failure(p);
   if (!error.empty()) return ConfigResult::failure(error);
   return ConfigResult::success(std::move(c));
 }

@@ -1,8 +1,8 @@
 #pragma once
-// Tests only: the capture model the imaging, sim and session tests share, a
-// label under a one-of-3 code at the design's reference settings (crosstalk M,
-// cap 3, read noise 4 e-, 12 bits over a 12000 e- well), each test changing
-// what it studies.
+// Tests only: the capture model the imaging, sim and session tests share, the
+// design's reference camera (crosstalk M, read noise 4 e-, 12 bits over a
+// 12000 e- well) and a label on it under a one-of-3 code at cap 3, each test
+// changing what it studies.
 
 #include "imaging/capture_model.hpp"
 
@@ -20,21 +20,28 @@ struct LabelCapture {
   double black_level = 0;  ///< DN
 };
 
-/// \brief The reference capture with `o`'s changes: crosstalk M = [[0.90, 0.08, 0.01],
-/// [0.10, 0.85, 0.12], [0.01, 0.07, 0.88]], the LEDs budgeted to `o.electrons` at cap 3,
-/// read noise 4 e-, full well 12000 e-, 12 bits (gain 12000 / 4095 e- per DN).
-inline imaging::CaptureModel label_capture(const LabelCapture& o = {}) {
+/// \brief The reference camera alone (no code, no light): crosstalk M = [[0.90, 0.08, 0.01],
+/// [0.10, 0.85, 0.12], [0.01, 0.07, 0.88]], read noise 4 e-, full well 12000 e-, 12 bits
+/// (gain 12000 / 4095 e- per DN), black level `black_level` DN.
+inline imaging::CaptureModel reference_camera(double black_level = 0) {
   imaging::CaptureModel m;
-  m.code = LedCode::parse(o.code, 3).value();
-  m.blur_px = o.blur_px;
-  m.direction = o.direction;
-  m.led_electrons = imaging::budgeted_led_electrons(m.code, o.electrons, 3);
   m.crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
   m.read_noise = 4;
   m.full_well = 12000;
   m.bit_depth = 12;
   m.gain = 12000.0 / 4095.0;
-  m.black_level = o.black_level;
+  m.black_level = black_level;
+  return m;
+}
+
+/// \brief The reference capture with `o`'s changes: the reference camera, the LEDs
+/// budgeted to `o.electrons` at cap 3.
+inline imaging::CaptureModel label_capture(const LabelCapture& o = {}) {
+  imaging::CaptureModel m = reference_camera(o.black_level);
+  m.code = LedCode::parse(o.code, 3).value();
+  m.blur_px = o.blur_px;
+  m.direction = o.direction;
+  m.led_electrons = imaging::budgeted_led_electrons(m.code, o.electrons, 3);
   return m;
 }
 

@@ -12,6 +12,7 @@
 #include "imaging/frame_conversion.hpp"
 #include "imaging/metrics.hpp"
 #include "imaging/motion_frame.hpp"
+#include "imaging/test/label_capture.hpp"
 #include "reader/barcode_reader.hpp"
 #include "sim/forward_model.hpp"
 #include "sim/scene.hpp"
@@ -47,19 +48,13 @@ Plane bars(int width, int height, unsigned seed) {
   return p;
 }
 
+/// The reference capture (test_fixtures::label_capture) with one of the bench's codes and its
+/// black level, 64 DN.
 CaptureModel bench_like_capture(Direction direction) {
-  CaptureModel m;
-  m.code = LedCode::parse("4144414111414444112422141121412124421244141221422122", 3).value();
-  m.blur_px = 52;
-  m.direction = direction;
-  m.crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
-  m.led_electrons = imaging::budgeted_led_electrons(m.code, 3000, 3);
-  m.read_noise = 4;
-  m.full_well = 12000;
-  m.bit_depth = 12;
-  m.gain = m.full_well / 4095.0;
-  m.black_level = 64;
-  return m;
+  return test_fixtures::label_capture(
+      {.code = "4144414111414444112422141121412124421244141221422122",
+       .direction = direction,
+       .black_level = 64});
 }
 
 /// The RGB frame and the Bayer mosaic (electrons) of one exposure of `scene`.

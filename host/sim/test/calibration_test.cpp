@@ -8,6 +8,7 @@
 
 #include "imaging/crosstalk_calibration.hpp"
 #include "imaging/photon_transfer.hpp"
+#include "imaging/test/label_capture.hpp"
 #include "sim/forward_model.hpp"
 
 namespace flutterscan::sim {
@@ -15,21 +16,16 @@ namespace {
 
 using imaging::CaptureModel;
 
-const std::vector<double> kCrosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
+const std::vector<double> kCrosstalk = test_fixtures::reference_camera().crosstalk;
 
 /// A static white target (blur well under a pixel) under `code`, 12 bits, 64 DN black.
 CaptureModel white_target(const char* code, double electrons,
                           const std::vector<double>& crosstalk = kCrosstalk) {
-  CaptureModel m;
+  CaptureModel m = test_fixtures::reference_camera(64);
   m.code = LedCode::parse(code, 3).value();
   m.blur_px = 0.01;
   m.crosstalk = crosstalk;
   m.led_electrons = {electrons / 52, electrons / 52, electrons / 52};
-  m.read_noise = 4;
-  m.full_well = 12000;
-  m.bit_depth = 12;
-  m.gain = 12000.0 / 4095.0;
-  m.black_level = 64;
   return m;
 }
 

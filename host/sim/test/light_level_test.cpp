@@ -8,6 +8,7 @@
 #include <string>
 
 #include "imaging/light_level.hpp"
+#include "imaging/test/label_capture.hpp"
 #include "sim/forward_model.hpp"
 #include "sim/scene.hpp"
 
@@ -16,17 +17,12 @@ namespace {
 
 using imaging::CaptureModel;
 
-const std::vector<double> kCrosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
+const std::vector<double> kCrosstalk = test_fixtures::reference_camera().crosstalk;
 
-/// The camera: 12 bits, 64 DN black, full well 12000 e-, crosstalk above.
+/// The reference camera (test_fixtures::reference_camera), 64 DN black, with `read_noise`.
 CaptureModel camera(double read_noise) {
-  CaptureModel m;
-  m.crosstalk = kCrosstalk;
+  CaptureModel m = test_fixtures::reference_camera(64);
   m.read_noise = read_noise;
-  m.full_well = 12000;
-  m.bit_depth = 12;
-  m.gain = 12000.0 / 4095.0;
-  m.black_level = 64;
   return m;
 }
 

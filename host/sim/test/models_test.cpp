@@ -15,6 +15,7 @@
 #include "imaging/motion_frame.hpp"
 #include "imaging/per_channel_wiener.hpp"
 #include "imaging/row_phase_deblur.hpp"
+#include "imaging/test/label_capture.hpp"
 #include "reader/barcode_reader.hpp"
 #include "sim/colour_scene.hpp"
 #include "sim/forward_model.hpp"
@@ -31,16 +32,9 @@ constexpr double kSlotTimeUs = 19;  // a 52-slot exposure of about 1 ms
 /// The bench camera (host/bench/capture_schemes): 12 bits, full well 12000 e-,
 /// black level 64 DN, read noise 4 e-, the crosstalk, 52 px blur along +x.
 CaptureModel camera(const char* code, double electrons) {
-  CaptureModel m;
-  m.code = codes::to_code(*codes::find_library_code(code));
-  m.blur_px = 52;
-  m.crosstalk = {0.90, 0.08, 0.01, 0.10, 0.85, 0.12, 0.01, 0.07, 0.88};
-  m.led_electrons = imaging::budgeted_led_electrons(m.code, electrons, 3);
-  m.full_well = 12000;
-  m.gain = m.full_well / 4095.0;
-  m.black_level = 64;
-  m.read_noise = 4;
-  return m;
+  return test_fixtures::label_capture({.code = codes::find_library_code(code)->digits.data(),
+                                       .electrons = electrons,
+                                       .black_level = 64});
 }
 
 SceneSpec label_spec() {
