@@ -61,13 +61,21 @@ bool BeltReads::any_over(const BeltBox& region) const {
 SecondPassBudget::SecondPassBudget(double per_frame_ms, int workers)
     : per_frame_ms_(per_frame_ms), workers_(std::max(1, workers)) {}
 
+void SecondPassBudget::expect_period_ms(double period_ms) {
+  const std::lock_guard lock(mutex_);
+  if (!period_measured_ && period_ms > 0 && period_ms < 1000) period_ms_ = period_ms;
+}
+
 void SecondPassBudget::add_frame(std::uint64_t index, std::int64_t camera_ns,
                                  double first_pass_ms) {
   const std::lock_guard lock(mutex_);
   if (seen_frame_ && index > last_index_ && camera_ns > last_camera_ns_) {
     const double period = static_cast<double>(camera_ns - last_camera_ns_) * 1e-6 /
                           static_cast<double>(index - last_index_);
-    if (period < 1000) period_ms_ = period_ms_ == 0 ? period : 0.9 * period_ms_ + 0.1 * period;
+    if (period < 1000) {
+      period_ms_ = period_measured_ ? 0.9 * period_ms_ + 0.1 * period : period;
+      period_measured_ = true;
+    }
   }
   if (!seen_frame_ || index > last_index_) {
     last_index_ = index;

@@ -41,6 +41,10 @@ class SecondPassBudget {
   /// and `workers`; >= 0: that many ms of credit per frame, whatever the rate.
   SecondPassBudget(double per_frame_ms, int workers);
 
+  /// \brief The frame period the camera was set to, ms: the frame's share
+  /// until the cameras' timestamps show the period (the first two frames a
+  /// worker finishes), which then replaces it.
+  void expect_period_ms(double period_ms);
   /// \brief Frame `index`, exposed at camera time `camera_ns`, whose first pass
   /// took `first_pass_ms` (wall time on its worker): its credit is added.
   void add_frame(std::uint64_t index, std::int64_t camera_ns, double first_pass_ms);
@@ -54,8 +58,8 @@ class SecondPassBudget {
   /// \brief The credit left, ms.
   double credit_ms() const;
   /// \brief The workers' time a frame has, all workers together: the frame period
-  /// the cameras' timestamps show times the workers times kShare, ms (0: the
-  /// period is not known yet).
+  /// the cameras' timestamps show (until then the one expected) times the
+  /// workers times kShare, ms (0: the period is not known yet).
   double frame_share_ms() const;
 
  private:
@@ -63,7 +67,8 @@ class SecondPassBudget {
   double per_frame_ms_;
   int workers_;
   double credit_ms_ = 0;
-  double period_ms_ = 0;  ///< the frame period the timestamps show (0: not yet known)
+  double period_ms_ = 0;          ///< the frame period the timestamps show (0: not yet known)
+  bool period_measured_ = false;  ///< period_ms_ from the timestamps, not expect_period_ms()
   std::uint64_t last_index_ = 0;
   std::int64_t last_camera_ns_ = 0;
   bool seen_frame_ = false;

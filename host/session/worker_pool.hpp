@@ -24,8 +24,11 @@ void plan_row_ffts(const capture::FrameFormat& format, imaging::Direction direct
 class WorkerPool {
  public:
   /// \brief Starts the workers on `pipeline`'s jobs; `config` and `flat` (may
-  /// be null) must outlive join().
-  WorkerPool(Pipeline& pipeline, const SessionConfig& config, const imaging::FlatField* flat);
+  /// be null) must outlive join(). `frame_rate_hz` (> 0): the camera's, the
+  /// frames' share of the workers until their timestamps show it (a busy
+  /// frame's decode is bounded from the first frame on).
+  WorkerPool(Pipeline& pipeline, const SessionConfig& config, const imaging::FlatField* flat,
+             double frame_rate_hz = 0);
   WorkerPool(const WorkerPool&) = delete;
   WorkerPool& operator=(const WorkerPool&) = delete;
   ~WorkerPool() { join(); }

@@ -661,5 +661,17 @@ TEST(SecondPassBudget, CreditFollowsTheFramePeriodTheWorkersAndTheFirstPass) {
   EXPECT_FALSE(none.take(0.1));
 }
 
+TEST(SecondPassBudget, TheCamerasRateServesUntilTheTimestampsShowTheirOwn) {
+  SecondPassBudget budget(-1, 2);
+  EXPECT_EQ(budget.frame_share_ms(), 0);  // nothing known: the decode is not bounded
+  budget.expect_period_ms(1000 / 60.0);   // the camera was set to 60 fps
+  EXPECT_NEAR(budget.frame_share_ms(), 2 * 16.666667 * SecondPassBudget::kShare, 0.01);
+  budget.add_frame(0, 0, 0);
+  budget.add_frame(1, 33'333'333, 0);  // the timestamps show 30 fps: they replace it
+  EXPECT_NEAR(budget.frame_share_ms(), 2 * 33.333333 * SecondPassBudget::kShare, 0.01);
+  budget.expect_period_ms(10);  // and a rate set later does not override what they show
+  EXPECT_NEAR(budget.frame_share_ms(), 2 * 33.333333 * SecondPassBudget::kShare, 0.01);
+}
+
 }  // namespace
 }  // namespace flutterscan::session
