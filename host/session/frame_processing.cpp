@@ -191,9 +191,9 @@ struct Decoded {
   }
 };
 
-/// The first pass's decode time for a frame whose conversion and deblur took
-/// `spent_ms` (processing.decode_ms; "auto": the frame's share of the workers'
-/// time less that, at least 1 ms: the first window; the frame rate unknown, no limit).
+/// The first pass's decode time for a frame that has taken `spent_ms` so far
+/// (its conversion, deblur and regions; processing.decode_ms; "auto": the frame's share of the
+/// workers' time less that, at least 1 ms: the first window; the frame rate unknown, no limit).
 double decode_budget_ms(const ProcessingConfig& processing, const WorkerShared& shared,
                         double spent_ms) {
   if (processing.decode_ms >= 0) return processing.decode_ms;
@@ -221,10 +221,11 @@ BeltBox on_belt(const reader::LabelRegion& r, double travel_px) {
 
 /// Step "decode": the paper and the code regions along the motion, then the
 /// codes in processing.decode_area (the paper runs and the code regions off
-/// them, widened; or the whole frame) with the session's reader options.
+/// them, widened; or the whole frame) with the session's reader options,
+/// within what is left of the frame's share since `frame_start_ns`.
 Decoded decode(const Deblurred& image, imaging::Direction direction,
                const ProcessingConfig& processing, const FrameJob& job, WorkerShared& shared,
-               double spent_ms) {
+               std::int64_t frame_start_ns) {
   Decoded out;
   out.paper = reader::find_paper_runs(image.motion_latent);
   // Code regions serve only the labels area and the cascade's second pass.
@@ -242,7 +243,7 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
   std::vector<reader::RegionTile> tiles;
   if (processing.decode_area == reader::DecodeArea::kLabels) {
     regions_whole = reader::regions_to_read(out.paper, out.code);
-    options.budget_ms = decode_budget_ms(processing, shared, spent_ms);
+    options.budget_ms = decode_budget_ms(processing, shared, ms_between(frame_start_ns, now_ns()));
     const double ms_per_mpx = shared.decode_ms_per_mpx.load();
     const auto tile_px = options.budget_ms > 0 && ms_per_mpx > 0
                              ? static_cast<long long>(options.budget_ms / ms_per_mpx * 1e6)
@@ -541,8 +542,7 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config, WorkerSha
   out.log.update(deblurred.value().log);
 
   const imaging::CaptureModel& model = deblurred.value().model;
-  Decoded decoded = decode(deblurred.value(), model.direction, config.processing, job, shared,
-                           ms_between(t0, t2));
+  Decoded decoded = decode(deblurred.value(), model.direction, config.processing, job, shared, t0);
   if (decoded.windows) out.log["decode_windows"] = *decoded.windows;
   if (!decoded.left.empty()) {
     // Over the decode's budget: counted and flagged, read in a frame after.
