@@ -235,8 +235,6 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
   // zbar (under the frame's budget); without it, this pass is the only one.
   reader::ReaderOptions options = reader_options(processing);
   options.second_decoder = !processing.cascade;
-  // Within the frame's budget, the regions no frame tried lately first: what one
-  // frame leaves, the next reads (a label passes through several).
   // Area "frame" reads the whole frame as one window: no regions, no budget.
   // A region larger than one view of the budget is read as tiles of that size.
   std::vector<reader::LabelRegion> regions_whole;
@@ -250,8 +248,9 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
                              : 0LL;
     tiles = reader::cut_to_tiles(regions_whole, image.motion_latent.height, tile_px);
   }
-  // Within a budget: those no frame tried lately first, each group the most like a linear code
-  // first.
+  // Within a budget, the tiles no frame tried lately first (what one frame leaves,
+  // the next reads: a label passes through several), each group the most like
+  // a linear code first.
   if (options.budget_ms > 0) {
     std::vector<reader::LabelRegion> cut;
     for (const reader::RegionTile& t : tiles) cut.push_back(t.tile);
