@@ -24,6 +24,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -119,6 +120,23 @@ session::SessionConfig bench_config(int width, int height, int frames, bool pace
   return c;
 }
 
+/// The session `c` run to its end (its config checked first); none where the
+/// config or the run fails, the error on stderr under `what`.
+std::optional<session::SessionOutcome> checked_run(session::SessionConfig c,
+                                                   const std::string& what) {
+  if (auto problem = session::check_config(c); !problem.empty()) {
+    std::cerr << "session_bench: " << problem << "\n";
+    return std::nullopt;
+  }
+  std::atomic<bool> stop{false};
+  session::SessionOutcome outcome = session::run_session(c, stop, {});
+  if (!outcome.error.empty()) {
+    std::cerr << "session_bench: " << what << ": " << outcome.error << "\n";
+    return std::nullopt;
+  }
+  return outcome;
+}
+
 /// The cascade (the session's default, at 60 fps input) against tv on every
 /// frame (offline, unpaced) on the same `frames` frames of a sim line at
 /// `electrons` (the sim's labels: Code 128, EAN-13, QR, Data Matrix in turn):
@@ -144,17 +162,9 @@ int cascade_against_tv(int width, int height, int frames, const fs::path& out) {
         c.processing.queue_depth = static_cast<std::size_t>(frames);  // offline: nothing dropped
         c.processing.refine_when_behind = true;                       // and every frame refined
       }
-      if (auto problem = session::check_config(c); !problem.empty()) {
-        std::cerr << "session_bench: " << problem << "\n";
-        return 1;
-      }
-      std::atomic<bool> stop{false};
-      const auto outcome = session::run_session(c, stop, {});
-      if (!outcome.error.empty()) {
-        std::cerr << "session_bench: cascade: " << outcome.error << "\n";
-        return 1;
-      }
-      const auto& s = outcome.summary;
+      const auto outcome = checked_run(c, "cascade");
+      if (!outcome) return 1;
+      const auto& s = outcome->summary;
       const auto truth = s.value("ground_truth", nlohmann::json::object());  // none: nothing whole
       std::cout << "| " << electrons << " | " << (cascade ? "cascade, 60 fps" : "tv, offline")
                 << " | " << s["objects_read"] << " of " << s["objects"] << " | "
@@ -201,23 +211,15 @@ int busy_belt(int width, int height, int frames, int runs, const fs::path& out) 
         c.processing.decode_ms = session::kMaxDecodeMs;
         c.processing.queue_depth = static_cast<std::size_t>(frames);
       }
-      if (auto problem = session::check_config(c); !problem.empty()) {
-        std::cerr << "session_bench: " << problem << "\n";
-        return 1;
-      }
-      std::atomic<bool> stop{false};
-      const auto outcome = session::run_session(c, stop, {});
-      if (!outcome.error.empty()) {
-        std::cerr << "session_bench: busy: " << outcome.error << "\n";
-        return 1;
-      }
+      const auto outcome = checked_run(c, "busy");
+      if (!outcome) return 1;
       int cut = 0;
       std::ifstream log(out / "session.jsonl");
       for (std::string line; std::getline(log, line);) {
         const auto j = nlohmann::json::parse(line, nullptr, false);
         if (!j.is_discarded() && j.value("decode_left", 0) > 0) ++cut;
       }
-      const auto& s = outcome.summary;
+      const auto& s = outcome->summary;
       const auto truth = s.value("ground_truth", nlohmann::json::object());
       std::cout << "| " << electrons << " | "
                 << (offline ? std::string("offline, every window")
