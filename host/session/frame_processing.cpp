@@ -252,9 +252,9 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
   // the next reads: a label passes through several), each group the most like
   // a linear code first.
   if (options.budget_ms > 0) {
-    std::vector<reader::LabelRegion> cut;
-    for (const reader::RegionTile& t : tiles) cut.push_back(t.tile);
-    const std::vector<double> likeness = reader::bar_likeness(image.motion_latent, cut);
+    std::vector<reader::LabelRegion> tile_regions;
+    for (const reader::RegionTile& t : tiles) tile_regions.push_back(t.tile);
+    const std::vector<double> likeness = reader::bar_likeness(image.motion_latent, tile_regions);
     std::vector<std::tuple<bool, double, reader::RegionTile>> ranked;
     for (std::size_t i = 0; i < tiles.size(); ++i)
       ranked.emplace_back(shared.belt_tried.any_over(on_belt(tiles[i].tile, job.travel_px)),
