@@ -331,6 +331,7 @@ Replay replay(const ReplayOptions& o, session::SessionConfig config,
   // Offline, no line to keep up with: every window is decoded and every second
   // pass the cascade wants runs.
   if (config.processing.decode_ms < 0) config.processing.decode_ms = session::kMaxDecodeMs;
+  if (config.processing.latency_ms < 0) config.processing.latency_ms = session::kMaxLatencyMs;
   if (config.processing.second_pass_ms < 0)
     config.processing.second_pass_ms = session::kMaxSecondPassMs;
   session::WorkerShared shared(config);

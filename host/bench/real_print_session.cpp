@@ -7,6 +7,7 @@
 
 #include "session/frame_model.hpp"
 #include "session/frame_processing.hpp"
+#include "session/session_clock.hpp"
 
 namespace flutterscan::bench {
 namespace {
@@ -59,6 +60,11 @@ int SessionRead::windows() const {
   return n;
 }
 
+void SessionLine::at_frame_rate(double fps, int workers) {
+  fps_ = fps;
+  config_.processing.workers = workers;
+}
+
 SessionRead SessionLine::read(const imaging::Image& dn) const {
   session::FrameJob job;
   job.event = event(config_, encoder_counts_);
@@ -74,6 +80,10 @@ SessionRead SessionLine::read(const imaging::Image& dn) const {
         job.frame.data[at + 1] = static_cast<std::uint8_t>(v >> 8);
       }
   session::WorkerShared shared(config_);
+  if (fps_ > 0) {
+    shared.second_pass.expect_period_ms(1000 / fps_);
+    job.frame.host_arrival_ns = session::now_ns();
+  }
   session::FrameOutcome out = session::process_frame(job, config_, shared, nullptr);
   SessionRead read;
   if (!out.processed) {  // a NO-READ, said

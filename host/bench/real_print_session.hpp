@@ -56,6 +56,12 @@ class SessionLine {
   /// what a simulated frame must be recorded with.
   const imaging::CaptureModel& model() const { return model_; }
 
+  /// \brief Frames come at `fps` to `workers` workers, each arriving as read()
+  /// starts: the decode's and the second pass's "auto" budgets and the frame's
+  /// deadline follow the session's rules for that line (by default the frame
+  /// rate is unknown, as offline).
+  void at_frame_rate(double fps, int workers);
+
   /// \brief What the session reads on `dn` (a frame recorded with model()).
   SessionRead read(const imaging::Image& dn) const;
 
@@ -65,6 +71,7 @@ class SessionLine {
   int height_;
   int encoder_counts_;
   imaging::CaptureModel model_;
+  double fps_ = 0;  ///< 0: the frame rate unknown
 };
 
 }  // namespace flutterscan::bench

@@ -302,7 +302,7 @@ bool same_symbol(const DecodedCode& a, const DecodedCode& b) {
 
 BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& symbologies,
                              bool try_rotate, std::span<const DecodeWindow> windows,
-                             double budget_ms) {
+                             const DecodeBudget& budget) {
   BarcodeReadout out;
   if (latent.empty()) return out;
   const auto started = std::chrono::steady_clock::now();
@@ -327,27 +327,33 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
   std::vector<std::array<int, 4>> reading;  // windows that read a code: x0, y0, x1, y1
   const std::span<const DecodeWindow> to_read =
       windows.empty() ? std::span<const DecodeWindow>(&whole, 1) : windows;
-  auto spent = [&] {
-    return budget_ms > 0 &&
-           std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started)
-                   .count() >= budget_ms;
+  // Whether the budget holds one more view of `px` pixels (false: it is spent).
+  auto spent = [&](long long px) {
+    if (budget.ms <= 0) return false;
+    const double ms =
+        std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started)
+            .count();
+    return ms + budget.view_ms_per_mpx * static_cast<double>(px) * 1e-6 > budget.ms ||
+           ms >= budget.ms;
   };
+  bool started_any = false;
   for (std::size_t i = 0; i < to_read.size(); ++i) {
     const DecodeWindow& w = to_read[i];
-    if (i > 0 && spent()) {
-      out.windows_left.push_back(i);
-      continue;
-    }
     const int x0 = std::clamp(w.x, 0, latent.width), y0 = std::clamp(w.y, 0, latent.height);
     const int x1 = std::clamp(w.x + w.width, x0, latent.width),
               y1 = std::clamp(w.y + w.height, y0, latent.height);
+    const long long area = static_cast<long long>(x1 - x0) * (y1 - y0);
+    if (started_any && spent(area)) {
+      out.windows_left.push_back(i);
+      continue;
+    }
     if (x1 - x0 < 1 || y1 - y0 < 1) continue;
+    started_any = true;
     zbar_lum.clear();
     // A window mostly inside one that read a code is there for what that one
     // missed: read again, the same label cost a whole decode (a code region on
     // its label's paper reaches a little past the paper's window). One that
     // reaches well beyond (another label, a whole carton) is read.
-    const long long area = static_cast<long long>(x1 - x0) * (y1 - y0);
     if (std::any_of(reading.begin(), reading.end(), [&](const std::array<int, 4>& r) {
           const long long across = std::max(0, std::min(x1, r[2]) - std::max(x0, r[0]));
           const long long h = std::max(0, std::min(y1, r[3]) - std::max(y0, r[1]));
@@ -364,7 +370,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
         LuminanceView::kSrgbToPaper, LuminanceView::kSmoothedFromBlack};
     bool window_read = false, cut = false;
     for (int v = 0; v < std::min(w.views, kLuminanceViews); ++v) {
-      if (v > 0 && spent()) {
+      if (v > 0 && spent(area)) {
         cut = true;
         break;
       }
@@ -420,8 +426,8 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
       }
     }
     // Cut short by the budget with nothing read (its views, or zbar's turn): left.
-    if (!window_read &&
-        (cut || (w.second_decoder && !linear.empty() && w.views >= kLuminanceViews && spent()))) {
+    if (!window_read && (cut || (w.second_decoder && !linear.empty() &&
+                                 w.views >= kLuminanceViews && spent(area)))) {
       out.windows_cut.push_back(i);
       continue;
     }

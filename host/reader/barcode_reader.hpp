@@ -97,6 +97,16 @@ inline constexpr const char* kDefaultSymbologies =
 /// (comma-separated, e.g. "Code128,QRCode"), else what is wrong with it.
 std::string check_symbologies(const std::string& symbologies);
 
+/// \brief The time a decode may take and what it expects a view to cost.
+struct DecodeBudget {
+  /// ms; 0: every window in every view.
+  double ms = 0;
+  /// What one view of a window costs a megapixel, ms (0: unknown): a view is
+  /// started only where the time left holds its window at this cost; unknown,
+  /// while any time is left.
+  double view_ms_per_mpx = 0;
+};
+
 /// \brief What one decode found.
 struct BarcodeReadout {
   std::vector<DecodedCode> codes;
@@ -178,14 +188,14 @@ struct DecodeWindow {
 /// passes its check). A value of a weak-check symbology counts only where a
 /// second reading backs it (read_evidence.hpp; else it goes to `unconfirmed`
 /// and the window is read on in its next view). Positions are the latent's. `try_rotate`: also look
-/// for 1-D codes turned by 90 degrees (about twice the decode time). `budget_ms` > 0: a window
-/// is started, and read in a view after its first or by zbar, only while the decode has run
-/// less than that (the first window's first view always is); the windows it did not start and
-/// those it cut short with nothing read are listed (windows_left, windows_cut).
+/// for 1-D codes turned by 90 degrees (about twice the decode time). `budget` (DecodeBudget): a
+/// window is started, and read in a view after its first or by zbar, only where the decode expects
+/// to end it within the budget (the first window's first view always is); the windows it did not
+/// start and those it cut short with nothing read are listed (windows_left, windows_cut).
 BarcodeReadout read_barcodes(const imaging::Plane& latent,
                              const std::string& symbologies = kDefaultSymbologies,
                              bool try_rotate = true, std::span<const DecodeWindow> windows = {},
-                             double budget_ms = 0);
+                             const DecodeBudget& budget = {});
 
 /// \brief Modules beyond each end of a linear symbol that quiet_zones_clear()
 /// judges: no more than any symbology's quiet zone (EAN-13 has 7 on its right,

@@ -21,7 +21,7 @@ CodeReading read_codes(const imaging::Plane& latent, std::span<const LabelRegion
   out.windows = windows.size();
   if (!windows.empty())
     out.readout =
-        read_barcodes(latent, options.symbologies, options.try_rotate, windows, options.budget_ms);
+        read_barcodes(latent, options.symbologies, options.try_rotate, windows, options.budget);
   return out;
 }
 

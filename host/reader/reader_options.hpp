@@ -29,12 +29,12 @@ struct ReaderOptions {
   /// session's cascade leaves it to its second pass, which reads those windows
   /// again under the frame's budget.
   bool second_decoder = true;
-  /// Area "labels": the decode's time, ms: windows are read in the order the
-  /// regions are given, each view only while the decode has run less (the first
+  /// Area "labels": the decode's time: windows are read in the order the
+  /// regions are given, each view only where the time left holds it (the first
   /// window's first view always is); those not started and those cut short with
-  /// nothing read are listed (BarcodeReadout::windows_left, windows_cut). 0:
-  /// every window in every view.
-  double budget_ms = 0;
+  /// nothing read are listed (BarcodeReadout::windows_left, windows_cut).
+  /// budget.ms 0: every window in every view.
+  DecodeBudget budget;
 };
 
 /// \brief The default options, reading the whole frame: what the benches and

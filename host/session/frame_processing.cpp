@@ -179,6 +179,7 @@ struct Decoded {
   std::vector<reader::LabelRegion> code;   ///< where the latent looks like a code (motion frame)
   reader::BarcodeReadout readout;
   std::optional<std::size_t> windows;  ///< decode_area "labels": the windows read
+  double budget_ms = 0;                ///< the decode's time (0: every window)
   /// Paper runs and code regions whose windows the decode's budget left: not
   /// judged and not deblurred again in this frame; read first in a frame after.
   std::vector<reader::LabelRegion> left;
@@ -191,15 +192,32 @@ struct Decoded {
   }
 };
 
+/// When frame `job`'s result is due (session clock, ns; 0: never): processing.latency_ms
+/// after it arrived; "auto": workers + 1 frame periods (a worker takes a frame every `workers`
+/// periods: one that waited up to a period for its worker and then took the worker's whole
+/// round is done by then; later, the worker is late for its next), never while the period is
+/// unknown.
+std::int64_t frame_deadline_ns(const FrameJob& job, const ProcessingConfig& processing,
+                               const WorkerShared& shared) {
+  double ms = processing.latency_ms;
+  if (ms < 0) ms = (processing.workers + 1) * shared.second_pass.period_ms();
+  if (ms <= 0 || ms >= kMaxLatencyMs || job.frame.host_arrival_ns <= 0) return 0;
+  return job.frame.host_arrival_ns + static_cast<std::int64_t>(ms * 1e6);
+}
+
 /// The first pass's decode time for a frame that has taken `spent_ms` so far
-/// (its conversion, deblur and regions; processing.decode_ms; "auto": the frame's share of the
-/// workers' time less that, at least 1 ms: the first window; the frame rate unknown, no limit).
+/// (its conversion, deblur and regions) and is due at `deadline_ns` (processing.decode_ms;
+/// "auto": half what the frame's share of the workers' time leaves after that, the other half
+/// the second pass's, and no later than the deadline; at least 1 ms: the first window; the frame
+/// rate unknown, no limit).
 double decode_budget_ms(const ProcessingConfig& processing, const WorkerShared& shared,
-                        double spent_ms) {
+                        double spent_ms, std::int64_t deadline_ns) {
   if (processing.decode_ms >= 0) return processing.decode_ms;
   const double share = shared.second_pass.frame_share_ms();
   if (share <= 0) return 0;
-  return std::max(1.0, share - spent_ms);
+  double ms = 0.5 * (share - spent_ms);
+  if (deadline_ns > 0) ms = std::min(ms, ms_between(now_ns(), deadline_ns));
+  return std::max(1.0, ms);
 }
 
 /// Keeps what a window's first view costs a megapixel lately (a moving mean
@@ -225,7 +243,7 @@ BeltBox on_belt(const reader::LabelRegion& r, double travel_px) {
 /// within what is left of the frame's share since `frame_start_ns`.
 Decoded decode(const Deblurred& image, imaging::Direction direction,
                const ProcessingConfig& processing, const FrameJob& job, WorkerShared& shared,
-               std::int64_t frame_start_ns) {
+               std::int64_t frame_start_ns, std::int64_t deadline_ns) {
   Decoded out;
   out.paper = reader::find_paper_runs(image.motion_latent);
   // Code regions serve only the labels area and the cascade's second pass.
@@ -241,17 +259,19 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
   std::vector<reader::RegionTile> tiles;
   if (processing.decode_area == reader::DecodeArea::kLabels) {
     regions_whole = reader::regions_to_read(out.paper, out.code);
-    options.budget_ms = decode_budget_ms(processing, shared, ms_between(frame_start_ns, now_ns()));
-    const double ms_per_mpx = shared.decode_ms_per_mpx.load();
-    const auto tile_px = options.budget_ms > 0 && ms_per_mpx > 0
-                             ? static_cast<long long>(options.budget_ms / ms_per_mpx * 1e6)
-                             : 0LL;
+    options.budget.ms =
+        decode_budget_ms(processing, shared, ms_between(frame_start_ns, now_ns()), deadline_ns);
+    options.budget.view_ms_per_mpx = shared.decode_ms_per_mpx.load();
+    const auto tile_px =
+        options.budget.ms > 0 && options.budget.view_ms_per_mpx > 0
+            ? static_cast<long long>(options.budget.ms / options.budget.view_ms_per_mpx * 1e6)
+            : 0LL;
     tiles = reader::cut_to_tiles(regions_whole, image.motion_latent.height, tile_px);
   }
   // Within a budget, the tiles no frame tried lately first (what one frame leaves,
   // the next reads: a label passes through several), each group the most like
   // a linear code first.
-  if (options.budget_ms > 0) {
+  if (options.budget.ms > 0) {
     std::vector<reader::LabelRegion> tile_regions;
     for (const reader::RegionTile& t : tiles) tile_regions.push_back(t.tile);
     const std::vector<double> likeness = reader::bar_likeness(image.motion_latent, tile_regions);
@@ -282,6 +302,7 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
     if (left[r]) out.left.push_back(regions_whole[r]);
   out.readout = std::move(reading.readout);
   out.windows = reading.windows;
+  out.budget_ms = options.budget.ms;
   return out;
 }
 
@@ -476,8 +497,8 @@ FrameOutcome stopped(FrameOutcome out, const StepFailure& failure, nlohmann::jso
 /// again by tv and read again, within the budget; the codes found join `decoded`, its log line and
 /// flag join `out`.
 void second_pass(Deblurred& image, Decoded& decoded, const FrameJob& job,
-                 const ProcessingConfig& processing, double first_pass_ms, WorkerShared& shared,
-                 FrameOutcome& out, nlohmann::json& flags) {
+                 const ProcessingConfig& processing, double first_pass_ms, std::int64_t deadline_ns,
+                 WorkerShared& shared, FrameOutcome& out, nlohmann::json& flags) {
   const imaging::Plane& latent = image.latent();
   const imaging::Direction direction = image.model.direction;
   for (const reader::DecodedCode& code : decoded.readout.codes)
@@ -497,13 +518,16 @@ void second_pass(Deblurred& image, Decoded& decoded, const FrameJob& job,
                   decoded.readout, direction, latent.width, latent.height));
   if (entering > 0) out.log["second_pass"]["entering"] = entering;
   if (unread.empty()) return;
-  const SecondPassFrame frame{image.electrons, image.model, image.motion_latent,
-                              image.camera_latent ? &*image.camera_latent : nullptr, job.travel_px};
+  const SecondPassFrame frame{
+      image.electrons,     image.model,
+      image.motion_latent, image.camera_latent ? &*image.camera_latent : nullptr,
+      job.travel_px,       deadline_ns};
   const SecondPass pass =
       run_second_pass(frame, unread, reader_options(processing), processing.second_pass_tries,
                       shared.second_pass, shared.belt_reads, decoded.readout);
   out.log["second_pass"].update(pass.log(shared.second_pass.credit_ms()));
   if (pass.skipped > 0) flags.push_back("second-pass-budget");
+  if (pass.past_deadline > 0) flags.push_back("deadline");
 }
 
 }  // namespace
@@ -526,6 +550,7 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config, WorkerSha
                            const imaging::FlatField* flat) {
   FrameOutcome out = start_outcome(job);
   const std::int64_t t0 = now_ns();
+  const std::int64_t deadline_ns = frame_deadline_ns(job, config.processing, shared);
   out.log = log_head(job, config);
   nlohmann::json flags = nlohmann::json::array();
 
@@ -541,8 +566,11 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config, WorkerSha
   out.log.update(deblurred.value().log);
 
   const imaging::CaptureModel& model = deblurred.value().model;
-  Decoded decoded = decode(deblurred.value(), model.direction, config.processing, job, shared, t0);
+  Decoded decoded =
+      decode(deblurred.value(), model.direction, config.processing, job, shared, t0, deadline_ns);
   if (decoded.windows) out.log["decode_windows"] = *decoded.windows;
+  if (decoded.budget_ms > 0 && decoded.budget_ms < kMaxDecodeMs)
+    out.log["decode_budget_ms"] = std::round(decoded.budget_ms * 10) / 10;
   if (!decoded.left.empty()) {
     // Over the decode's budget: counted and flagged, read in a frame after.
     out.log["decode_left"] = decoded.left.size();
@@ -555,8 +583,8 @@ FrameOutcome process_frame(FrameJob& job, const SessionConfig& config, WorkerSha
   }
   const std::int64_t t3 = now_ns();
   if (config.processing.cascade && decoded.readout.decoder_fault.empty())
-    second_pass(deblurred.value(), decoded, job, config.processing, ms_between(t0, t3), shared, out,
-                flags);
+    second_pass(deblurred.value(), decoded, job, config.processing, ms_between(t0, t3), deadline_ns,
+                shared, out, flags);
   const std::int64_t t4 = now_ns();
 
   const imaging::Plane& latent = deblurred.value().latent();

@@ -9,6 +9,7 @@
 #include "reader/code_reading.hpp"
 #include "reader/code_regions.hpp"
 #include "session/second_pass_window.hpp"
+#include "session/session_clock.hpp"
 #include "session/session_config.hpp"
 #include "session/window_tries.hpp"
 
@@ -17,6 +18,12 @@ namespace {
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+/// Whether work expected to take `ms` from now would end past `deadline_ns` (0: none).
+bool past(std::int64_t deadline_ns, double ms) {
+  return deadline_ns > 0 &&
+         static_cast<double>(now_ns()) + ms * 1e6 > static_cast<double>(deadline_ns);
 }
 
 }  // namespace
@@ -124,6 +131,11 @@ double SecondPassBudget::credit_ms() const {
   return credit_ms_;
 }
 
+double SecondPassBudget::period_ms() const {
+  const std::lock_guard lock(mutex_);
+  return period_ms_;
+}
+
 nlohmann::json SecondPass::log(double credit_ms) const {
   nlohmann::json windows = nlohmann::json::array();
   for (const WindowRetry& r : retried) {
@@ -174,10 +186,12 @@ nlohmann::json SecondPass::log(double credit_ms) const {
       window["isotropic"] = {{"read", r.isotropic->read}, {"weights", r.isotropic->weights}};
     windows.push_back(std::move(window));
   }
-  return {{"windows", std::move(windows)},
-          {"skipped", skipped},
-          {"read_before", read_before},
-          {"credit_ms", std::round(credit_ms * 10) / 10}};
+  nlohmann::json out = {{"windows", std::move(windows)},
+                        {"skipped", skipped},
+                        {"read_before", read_before},
+                        {"credit_ms", std::round(credit_ms * 10) / 10}};
+  if (past_deadline > 0) out["past_deadline"] = past_deadline;
+  return out;
 }
 
 std::vector<reader::LabelRegion> unread_runs(std::span<const reader::LabelRegion> paper,
@@ -227,6 +241,10 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
     // The window's estimate pays for tv and the bar sums; every other try is
     // charged its own estimate before it runs, and settled on its own.
     const double estimate = budget.estimate_ms(window.pixels());
+    if (past(frame.deadline_ns, estimate)) {
+      ++out.past_deadline;
+      continue;
+    }
     if (!budget.take(estimate)) {
       ++out.skipped;
       continue;
@@ -238,6 +256,10 @@ SecondPass run_second_pass(const SecondPassFrame& frame,
     // Runs try `name` (`body`, returning the values it read) where the budget
     // holds `try_estimate`; false where it does not.
     auto paid = [&](const char* name, double try_estimate, std::size_t pixels, auto&& body) {
+      if (past(frame.deadline_ns, try_estimate)) {
+        ++out.past_deadline;
+        return false;
+      }
       if (!budget.take(try_estimate)) return false;
       const auto t1 = std::chrono::steady_clock::now();
       std::vector<std::string> read = body();

@@ -57,6 +57,9 @@ class SecondPassBudget {
   double estimate_ms(std::size_t pixels) const;
   /// \brief The credit left, ms.
   double credit_ms() const;
+  /// \brief The frame period the cameras' timestamps show (until then the one
+  /// expected), ms; 0: not known yet.
+  double period_ms() const;
   /// \brief The workers' time a frame has, all workers together: the frame period
   /// the cameras' timestamps show (until then the one expected) times the
   /// workers times kShare, ms (0: the period is not known yet).
@@ -184,7 +187,10 @@ struct SecondPass {
   std::vector<WindowRetry> retried;
   int skipped = 0;      ///< windows left as they were: the budget was spent
   int read_before = 0;  ///< windows left as they were: their object was read in another frame
-  /// The frame's line entry: {"windows": [...], "skipped": n, "read_before": n, "credit_ms": c}.
+  int past_deadline =
+      0;  ///< windows and tries not started: they would end past the frame's deadline
+  /// The frame's line entry: {"windows": [...], "skipped": n, "read_before": n,
+  /// "past_deadline": n (where any), "credit_ms": c}.
   nlohmann::json log(double credit_ms) const;
 };
 
@@ -197,6 +203,8 @@ struct SecondPassFrame {
   imaging::Plane& motion_latent;
   imaging::Plane* camera_latent;  ///< null: the motion latent is the camera's
   double travel_px = 0;           ///< the belt's travel at this frame (belt = along - travel)
+  /// When the frame's result is due, on the session's clock (session_clock.hpp), ns; 0: never.
+  std::int64_t deadline_ns = 0;
 };
 
 /// \brief The paper runs of `paper` (the motion frame's) where `readout` has no

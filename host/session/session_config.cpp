@@ -459,6 +459,7 @@ Result<SessionConfig, std::string> parse_config(const std::string& text,
                [](const std::string& n) { return "'" + n + "' is none of " + kProcessingMethods; }),
            auto_or_ms("second_pass_ms", c.processing.second_pass_ms),
            auto_or_ms("decode_ms", c.processing.decode_ms),
+           auto_or_ms("latency_ms", c.processing.latency_ms),
            {"workers", c.processing.workers},
            {"threads_per_worker", c.processing.threads_per_worker},
            {"queue_depth", c.processing.queue_depth},
@@ -661,6 +662,11 @@ std::string check_config(SessionConfig& c) {
     return outside("processing.decode_ms", c.processing.decode_ms,
                    "\"auto\" or (0, " + number_text(kMaxDecodeMs) + "] ms per frame",
                    "the first pass's decode time");
+  if (!(c.processing.latency_ms == -1 ||
+        (c.processing.latency_ms > 0 && c.processing.latency_ms <= kMaxLatencyMs)))
+    return outside("processing.latency_ms", c.processing.latency_ms,
+                   "\"auto\" or (0, " + number_text(kMaxLatencyMs) + "] ms",
+                   "each frame's result due after its arrival");
   if (c.processing.threads_per_worker < 1 || c.processing.threads_per_worker > 64)
     return problem("processing.threads_per_worker",
                    "must be within 1..64" + got(c.processing.threads_per_worker));

@@ -85,6 +85,11 @@ struct ProcessingConfig {
   /// its conversion and deblur, every window while the frame rate is unknown
   /// (offline); > 0: that many ms; kMaxDecodeMs: every window.
   double decode_ms = -1;
+  /// Each frame's result is due this long after the frame arrived, ms: the
+  /// decode and the second pass start no window they expect to end later
+  /// (docs/session.md, "The frame's deadline"); < 0 ("auto"): workers + 1 frame
+  /// periods, none while the frame rate is unknown (offline); kMaxLatencyMs: none.
+  double latency_ms = -1;
   /// The cascade's second-pass tries beyond tv on the window (second_pass_tries.hpp).
   SecondPassTries second_pass_tries;
   int workers = 2;              ///< frames deblurred at once
@@ -134,7 +139,12 @@ std::string processing_method_name(const ProcessingConfig& processing);
 /// decode_area; a window of paper or print cut by the frame's edge in the
 /// linear view only (the line sees its label whole in another frame).
 inline reader::ReaderOptions reader_options(const ProcessingConfig& processing) {
-  return {processing.symbologies, processing.try_rotate, processing.decode_area, 1};
+  reader::ReaderOptions options;
+  options.symbologies = processing.symbologies;
+  options.try_rotate = processing.try_rotate;
+  options.area = processing.decode_area;
+  options.cut_window_views = 1;
+  return options;
 }
 
 struct OutputConfig {
@@ -186,6 +196,7 @@ inline constexpr std::size_t kMaxQueueDepth = 256;  ///< processing.queue_depth
 inline constexpr double kMaxDiskBudgetMb = 1e9;     ///< output.disk_budget_mb (a petabyte)
 inline constexpr double kMaxSecondPassMs = 1e6;     ///< processing.second_pass_ms
 inline constexpr double kMaxDecodeMs = 1e6;         ///< processing.decode_ms
+inline constexpr double kMaxLatencyMs = 1e6;        ///< processing.latency_ms
 inline constexpr double kMaxCrosstalk = 100;        ///< each optics.crosstalk entry
 /// results.mqtt.queue_limit: below MQTT's 65535 message ids, each waiting result holding one.
 inline constexpr std::size_t kMaxMqttQueue = 50000;

@@ -82,17 +82,26 @@ TEST(BarcodeReader, WindowsBeyondTheTimeBudgetAreListedNotRead) {
   const BarcodeReadout every = read_barcodes(frame, kDefaultSymbologies, true, windows);
   ASSERT_EQ(every.codes.size(), 1u);
   EXPECT_TRUE(every.windows_left.empty() && every.windows_cut.empty());
-  const BarcodeReadout bounded = read_barcodes(frame, kDefaultSymbologies, true, windows, 1e-3);
+  const BarcodeReadout bounded = read_barcodes(frame, kDefaultSymbologies, true, windows, {1e-3});
   ASSERT_EQ(bounded.codes.size(), 1u);
   EXPECT_EQ(bounded.codes[0].text, "BUDGET-1");
   EXPECT_EQ(bounded.windows_left, (std::vector<std::size_t>{1, 2}));
   EXPECT_TRUE(bounded.windows_cut.empty());
   // The label last: the blank window's first view is read, nothing else.
   const std::vector<DecodeWindow> label_last = {windows[1], windows[0]};
-  const BarcodeReadout late = read_barcodes(frame, kDefaultSymbologies, true, label_last, 1e-3);
+  const BarcodeReadout late = read_barcodes(frame, kDefaultSymbologies, true, label_last, {1e-3});
   EXPECT_TRUE(late.codes.empty());
   EXPECT_EQ(late.windows_cut, (std::vector<std::size_t>{0}));
   EXPECT_EQ(late.windows_left, (std::vector<std::size_t>{1}));
+  // At a view cost of 1 ms a pixel, a second of budget holds no more window of
+  // 400 x 200 (80 s) but does hold one of 10 x 10 (0.1 s): the larger is left,
+  // the smaller after it is read.
+  const std::vector<DecodeWindow> by_cost = {windows[0], windows[1], {900, 50, 10, 10}};
+  const BarcodeReadout costed = read_barcodes(frame, kDefaultSymbologies, true, by_cost,
+                                              {.ms = 1000, .view_ms_per_mpx = 1e6});
+  ASSERT_EQ(costed.codes.size(), 1u);
+  EXPECT_EQ(costed.windows_left, (std::vector<std::size_t>{1}));
+  EXPECT_TRUE(costed.windows_cut.empty());
 }
 
 TEST(BarcodeReader, AnImageThatTripsZXingsMicroQrAssertionIsReportedNotFatal) {

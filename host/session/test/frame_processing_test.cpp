@@ -20,6 +20,7 @@
 #include "device/virtual_controller.hpp"
 #include "imaging/bar_sums.hpp"
 #include "imaging/capture_descriptor.hpp"
+#include "session/session_clock.hpp"
 #include "session/window_tries.hpp"
 #include "sim/scene.hpp"
 
@@ -395,6 +396,61 @@ TEST(FrameProcessing, AWindowTheBudgetCannotPayForIsFlaggedAndStaysANoRead) {
   const auto& flags = out.log["flags"];
   EXPECT_NE(std::find(flags.begin(), flags.end(), "second-pass-budget"), flags.end())
       << flags.dump();
+}
+
+TEST(FrameProcessing, WorkThatWouldEndPastTheFramesDeadlineIsNotStartedAndIsNamed) {
+  SessionConfig config = small_config();
+  std::optional<FrameJob> missed = frame_joint_wiener_misses(config);
+  ASSERT_TRUE(missed);
+  config.processing.second_pass_ms = kMaxSecondPassMs;  // the credit pays for every window
+  config.processing.latency_ms = 1;                     // but the result is due 1 ms after arrival
+  ASSERT_EQ(check_config(config), "");
+  WorkerShared shared(config);
+  FrameJob job = *missed;
+  job.frame.host_arrival_ns = now_ns();
+  const FrameOutcome out = process_frame(job, config, shared, nullptr);
+  ASSERT_TRUE(out.processed);
+  EXPECT_TRUE(out.decode_failed);
+  EXPECT_GE(out.log["second_pass"]["past_deadline"].get<int>(), 1) << out.log.dump();
+  EXPECT_TRUE(out.log["second_pass"]["windows"].empty());
+  const auto& flags = out.log["flags"];
+  EXPECT_NE(std::find(flags.begin(), flags.end(), "deadline"), flags.end()) << flags.dump();
+  // Due a second after arrival, the same frame's window is deblurred again and read.
+  config.processing.latency_ms = 1000;
+  WorkerShared roomy(config);
+  FrameJob again = *missed;
+  again.frame.host_arrival_ns = now_ns();
+  const FrameOutcome read = process_frame(again, config, roomy, nullptr);
+  EXPECT_FALSE(read.log["second_pass"].contains("past_deadline")) << read.log.dump();
+  EXPECT_FALSE(read.log["second_pass"]["windows"].empty());
+}
+
+TEST(FrameProcessing, TheAutoDecodeBudgetIsHalfWhatTheFramesShareLeavesAndEndsByItsDeadline) {
+  SessionConfig config = small_config();
+  ASSERT_EQ(check_config(config), "");
+  const std::vector<FrameJob> jobs = belt_frames(
+      config, 40, [](const capture::Frame& f, int i) { return i >= 4 && !f.truth.empty(); }, 1);
+  ASSERT_FALSE(jobs.empty());
+  // 30 fps on the config's workers: the share is 2 x 33.3 ms x kShare.
+  WorkerShared shared(config);
+  shared.second_pass.expect_period_ms(1000 / 30.0);
+  const double share = shared.second_pass.frame_share_ms();
+  FrameJob job = jobs[0];
+  job.frame.host_arrival_ns = now_ns();
+  const FrameOutcome out = process_frame(job, config, shared, nullptr);
+  ASSERT_TRUE(out.processed) << out.log.dump();
+  const double before_decode =
+      out.log["times_ms"]["convert"].get<double>() + out.log["times_ms"]["deblur"].get<double>();
+  const double budget = out.log["decode_budget_ms"].get<double>();
+  EXPECT_LE(budget, 0.5 * (share - before_decode) + 0.1) << out.log.dump();
+  EXPECT_GE(budget, 1.0);
+  // A frame that waited until a ms before its deadline (workers + 1 periods)
+  // gets the first window's minimum.
+  FrameJob late = jobs[0];
+  const double due_ms = (config.processing.workers + 1) * 1000 / 30.0;
+  late.frame.host_arrival_ns = now_ns() - static_cast<std::int64_t>((due_ms - 1) * 1e6);
+  const FrameOutcome rushed = process_frame(late, config, shared, nullptr);
+  EXPECT_EQ(rushed.log["decode_budget_ms"].get<double>(), 1.0) << rushed.log.dump();
 }
 
 // A label coming into view upstream: its code region reaches into the columns

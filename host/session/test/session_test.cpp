@@ -405,6 +405,18 @@ TEST(SessionConfigFile, ReadsTheAnnotatedExampleAndNamesBadKeys) {
   EXPECT_NE(check_config(no_time).find("processing.decode_ms"), std::string::npos);
   negative.processing.second_pass_ms = 2e6;
   EXPECT_NE(check_config(negative).find("processing.second_pass_ms"), std::string::npos);
+  // Each frame's deadline after its arrival: "auto" (the default) or ms within (0, 1e6].
+  EXPECT_EQ(config.processing.latency_ms, -1);
+  const auto due = parse_config("[processing]\nlatency_ms = 80\n", "line3.toml");
+  ASSERT_TRUE(due.ok()) << due.error();
+  EXPECT_EQ(due.value().processing.latency_ms, 80);
+  const auto due_word = parse_config("[processing]\nlatency_ms = \"soon\"\n", "line3.toml");
+  ASSERT_FALSE(due_word.ok());
+  EXPECT_NE(due_word.error().find("line3.toml:2: processing.latency_ms"), std::string::npos)
+      << due_word.error();
+  SessionConfig never;
+  never.processing.latency_ms = 0;
+  EXPECT_NE(check_config(never).find("processing.latency_ms"), std::string::npos);
 
   // Code "auto": optics.electrons is optional (the session measures the light).
   EXPECT_TRUE(config.optics.electrons_given);  // the example gives it
