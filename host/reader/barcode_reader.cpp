@@ -327,14 +327,15 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
   std::vector<std::array<int, 4>> reading;  // windows that read a code: x0, y0, x1, y1
   const std::span<const DecodeWindow> to_read =
       windows.empty() ? std::span<const DecodeWindow>(&whole, 1) : windows;
-  // Whether the budget holds one more view of `px` pixels (false: it is spent).
-  auto spent = [&](long long px) {
-    if (budget.ms <= 0) return false;
+  // Whether one more view of `px` pixels would end past the deadline, or past the
+  // budget (`within_budget`; the budget is spent).
+  auto spent = [&](long long px, bool within_budget = true) {
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started)
             .count();
-    return ms + budget.view_ms_per_mpx * static_cast<double>(px) * 1e-6 > budget.ms ||
-           ms >= budget.ms;
+    const double ends = ms + budget.view_ms_per_mpx * static_cast<double>(px) * 1e-6;
+    if (budget.deadline_ms >= 0 && ends > budget.deadline_ms) return true;
+    return within_budget && budget.ms > 0 && (ends > budget.ms || ms >= budget.ms);
   };
   bool started_any = false;
   for (std::size_t i = 0; i < to_read.size(); ++i) {
@@ -343,7 +344,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
     const int x1 = std::clamp(w.x + w.width, x0, latent.width),
               y1 = std::clamp(w.y + w.height, y0, latent.height);
     const long long area = static_cast<long long>(x1 - x0) * (y1 - y0);
-    if (started_any && spent(area)) {
+    if (spent(area, started_any)) {
       out.windows_left.push_back(i);
       continue;
     }

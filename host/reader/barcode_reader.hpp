@@ -105,6 +105,9 @@ struct DecodeBudget {
   /// started only where the time left holds its window at this cost; unknown,
   /// while any time is left.
   double view_ms_per_mpx = 0;
+  /// ms; no view, the first window's included, is started that is expected to
+  /// end later than this (at view_ms_per_mpx); < 0: none.
+  double deadline_ms = -1;
 };
 
 /// \brief What one decode found.
@@ -190,8 +193,9 @@ struct DecodeWindow {
 /// and the window is read on in its next view). Positions are the latent's. `try_rotate`: also look
 /// for 1-D codes turned by 90 degrees (about twice the decode time). `budget` (DecodeBudget): a
 /// window is started, and read in a view after its first or by zbar, only where the decode expects
-/// to end it within the budget (the first window's first view always is); the windows it did not
-/// start and those it cut short with nothing read are listed (windows_left, windows_cut).
+/// to end it within the budget (the first window's first view always is, unless it would end past
+/// the budget's deadline); the windows it did not start and those it cut short with nothing read
+/// are listed (windows_left, windows_cut).
 BarcodeReadout read_barcodes(const imaging::Plane& latent,
                              const std::string& symbologies = kDefaultSymbologies,
                              bool try_rotate = true, std::span<const DecodeWindow> windows = {},

@@ -208,8 +208,8 @@ std::int64_t frame_deadline_ns(const FrameJob& job, const ProcessingConfig& proc
 /// The first pass's decode time for a frame that has taken `spent_ms` so far
 /// (its conversion, deblur and regions) and is due at `deadline_ns` (processing.decode_ms;
 /// "auto": half what the frame's share of the workers' time leaves after that, the other half
-/// the second pass's, and no later than the deadline; at least 1 ms: the first window; the frame
-/// rate unknown, no limit).
+/// the second pass's, and no later than the deadline; at least 1 ms: the first window, where the
+/// deadline holds it; the frame rate unknown, no limit).
 double decode_budget_ms(const ProcessingConfig& processing, const WorkerShared& shared,
                         double spent_ms, std::int64_t deadline_ns) {
   if (processing.decode_ms >= 0) return processing.decode_ms;
@@ -262,6 +262,8 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
     options.budget.ms =
         decode_budget_ms(processing, shared, ms_between(frame_start_ns, now_ns()), deadline_ns);
     options.budget.view_ms_per_mpx = shared.decode_ms_per_mpx.load();
+    if (deadline_ns > 0)
+      options.budget.deadline_ms = std::max(0.0, ms_between(now_ns(), deadline_ns));
     const auto tile_px =
         options.budget.ms > 0 && options.budget.view_ms_per_mpx > 0
             ? static_cast<long long>(options.budget.ms / options.budget.view_ms_per_mpx * 1e6)

@@ -102,6 +102,11 @@ TEST(BarcodeReader, WindowsBeyondTheTimeBudgetAreListedNotRead) {
   ASSERT_EQ(costed.codes.size(), 1u);
   EXPECT_EQ(costed.windows_left, (std::vector<std::size_t>{1}));
   EXPECT_TRUE(costed.windows_cut.empty());
+  // A deadline that holds no view leaves even the first window.
+  const BarcodeReadout due = read_barcodes(frame, kDefaultSymbologies, true, windows,
+                                           {.ms = 1000, .view_ms_per_mpx = 1, .deadline_ms = 0});
+  EXPECT_TRUE(due.codes.empty());
+  EXPECT_EQ(due.windows_left, (std::vector<std::size_t>{0, 1, 2}));
 }
 
 TEST(BarcodeReader, AnImageThatTripsZXingsMicroQrAssertionIsReportedNotFatal) {

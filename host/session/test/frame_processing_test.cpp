@@ -403,9 +403,11 @@ TEST(FrameProcessing, WorkThatWouldEndPastTheFramesDeadlineIsNotStartedAndIsName
   std::optional<FrameJob> missed = frame_joint_wiener_misses(config);
   ASSERT_TRUE(missed);
   config.processing.second_pass_ms = kMaxSecondPassMs;  // the credit pays for every window
-  config.processing.latency_ms = 1;                     // but the result is due 1 ms after arrival
+  config.processing.latency_ms = 1e5;  // the result is due 100 s after arrival
   ASSERT_EQ(check_config(config), "");
   WorkerShared shared(config);
+  // A window of tv has lately cost 1,000 s a megapixel: none ends by then.
+  shared.second_pass.settle(0, 5e9, 1'000'000);
   FrameJob job = *missed;
   job.frame.host_arrival_ns = now_ns();
   const FrameOutcome out = process_frame(job, config, shared, nullptr);
@@ -445,12 +447,16 @@ TEST(FrameProcessing, TheAutoDecodeBudgetIsHalfWhatTheFramesShareLeavesAndEndsBy
   EXPECT_LE(budget, 0.5 * (share - before_decode) + 0.1) << out.log.dump();
   EXPECT_GE(budget, 1.0);
   // A frame that waited until a ms before its deadline (workers + 1 periods)
-  // gets the first window's minimum.
+  // gets the first window's minimum, and the deadline does not hold even that:
+  // every window is left for a frame after, none judged.
   FrameJob late = jobs[0];
   const double due_ms = (config.processing.workers + 1) * 1000 / 30.0;
   late.frame.host_arrival_ns = now_ns() - static_cast<std::int64_t>((due_ms - 1) * 1e6);
   const FrameOutcome rushed = process_frame(late, config, shared, nullptr);
   EXPECT_EQ(rushed.log["decode_budget_ms"].get<double>(), 1.0) << rushed.log.dump();
+  EXPECT_GE(rushed.log.value("decode_windows", 0), 1);
+  EXPECT_EQ(rushed.log.value("decode_left", 0), rushed.log.value("decode_windows", 0));
+  EXPECT_TRUE(rushed.sightings.empty());
 }
 
 // A label coming into view upstream: its code region reaches into the columns
