@@ -33,6 +33,7 @@
 #include "bench/real_print_photos.hpp"
 #include "bench/real_print_session.hpp"
 #include "imaging/exposure_timeline.hpp"
+#include "session/frame_memory.hpp"
 #include "session/session_config.hpp"
 #include "sim/colour_scene.hpp"
 #include "sim/forward_model.hpp"
@@ -176,6 +177,7 @@ double median(std::vector<double> v) {
 }
 
 int run(const Options& o) {
+  session::keep_freed_frame_memory();  // as a session does: frames' planes not page-faulted anew
   std::cout << "CPU: " << bench::cpu_model() << " (one thread)\n";
   const double credit_ms = o.second_pass_ms >= 0 ? o.second_pass_ms : bench::line_credit_ms(60, 2);
   const bench::SessionLine line(o.width, o.height, kBlurPx, o.electrons);  // its model
