@@ -82,6 +82,7 @@ SessionRead SessionLine::read(const imaging::Image& dn) const {
   session::WorkerShared shared(config_);
   if (fps_ > 0) {
     shared.second_pass.expect_period_ms(1000 / fps_);
+    shared.live_arrivals = true;
     job.frame.host_arrival_ns = session::now_ns();
   }
   session::FrameOutcome out = session::process_frame(job, config_, shared, nullptr);

@@ -172,6 +172,10 @@ class CameraSource {
   virtual void stop() = 0;
   /// \brief Counters since start().
   virtual CameraCounters counters() const = 0;
+  /// \brief Whether frames arrive as they are exposed (a camera, a paced sim):
+  /// their arrival times are the line's. A source that delivers frames as fast
+  /// as it makes or reads them (files, an unpaced sim) is not live.
+  virtual bool live() const { return true; }
   /// \brief Settings the backend could neither control nor read back, and
   /// formats accepted with lost accuracy, each a sentence naming it.
   virtual std::vector<std::string> warnings() const { return {}; }

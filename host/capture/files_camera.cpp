@@ -97,6 +97,7 @@ class FilesCamera final : public CameraSource {
 
   void stop() override { next_ = frames_.size(); }
   CameraCounters counters() const override { return counters_; }
+  bool live() const override { return false; }
 
  private:
   bool load(std::size_t index, Frame& frame, std::string& error) const {

@@ -230,6 +230,7 @@ class SimCamera final : public CameraSource {
     }
   }
   CameraCounters counters() const override { return counters_; }
+  bool live() const override { return o_.pace_realtime; }
 
  private:
   /// A label's rendered tile and where its symbol lies in it (barcode labels).

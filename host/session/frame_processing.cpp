@@ -196,10 +196,11 @@ struct Decoded {
 /// after it arrived; "auto": workers + 1 frame periods (a worker takes a frame every `workers`
 /// periods: one that waited up to a period for its worker and then took the worker's whole
 /// round is done by then; later, the worker is late for its next), never while the period is
-/// unknown.
+/// unknown or where frames do not arrive as they are exposed (WorkerShared::live_arrivals).
 std::int64_t frame_deadline_ns(const FrameJob& job, const ProcessingConfig& processing,
                                const WorkerShared& shared) {
   double ms = processing.latency_ms;
+  if (ms < 0 && !shared.live_arrivals) return 0;
   if (ms < 0) ms = (processing.workers + 1) * shared.second_pass.period_ms();
   if (ms <= 0 || ms >= kMaxLatencyMs || job.frame.host_arrival_ns <= 0) return 0;
   return job.frame.host_arrival_ns + static_cast<std::int64_t>(ms * 1e6);

@@ -46,6 +46,10 @@ struct WorkerShared {
   /// reader::view_cost_ms_per_mpx() until frames say; 0 for decode area
   /// "frame"): the first pass's decode cuts regions to its budget by it.
   std::atomic<double> decode_ms_per_mpx;
+  /// Frames arrive as they are exposed (capture::CameraSource::live()): their
+  /// arrival is the line's, and processing.latency_ms "auto" sets each a
+  /// deadline. Set before the workers start.
+  bool live_arrivals = false;
 };
 
 /// \brief Whether a frame that left `waiting` frames in a queue of

@@ -104,7 +104,8 @@ SessionOutcome run_session(SessionConfig config, const std::atomic<bool>& stop,
   // worker pool -> results thread, in capture order.
   Pipeline pipeline(config.processing.queue_depth);
   const std::int64_t start_ns = now_ns();
-  WorkerPool workers(pipeline, config, flat_field, camera->settings().frame_rate_hz.value_or(0));
+  WorkerPool workers(pipeline, config, flat_field, camera->settings().frame_rate_hz.value_or(0),
+                     camera->live());
   ResultsStage results(config, imaging::length_along_motion(direction, format.width, format.height),
                        start_ns, pipeline, folder, server, config.results.mqtt ? &mqtt : nullptr);
   if (hooks.live_view) {

@@ -20,9 +20,10 @@ void plan_row_ffts(const capture::FrameFormat& format, imaging::Direction direct
 }
 
 WorkerPool::WorkerPool(Pipeline& pipeline, const SessionConfig& config,
-                       const imaging::FlatField* flat, double frame_rate_hz)
+                       const imaging::FlatField* flat, double frame_rate_hz, bool live)
     : shared_(config) {
   if (frame_rate_hz > 0) shared_.second_pass.expect_period_ms(1000 / frame_rate_hz);
+  shared_.live_arrivals = live;
   for (int w = 0; w < config.processing.workers; ++w)
     threads_.emplace_back([this, &pipeline, &config, flat] {
       FrameJob job;

@@ -26,9 +26,10 @@ class WorkerPool {
   /// \brief Starts the workers on `pipeline`'s jobs; `config` and `flat` (may
   /// be null) must outlive join(). `frame_rate_hz` (> 0): the camera's, the
   /// frames' share of the workers until their timestamps show it (a busy
-  /// frame's decode is bounded from the first frame on).
+  /// frame's decode is bounded from the first frame on). `live`: frames arrive
+  /// as they are exposed (capture::CameraSource::live()), so each has a deadline.
   WorkerPool(Pipeline& pipeline, const SessionConfig& config, const imaging::FlatField* flat,
-             double frame_rate_hz = 0);
+             double frame_rate_hz = 0, bool live = false);
   WorkerPool(const WorkerPool&) = delete;
   WorkerPool& operator=(const WorkerPool&) = delete;
   ~WorkerPool() { join(); }

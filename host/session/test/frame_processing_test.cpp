@@ -403,7 +403,7 @@ TEST(FrameProcessing, WorkThatWouldEndPastTheFramesDeadlineIsNotStartedAndIsName
   std::optional<FrameJob> missed = frame_joint_wiener_misses(config);
   ASSERT_TRUE(missed);
   config.processing.second_pass_ms = kMaxSecondPassMs;  // the credit pays for every window
-  config.processing.latency_ms = 1e5;  // the result is due 100 s after arrival
+  config.processing.latency_ms = 1e5;                   // the result is due 100 s after arrival
   ASSERT_EQ(check_config(config), "");
   WorkerShared shared(config);
   // A window of tv has lately cost 1,000 s a megapixel: none ends by then.
@@ -436,6 +436,7 @@ TEST(FrameProcessing, TheAutoDecodeBudgetIsHalfWhatTheFramesShareLeavesAndEndsBy
   // 30 fps on the config's workers: the share is 2 x 33.3 ms x kShare.
   WorkerShared shared(config);
   shared.second_pass.expect_period_ms(1000 / 30.0);
+  shared.live_arrivals = true;  // frames arriving as exposed: deadlines from their arrival
   const double share = shared.second_pass.frame_share_ms();
   FrameJob job = jobs[0];
   job.frame.host_arrival_ns = now_ns();
