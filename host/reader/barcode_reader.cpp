@@ -327,15 +327,16 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
   std::vector<std::array<int, 4>> reading;  // windows that read a code: x0, y0, x1, y1
   const std::span<const DecodeWindow> to_read =
       windows.empty() ? std::span<const DecodeWindow>(&whole, 1) : windows;
-  // Whether one more view of `px` pixels would end past the deadline, or past the
-  // budget (`within_budget`; the budget is spent).
+  // Whether one more view of `px` pixels would end past the deadline, or
+  // (`within_budget`) the budget is spent.
   auto spent = [&](long long px, bool within_budget = true) {
     const double ms =
         std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - started)
             .count();
-    const double ends = ms + budget.view_ms_per_mpx * static_cast<double>(px) * 1e-6;
-    if (budget.deadline_ms >= 0 && ends > budget.deadline_ms) return true;
-    return within_budget && budget.ms > 0 && (ends > budget.ms || ms >= budget.ms);
+    if (budget.deadline_ms >= 0 &&
+        ms + budget.view_ms_per_mpx * static_cast<double>(px) * 1e-6 > budget.deadline_ms)
+      return true;
+    return within_budget && budget.ms > 0 && ms >= budget.ms;
   };
   bool started_any = false;
   for (std::size_t i = 0; i < to_read.size(); ++i) {

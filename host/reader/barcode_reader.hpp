@@ -99,15 +99,13 @@ std::string check_symbologies(const std::string& symbologies);
 
 /// \brief The time a decode may take and what it expects a view to cost.
 struct DecodeBudget {
-  /// ms; 0: every window in every view.
+  /// ms: a view is started while the decode has run less; 0: every window in every view.
   double ms = 0;
-  /// What one view of a window costs a megapixel, ms (0: unknown): a view is
-  /// started only where the time left holds its window at this cost; unknown,
-  /// while any time is left.
-  double view_ms_per_mpx = 0;
   /// ms; no view, the first window's included, is started that is expected to
   /// end later than this (at view_ms_per_mpx); < 0: none.
   double deadline_ms = -1;
+  /// What one view of a window costs a megapixel, ms (0: unknown).
+  double view_ms_per_mpx = 0;
 };
 
 /// \brief What one decode found.
@@ -192,10 +190,10 @@ struct DecodeWindow {
 /// second reading backs it (read_evidence.hpp; else it goes to `unconfirmed`
 /// and the window is read on in its next view). Positions are the latent's. `try_rotate`: also look
 /// for 1-D codes turned by 90 degrees (about twice the decode time). `budget` (DecodeBudget): a
-/// window is started, and read in a view after its first or by zbar, only where the decode expects
-/// to end it within the budget (the first window's first view always is, unless it would end past
-/// the budget's deadline); the windows it did not start and those it cut short with nothing read
-/// are listed (windows_left, windows_cut).
+/// window is started, and read in a view after its first or by zbar, only while the decode has run
+/// less than the budget (the first window's first view always is) and where the view is expected to
+/// end by the budget's deadline; the windows it did not start and those it cut short with nothing
+/// read are listed (windows_left, windows_cut).
 BarcodeReadout read_barcodes(const imaging::Plane& latent,
                              const std::string& symbologies = kDefaultSymbologies,
                              bool try_rotate = true, std::span<const DecodeWindow> windows = {},

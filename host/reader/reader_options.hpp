@@ -30,10 +30,11 @@ struct ReaderOptions {
   /// again under the frame's budget.
   bool second_decoder = true;
   /// Area "labels": the decode's time: windows are read in the order the
-  /// regions are given, each view only where the time left holds it (the first
-  /// window's first view always is, unless past the budget's deadline); those not started and those
-  /// cut short with nothing read are listed (BarcodeReadout::windows_left, windows_cut). budget.ms
-  /// 0: every window in every view.
+  /// regions are given, each view only while the decode has run less (the first
+  /// window's first view always is) and where it is expected to end by the
+  /// deadline; those not started and those cut short with nothing read are
+  /// listed (BarcodeReadout::windows_left, windows_cut). budget.ms 0: every
+  /// window in every view.
   DecodeBudget budget;
 };
 

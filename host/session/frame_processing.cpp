@@ -208,15 +208,14 @@ std::int64_t frame_deadline_ns(const FrameJob& job, const ProcessingConfig& proc
 
 /// The first pass's decode time for a frame that has taken `spent_ms` so far
 /// (its conversion, deblur and regions) and is due at `deadline_ns` (processing.decode_ms;
-/// "auto": half what the frame's share of the workers' time leaves after that, the other half
-/// the second pass's, and no later than the deadline; at least 1 ms: the first window, where the
-/// deadline holds it; the frame rate unknown, no limit).
+/// "auto": the frame's share of the workers' time less that, and no later than the deadline; at
+/// least 1 ms: the first window, where the deadline holds it; the frame rate unknown, no limit).
 double decode_budget_ms(const ProcessingConfig& processing, const WorkerShared& shared,
                         double spent_ms, std::int64_t deadline_ns) {
   if (processing.decode_ms >= 0) return processing.decode_ms;
   const double share = shared.second_pass.frame_share_ms();
   if (share <= 0) return 0;
-  double ms = 0.5 * (share - spent_ms);
+  double ms = share - spent_ms;
   if (deadline_ns > 0) ms = std::min(ms, ms_between(now_ns(), deadline_ns));
   return std::max(1.0, ms);
 }

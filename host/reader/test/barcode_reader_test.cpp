@@ -93,18 +93,18 @@ TEST(BarcodeReader, WindowsBeyondTheTimeBudgetAreListedNotRead) {
   EXPECT_TRUE(late.codes.empty());
   EXPECT_EQ(late.windows_cut, (std::vector<std::size_t>{0}));
   EXPECT_EQ(late.windows_left, (std::vector<std::size_t>{1}));
-  // At a view cost of 1 ms a pixel, a second of budget holds no more window of
-  // 400 x 200 (80 s) but does hold one of 10 x 10 (0.1 s): the larger is left,
-  // the smaller after it is read.
-  const std::vector<DecodeWindow> by_cost = {windows[0], windows[1], {900, 50, 10, 10}};
+  // At a view cost of 0.01 ms a pixel, a deadline a second away holds the
+  // label's window (0.8 s) but no more the whole frame's (2.4 s), and still one
+  // of 10 x 10 (1 ms): the frame's is left, the smaller after it is read.
+  const std::vector<DecodeWindow> by_cost = {windows[0], {0, 0, 1200, 200}, {900, 50, 10, 10}};
   const BarcodeReadout costed = read_barcodes(frame, kDefaultSymbologies, true, by_cost,
-                                              {.ms = 1000, .view_ms_per_mpx = 1e6});
+                                              {.deadline_ms = 1000, .view_ms_per_mpx = 1e4});
   ASSERT_EQ(costed.codes.size(), 1u);
   EXPECT_EQ(costed.windows_left, (std::vector<std::size_t>{1}));
   EXPECT_TRUE(costed.windows_cut.empty());
   // A deadline that holds no view leaves even the first window.
   const BarcodeReadout due = read_barcodes(frame, kDefaultSymbologies, true, windows,
-                                           {.ms = 1000, .view_ms_per_mpx = 1, .deadline_ms = 0});
+                                           {.ms = 1000, .deadline_ms = 0, .view_ms_per_mpx = 1});
   EXPECT_TRUE(due.codes.empty());
   EXPECT_EQ(due.windows_left, (std::vector<std::size_t>{0, 1, 2}));
 }
