@@ -171,8 +171,10 @@ TEST(SimSession, ARingLongerThanTheControllersEventQueueLosesNoEventNorObject) {
     config.camera.options.push_back({"pace_realtime", "true"});
     config.processing.queue_depth = 24;  // none dropped
     // Every second pass the cascade wants, in both runs: what it reads must not
-    // depend on how busy the machine was (the budget's credit is CPU time).
+    // depend on how busy the machine was (the budget's credit is CPU time), nor
+    // on each frame's deadline (wall time from its arrival).
     config.processing.second_pass_ms = kMaxSecondPassMs;
+    config.processing.latency_ms = kMaxLatencyMs;
     config.output.report = false;
     const SessionOutcome outcome = run(config);
     EXPECT_EQ(outcome.error, "");
