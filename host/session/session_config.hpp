@@ -69,6 +69,9 @@ struct OpticsConfig {
   int bit_depth = 12;
 };
 
+/// processing.latency_ms at most, and its default: no deadline.
+inline constexpr double kMaxLatencyMs = 1e6;
+
 struct ProcessingConfig {
   /// The method that deblurs each whole frame ("cascade": joint Wiener).
   imaging::Method method = imaging::Method::kJointWiener;
@@ -88,8 +91,9 @@ struct ProcessingConfig {
   /// Each frame's result is due this long after the frame arrived, ms: the
   /// decode and the second pass start no window they expect to end later
   /// (docs/session.md, "The frame's deadline"); < 0 ("auto"): workers + 1 frame
-  /// periods, none while the frame rate is unknown (offline); kMaxLatencyMs: none.
-  double latency_ms = -1;
+  /// periods, none while the frame rate is unknown or frames do not arrive as
+  /// exposed; kMaxLatencyMs (the default): none.
+  double latency_ms = kMaxLatencyMs;
   /// The cascade's second-pass tries beyond tv on the window (second_pass_tries.hpp).
   SecondPassTries second_pass_tries;
   int workers = 2;              ///< frames deblurred at once
@@ -196,7 +200,6 @@ inline constexpr std::size_t kMaxQueueDepth = 256;  ///< processing.queue_depth
 inline constexpr double kMaxDiskBudgetMb = 1e9;     ///< output.disk_budget_mb (a petabyte)
 inline constexpr double kMaxSecondPassMs = 1e6;     ///< processing.second_pass_ms
 inline constexpr double kMaxDecodeMs = 1e6;         ///< processing.decode_ms
-inline constexpr double kMaxLatencyMs = 1e6;        ///< processing.latency_ms
 inline constexpr double kMaxCrosstalk = 100;        ///< each optics.crosstalk entry
 /// results.mqtt.queue_limit: below MQTT's 65535 message ids, each waiting result holding one.
 inline constexpr std::size_t kMaxMqttQueue = 50000;

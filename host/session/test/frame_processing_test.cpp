@@ -429,6 +429,7 @@ TEST(FrameProcessing, WorkThatWouldEndPastTheFramesDeadlineIsNotStartedAndIsName
 
 TEST(FrameProcessing, TheAutoDecodeBudgetIsWhatTheFramesShareLeavesAndEndsByItsDeadline) {
   SessionConfig config = small_config();
+  config.processing.latency_ms = -1;  // "auto": workers + 1 frame periods
   ASSERT_EQ(check_config(config), "");
   const std::vector<FrameJob> jobs = belt_frames(
       config, 40, [](const capture::Frame& f, int i) { return i >= 4 && !f.truth.empty(); }, 1);

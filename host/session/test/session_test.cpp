@@ -407,8 +407,11 @@ TEST(SessionConfigFile, ReadsTheAnnotatedExampleAndNamesBadKeys) {
   EXPECT_NE(check_config(no_time).find("processing.decode_ms"), std::string::npos);
   negative.processing.second_pass_ms = 2e6;
   EXPECT_NE(check_config(negative).find("processing.second_pass_ms"), std::string::npos);
-  // Each frame's deadline after its arrival: "auto" (the default) or ms within (0, 1e6].
-  EXPECT_EQ(config.processing.latency_ms, -1);
+  // Each frame's deadline after its arrival: none (the default), "auto" or ms within (0, 1e6].
+  EXPECT_EQ(config.processing.latency_ms, kMaxLatencyMs);
+  const auto due_auto = parse_config("[processing]\nlatency_ms = \"auto\"\n", "line3.toml");
+  ASSERT_TRUE(due_auto.ok()) << due_auto.error();
+  EXPECT_EQ(due_auto.value().processing.latency_ms, -1);
   const auto due = parse_config("[processing]\nlatency_ms = 80\n", "line3.toml");
   ASSERT_TRUE(due.ok()) << due.error();
   EXPECT_EQ(due.value().processing.latency_ms, 80);
