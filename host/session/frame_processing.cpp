@@ -207,16 +207,16 @@ std::int64_t frame_deadline_ns(const FrameJob& job, const ProcessingConfig& proc
 }
 
 /// The first pass's decode time for a frame that has taken `spent_ms` so far
-/// (its conversion, deblur and regions) and is due at `deadline_ns` (processing.decode_ms;
-/// "auto": the frame's share of the workers' time less that, and no later than the deadline; at
-/// least 1 ms: the first window, where the deadline holds it; the frame rate unknown, no limit).
+/// (its conversion, deblur and regions) and is due in `due_ms` (< 0: never) (processing.decode_ms;
+/// "auto": the frame's share of the workers' time less that, and no more than `due_ms`; at least
+/// 1 ms: the first window, where the deadline holds it; the frame rate unknown, no limit).
 double decode_budget_ms(const ProcessingConfig& processing, const WorkerShared& shared,
-                        double spent_ms, std::int64_t deadline_ns) {
+                        double spent_ms, double due_ms) {
   if (processing.decode_ms >= 0) return processing.decode_ms;
   const double share = shared.second_pass.frame_share_ms();
   if (share <= 0) return 0;
   double ms = share - spent_ms;
-  if (deadline_ns > 0) ms = std::min(ms, ms_between(now_ns(), deadline_ns));
+  if (due_ms >= 0) ms = std::min(ms, due_ms);
   return std::max(1.0, ms);
 }
 
@@ -259,11 +259,11 @@ Decoded decode(const Deblurred& image, imaging::Direction direction,
   std::vector<reader::RegionTile> tiles;
   if (processing.decode_area == reader::DecodeArea::kLabels) {
     regions_whole = reader::regions_to_read(out.paper, out.code);
-    options.budget.ms =
-        decode_budget_ms(processing, shared, ms_between(frame_start_ns, now_ns()), deadline_ns);
+    const std::int64_t now = now_ns();
+    options.budget.deadline_ms = deadline_ns > 0 ? std::max(0.0, ms_between(now, deadline_ns)) : -1;
+    options.budget.ms = decode_budget_ms(processing, shared, ms_between(frame_start_ns, now),
+                                         options.budget.deadline_ms);
     options.budget.view_ms_per_mpx = shared.decode_ms_per_mpx.load();
-    if (deadline_ns > 0)
-      options.budget.deadline_ms = std::max(0.0, ms_between(now_ns(), deadline_ns));
     const auto tile_px =
         options.budget.ms > 0 && options.budget.view_ms_per_mpx > 0
             ? static_cast<long long>(options.budget.ms / options.budget.view_ms_per_mpx * 1e6)

@@ -187,8 +187,8 @@ struct SecondPass {
   std::vector<WindowRetry> retried;
   int skipped = 0;      ///< windows left as they were: the budget was spent
   int read_before = 0;  ///< windows left as they were: their object was read in another frame
-  int past_deadline =
-      0;  ///< windows and tries not started: they would end past the frame's deadline
+  /// Windows and tries not started: they would end past the frame's deadline.
+  int past_deadline = 0;
   /// The frame's line entry: {"windows": [...], "skipped": n, "read_before": n,
   /// "past_deadline": n (where any), "credit_ms": c}.
   nlohmann::json log(double credit_ms) const;

@@ -13,6 +13,7 @@
 
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <set>
 #include <string>
 #include <thread>
@@ -380,28 +381,32 @@ TEST(SessionConfigFile, ReadsTheAnnotatedExampleAndNamesBadKeys) {
   EXPECT_NE(bad_method.error().find("processing.method 'fast' is none of cascade"),
             std::string::npos)
       << bad_method.error();
-  const auto fixed = parse_config("[processing]\nsecond_pass_ms = 5\n", "line3.toml");
-  ASSERT_TRUE(fixed.ok()) << fixed.error();
-  EXPECT_EQ(fixed.value().processing.second_pass_ms, 5);
-  const auto bad_word = parse_config("[processing]\nsecond_pass_ms = \"lots\"\n", "line3.toml");
-  ASSERT_FALSE(bad_word.ok());
-  EXPECT_NE(bad_word.error().find("line3.toml:2: processing.second_pass_ms"), std::string::npos)
-      << bad_word.error();
+  // A processing key taking "auto" (-1) or ms: each parsed into `field`, a
+  // word refused naming the key on its line (after `blank_lines` blank lines).
+  auto auto_or_ms = [](const std::string& key, double ProcessingConfig::*field, double ms,
+                       int blank_lines) {
+    const auto automatic = parse_config("[processing]\n" + key + " = \"auto\"\n", "line3.toml");
+    ASSERT_TRUE(automatic.ok()) << automatic.error();
+    EXPECT_EQ(automatic.value().processing.*field, -1) << key;
+    const auto fixed = parse_config(
+        "[processing]\n" + key + " = " + std::to_string(std::lround(ms)) + "\n", "line3.toml");
+    ASSERT_TRUE(fixed.ok()) << fixed.error();
+    EXPECT_EQ(fixed.value().processing.*field, ms) << key;
+    const auto word =
+        parse_config("[processing]\n" + std::string(static_cast<std::size_t>(blank_lines), '\n') +
+                         key + " = \"soon\"\n",
+                     "line3.toml");
+    ASSERT_FALSE(word.ok()) << key;
+    const std::string at = "line3.toml:" + std::to_string(2 + blank_lines) + ": processing." + key;
+    EXPECT_NE(word.error().find(at), std::string::npos) << word.error();
+  };
+  auto_or_ms("second_pass_ms", &ProcessingConfig::second_pass_ms, 5, 0);
   SessionConfig negative;
   negative.processing.second_pass_ms = -5;
   EXPECT_NE(check_config(negative).find("processing.second_pass_ms"), std::string::npos);
   // The first pass's decode budget: "auto" (the default) or ms per frame within (0, 1e6].
   EXPECT_EQ(config.processing.decode_ms, -1);
-  const auto decode_auto = parse_config("[processing]\ndecode_ms = \"auto\"\n", "line3.toml");
-  ASSERT_TRUE(decode_auto.ok()) << decode_auto.error();
-  EXPECT_EQ(decode_auto.value().processing.decode_ms, -1);
-  const auto decode_fixed = parse_config("[processing]\ndecode_ms = 12\n", "line3.toml");
-  ASSERT_TRUE(decode_fixed.ok()) << decode_fixed.error();
-  EXPECT_EQ(decode_fixed.value().processing.decode_ms, 12);
-  const auto decode_word = parse_config("[processing]\n\ndecode_ms = \"soon\"\n", "line3.toml");
-  ASSERT_FALSE(decode_word.ok());
-  EXPECT_NE(decode_word.error().find("line3.toml:3: processing.decode_ms"), std::string::npos)
-      << decode_word.error();
+  auto_or_ms("decode_ms", &ProcessingConfig::decode_ms, 12, 1);
   SessionConfig no_time;
   no_time.processing.decode_ms = 0;
   EXPECT_NE(check_config(no_time).find("processing.decode_ms"), std::string::npos);
@@ -409,16 +414,7 @@ TEST(SessionConfigFile, ReadsTheAnnotatedExampleAndNamesBadKeys) {
   EXPECT_NE(check_config(negative).find("processing.second_pass_ms"), std::string::npos);
   // Each frame's deadline after its arrival: none (the default), "auto" or ms within (0, 1e6].
   EXPECT_EQ(config.processing.latency_ms, kMaxLatencyMs);
-  const auto due_auto = parse_config("[processing]\nlatency_ms = \"auto\"\n", "line3.toml");
-  ASSERT_TRUE(due_auto.ok()) << due_auto.error();
-  EXPECT_EQ(due_auto.value().processing.latency_ms, -1);
-  const auto due = parse_config("[processing]\nlatency_ms = 80\n", "line3.toml");
-  ASSERT_TRUE(due.ok()) << due.error();
-  EXPECT_EQ(due.value().processing.latency_ms, 80);
-  const auto due_word = parse_config("[processing]\nlatency_ms = \"soon\"\n", "line3.toml");
-  ASSERT_FALSE(due_word.ok());
-  EXPECT_NE(due_word.error().find("line3.toml:2: processing.latency_ms"), std::string::npos)
-      << due_word.error();
+  auto_or_ms("latency_ms", &ProcessingConfig::latency_ms, 80, 0);
   SessionConfig never;
   never.processing.latency_ms = 0;
   EXPECT_NE(check_config(never).find("processing.latency_ms"), std::string::npos);
