@@ -43,6 +43,54 @@ bool zbar_reads(std::span<const std::uint8_t> lum, int width, int height,
                      [&](const ZbarSymbol& s) { return same_value(s.text, s.format, code); });
 }
 
+/// A window cut down to a symbol's surroundings: its own copies of the rows.
+struct Surroundings {
+  std::vector<std::uint8_t> lum, zbar_lum;
+  LumWindow window;
+};
+
+/// `window` cut to `code`'s surroundings: the box of its corners and its
+/// extent along x, widened along its reading direction by a quarter of its
+/// length each way (every symbology's quiet zone, 7 to 11 modules, is less)
+/// and across its bars by half its length each way (a linear symbol's bars are
+/// taller than the rows that read it; each half then still holds its bars).
+/// A second reading of the symbol needs no more of the window; the rest is
+/// other print, which costs a decoder time and is no evidence of this symbol.
+Surroundings surroundings(const DecodedCode& code, const LumWindow& window, bool along_x) {
+  double left = code.min_x, right = code.max_x, top = code.centre_y, bottom = code.centre_y;
+  for (const CodePoint& p : code.quality.corners) {
+    left = std::min(left, p.x);
+    right = std::max(right, p.x);
+    top = std::min(top, p.y);
+    bottom = std::max(bottom, p.y);
+  }
+  const double length = along_x ? right - left : bottom - top;
+  const double along_margin = std::max(16.0, length / 4),
+               across_margin = std::max(16.0, length / 2);
+  const double margin_x = along_x ? along_margin : across_margin;
+  const double margin_y = along_x ? across_margin : along_margin;
+  auto clip = [](double v, int size) {
+    return std::clamp(static_cast<int>(std::lround(v)), 0, size);
+  };
+  const int x0 = clip(left - margin_x - window.x0, window.width),
+            x1 = clip(right + margin_x - window.x0, window.width),
+            y0 = clip(top - margin_y - window.y0, window.height),
+            y1 = clip(bottom + margin_y - window.y0, window.height);
+  Surroundings out;
+  const auto copy = [&](std::span<const std::uint8_t> from, std::vector<std::uint8_t>& to) {
+    if (from.empty()) return;
+    to.reserve(static_cast<std::size_t>(x1 - x0) * static_cast<std::size_t>(y1 - y0));
+    for (int y = y0; y < y1; ++y) {
+      const auto row = from.begin() + static_cast<std::ptrdiff_t>(y) * window.width;
+      to.insert(to.end(), row + x0, row + x1);
+    }
+  };
+  copy(window.lum, out.lum);
+  copy(window.zbar_lum, out.zbar_lum);
+  out.window = {out.lum, x1 - x0, y1 - y0, window.x0 + x0, window.y0 + y0, out.zbar_lum};
+  return out;
+}
+
 }  // namespace
 
 bool weak_check(const std::string& format) {
@@ -60,12 +108,14 @@ std::string symbology_family(const std::string& format) {
   return format;
 }
 
-std::string corroboration(const DecodedCode& code, const LumWindow& window,
+std::string corroboration(const DecodedCode& code, const LumWindow& whole,
                           const ZXing::DecodeHints& hints, const std::string& symbologies,
                           bool try_rotate, int independent_apart) {
-  // The symbol's centre across its bars, in the window: the halves meet there.
   const double turn = code.orientation_deg * std::numbers::pi / 180;
   const bool along_x = std::abs(std::cos(turn)) >= std::abs(std::sin(turn));
+  const Surroundings near = surroundings(code, whole, along_x);
+  const LumWindow& window = near.window;
+  // The symbol's centre across its bars, in the window: the halves meet there.
   const int across = along_x ? window.height : window.width;
   const int cut = static_cast<int>(
       std::lround(along_x ? code.centre_y - window.y0 : code.centre_x - window.x0));

@@ -50,16 +50,18 @@ struct LumWindow {
 };
 
 /// \brief What backs `code` (a value of a weak-check symbology read by
-/// code.decoder in `window`): "halves" where the window cut in two across the
+/// code.decoder in `window`), judged on the symbol's surroundings in the window
+/// (its box widened by a quarter of its length along its reading direction and
+/// half its length across: its quiet zones and bars, not the rest of a window
+/// that may span a carton): "halves" where they, cut in two across the
 /// symbol's bars at its centre, `independent_apart` - 1 rows left out at the
 /// cut (DecodeWindow's: so that no sample of the frame is in both), reads the
 /// same value in each half (by ZXing with `hints`, on the rows ZXing asks to
 /// agree, two by default; or by zbar for a value zbar read): two readings with
 /// independent noise on either side of the symbol's centre (not for no_check()
-/// symbologies); "decoders" where the other decoder reads it in
-/// the window (zbar, in the view ZXing read it in or in its own, for a value
-/// ZXing read); else empty: nothing does, and the value is not reported. No
-/// halves where `independent_apart` is 0. `symbologies` and `try_rotate` as
+/// symbologies); "decoders" where the other decoder reads it there (zbar, in the view ZXing read it
+/// in or in its own, for a value ZXing read); else empty: nothing does, and the value is not
+/// reported. No halves where `independent_apart` is 0. `symbologies` and `try_rotate` as
 /// read_barcodes() takes them.
 std::string corroboration(const DecodedCode& code, const LumWindow& window,
                           const ZXing::DecodeHints& hints, const std::string& symbologies,

@@ -117,6 +117,12 @@ TEST(ReadEvidence, ASymbologyWithNoCheckIsBackedByTheOtherDecoderNotByItsHalves)
   code.decoder = "zxing";
   code.centre_x = width / 2.0;
   code.centre_y = height / 2.0;
+  for (int i = 0; i < 4; ++i)  // where it lies, as read_barcodes() gives it
+    code.quality.corners[static_cast<std::size_t>(i)] = {
+        static_cast<double>(results[0].position()[i].x),
+        static_cast<double>(results[0].position()[i].y)};
+  code.min_x = std::min(code.quality.corners[0].x, code.quality.corners[3].x);
+  code.max_x = std::max(code.quality.corners[1].x, code.quality.corners[2].x);
   ASSERT_EQ(code.format, "Code39");
   ASSERT_EQ(code.text, "PARCEL42");
   EXPECT_TRUE(no_check(code.format));
@@ -158,6 +164,36 @@ TEST(ReadEvidence, AHalfNoRowOfWhichReadsLeavesTheSecondDecoderAsTheOnlyBacking)
   EXPECT_EQ(corroboration(code, window, hints, kDefaultSymbologies, true), "halves");
   // Neither where rows share samples across a gap wider than the clean half.
   EXPECT_EQ(corroboration(code, window, hints, kDefaultSymbologies, true, 2 * 150), "decoders");
+}
+
+TEST(ReadEvidence, OnlyTheSymbolsOwnSurroundingsBackIt) {
+  // Two copies of one label side by side, the left one's bars drowned in noise
+  // (four times their contrast, rms): a value said to lie on the left copy is
+  // backed by neither its halves nor zbar there; the clean copy beside it, the
+  // same value elsewhere in the window, is no evidence of this symbol.
+  const imaging::Plane label = rendered("ean13:590123412345", 480, 240, 2.5);
+  const BarcodeReadout clean = read_barcodes(label);
+  ASSERT_EQ(clean.codes.size(), 1u);
+  imaging::Plane pair(2 * label.width, label.height);
+  std::mt19937_64 rng(11);
+  std::normal_distribution<float> noise(0.0f, 4.0f);
+  for (int y = 0; y < label.height; ++y)
+    for (int x = 0; x < label.width; ++x) {
+      pair.at(x, y) = label.at(x, y) + noise(rng);
+      pair.at(x + label.width, y) = label.at(x, y);
+    }
+  const std::vector<std::uint8_t> lum = luminance(pair);
+  const LumWindow window{lum, pair.width, pair.height, 0, 0, {}};
+  ZXing::DecodeHints hints;
+  hints.setFormats(ZXing::BarcodeFormat::LinearCodes).setTryHarder(true);
+  EXPECT_EQ(corroboration(clean.codes[0], window, hints, kDefaultSymbologies, true), "");
+  // The same value said to lie on the clean copy is backed there.
+  DecodedCode right = clean.codes[0];
+  right.centre_x += label.width;
+  right.min_x += label.width;
+  right.max_x += label.width;
+  for (CodePoint& p : right.quality.corners) p.x += label.width;
+  EXPECT_EQ(corroboration(right, window, hints, kDefaultSymbologies, true), "halves");
 }
 
 TEST(ReadEvidence, AnUpcEAndAnEan13OverOnePlaceConflict) {
