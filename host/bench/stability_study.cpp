@@ -283,9 +283,9 @@ std::vector<Factor> make_factors() {
       auto scores = standard_methods(electrons, m, truth, t);
       for (const auto prior :
            {imaging::ColourPrior::kThreeBands, imaging::ColourPrior::kPrintPlane}) {
-        const auto r =
-            imaging::deblur_per_channel(imaging::MotionFrame::make(electrons, m.direction).value(),
-                                        m, 1.0 / imaging::kLabelGradientVariance, 1, prior);
+        const auto r = imaging::deblur_per_channel(
+            imaging::MotionFrame::make(electrons, m.direction).value(), m,
+            1.0 / imaging::kLabelGradientVariance, {.threads = 1, .prior = prior});
         scores.push_back(r.ok() ? judge(r.value().grey, truth, t.scene.content) : Score{});
       }
       return scores;

@@ -1,5 +1,6 @@
 #include "imaging/joint_wiener.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <numbers>
 
@@ -69,19 +70,18 @@ std::vector<std::complex<double>> psf_spectrum(std::span<const double> taps, int
   return real_dft_bins(taps, n);
 }
 
-JointWiener::JointWiener(std::span<const ChannelPsf> channels, int width, double lambda,
-                         PlanEffort effort)
-    : width_(width),
-      fft_(
-          [&] {
-            std::size_t longest = 1;
-            for (const auto& c : channels) longest = std::max(longest, c.taps.size());
-            return row_fft_length(width + static_cast<int>(longest));
-          }(),
-          effort) {
-  const int n = fft_.length();
-  const auto size = static_cast<std::size_t>(n);
-  const std::size_t bins = size / 2 + 1;
+namespace {
+
+int padded_row_length(std::span<const ChannelPsf> channels, int width) {
+  std::size_t longest = 1;
+  for (const auto& c : channels) longest = std::max(longest, c.taps.size());
+  return row_fft_length(width + static_cast<int>(longest));
+}
+
+/// conj(G_c) / v_c / D per channel on bins 0..n/2, D = sum_c |G_c|^2 / v_c + lambda P.
+std::vector<std::vector<std::complex<double>>> wiener_transfer(std::span<const ChannelPsf> channels,
+                                                               int n, double lambda) {
+  const std::size_t bins = static_cast<std::size_t>(n) / 2 + 1;
   std::vector<std::vector<std::complex<double>>> spectra;
   std::vector<double> denominator(bins, 0.0);
   for (const auto& c : channels) {
@@ -94,15 +94,35 @@ JointWiener::JointWiener(std::span<const ChannelPsf> channels, int width, double
     denominator[j] += lambda * label_prior_power(w);
     if (denominator[j] <= 0) denominator[j] = 1e-30;
   }
-  for (std::size_t c = 0; c < channels.size(); ++c) {
+  for (std::size_t c = 0; c < channels.size(); ++c)
+    for (std::size_t j = 0; j < bins; ++j)
+      spectra[c][j] = std::conj(spectra[c][j]) / channels[c].noise_variance / denominator[j];
+  return spectra;
+}
+
+}  // namespace
+
+JointWiener::JointWiener(std::span<const ChannelPsf> channels, int width, double lambda,
+                         PlanEffort effort)
+    : JointWiener(wiener_transfer(channels, padded_row_length(channels, width), lambda),
+                  padded_row_length(channels, width), width, effort) {}
+
+JointWiener::JointWiener(std::span<const std::vector<std::complex<double>>> transfer, int n,
+                         int width, PlanEffort effort)
+    : width_(width), fft_(n, effort) {
+  const auto size = static_cast<std::size_t>(n);
+  const std::size_t bins = size / 2 + 1;
+  for (const auto& t : transfer) {
     AlignedFloats filter(2 * size);
     std::complex<float>* bins_of = filter.complex();
     for (std::size_t j = 0; j < bins; ++j) {
-      const std::complex<double> h = std::conj(spectra[c][j]) / channels[c].noise_variance /
-                                     denominator[j] / static_cast<double>(n);
-      bins_of[j] = std::complex<float>(h);
+      bins_of[j] = std::complex<float>(t[j] / static_cast<double>(n));
       if (j > 0 && j < size - j) bins_of[size - j] = std::conj(bins_of[j]);  // a real filter's
     }
+    // A real filter's DC and Nyquist bins are real; any rounding left in their
+    // imaginary parts would mix the two rows of a pair.
+    bins_of[0].imag(0.0f);
+    bins_of[size / 2].imag(0.0f);
     // A constant row m_c has bin 0 = n m_c and nothing else: its latent is
     // sum_c Re(filter_c[0]) n m_c everywhere.
     dc_gains_.push_back(bins_of[0].real() * static_cast<float>(n));

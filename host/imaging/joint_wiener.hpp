@@ -66,6 +66,12 @@ class JointWiener {
   /// \brief `lambda` weights the gradient prior (inverse latent gradient variance).
   JointWiener(std::span<const ChannelPsf> channels, int width, double lambda,
               PlanEffort effort = PlanEffort::kEstimate);
+  /// \brief Any filter of this shape (the latent's spectrum is sum_c T_c Y_c) from
+  /// its channels' transfer functions T_c on bins 0..n/2 of an n-point row FFT (n
+  /// even, at least width plus the longest PSF, as row_fft_length() gives); each
+  /// must be the spectrum of a real impulse response.
+  JointWiener(std::span<const std::vector<std::complex<double>>> transfer, int n, int width,
+              PlanEffort effort = PlanEffort::kEstimate);
 
   int width() const { return width_; }
   int channel_count() const { return static_cast<int>(filters_.size()); }
@@ -111,7 +117,8 @@ class JointWiener {
 
   int width_;
   RowPairFft fft_;
-  /// conj(G_c) / v_c / D / N on all N bins (Hermitian), per channel, interleaved complex.
+  /// T_c / N on all N bins (Hermitian), per channel, interleaved complex (joint
+  /// Wiener: T_c = conj(G_c) / v_c / D).
   std::vector<AlignedFloats> filters_;
   std::vector<float> blend_;
   std::vector<Scratch> workers_;

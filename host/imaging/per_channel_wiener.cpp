@@ -10,7 +10,6 @@
 #include "imaging/exposure_timeline.hpp"
 #include "imaging/joint_wiener.hpp"
 #include "imaging/row_fft.hpp"
-#include "imaging/row_pool.hpp"
 
 namespace flutterscan::imaging {
 namespace {
@@ -91,14 +90,18 @@ struct BandBasis {
   std::array<double, 3> offset{};
 };
 
-/// Solves for the K latents of `basis` per frequency from the three channels
-/// (motion-frame rows); returns them as planes (motion frame). With `mix` (K
-/// weights), one plane instead: sum_i mix[i] a_i, filtered as one (the sum is
-/// linear in each bin, so one inverse transform a row serves it).
-std::vector<Plane> solve_latents(const std::vector<Plane>& rows, const CaptureModel& model,
+/// Solves for the K latents of `basis` per frequency from the frame's three
+/// channels; returns them as planes (motion frame). With `mix` (K weights), one
+/// plane instead: sum_i mix[i] a_i, filtered as one (the sum is linear in each
+/// bin). Each output is a filter of joint Wiener's shape (a transfer function
+/// per channel, summed), so it runs on JointWiener's rows in pairs and, with
+/// options.skip_flat_rows, its flat rows.
+std::vector<Plane> solve_latents(const MotionFrame& frame, const CaptureModel& model,
                                  std::span<const double> noise_variance, const BandBasis& bands,
-                                 double lambda, int threads, std::span<const double> mix = {}) {
-  const int width = rows[0].width, height = rows[0].height;
+                                 double lambda, const PerChannelOptions& options,
+                                 std::span<const double> mix = {}) {
+  const std::vector<Plane>& rows = frame.image().channels;
+  const int width = rows[0].width;
   const int latents = static_cast<int>(bands.basis.size());
   const auto segments = slot_segments(model);
   CaptureModel ambient_only = model;
@@ -122,16 +125,17 @@ std::vector<Plane> solve_latents(const std::vector<Plane>& rows, const CaptureMo
       offset_electrons[static_cast<std::size_t>(c)] +=
           white * bands.offset[static_cast<std::size_t>(k)];
     }
-  const RowFft fft(row_fft_length(width + static_cast<int>(longest)));
-  const int n = fft.length();
-  const auto bins = static_cast<std::size_t>(fft.bins());
+  const int n = row_fft_length(width + static_cast<int>(longest));
+  const auto bins = static_cast<std::size_t>(n / 2 + 1);
   std::vector<std::vector<Complex>> h, ambient;
   for (int k = 0; k < 3; ++k) {
     h.push_back(psf_spectrum(led_taps[static_cast<std::size_t>(k)], n));
     ambient.push_back(psf_spectrum(ambient_taps[static_cast<std::size_t>(k)], n));
   }
-  // filter[j][i * 3 + c]: latent i's weight on channel c's spectrum in bin j (1 / n folded in).
-  std::vector<std::array<std::complex<float>, 9>> filter(bins);
+  // transfer[i][c][j]: latent i's weight on channel c's spectrum in bin j.
+  std::vector<std::vector<std::vector<Complex>>> transfer(
+      static_cast<std::size_t>(latents),
+      std::vector<std::vector<Complex>>(3, std::vector<Complex>(bins)));
   for (std::size_t j = 0; j < bins; ++j) {
     Matrix3 a{};  // channel c from latent i: sum_k (M[c][k] H_k + ambient) basis[i][k]
     for (int c = 0; c < 3; ++c)
@@ -157,60 +161,33 @@ std::vector<Plane> solve_latents(const std::vector<Plane>& rows, const CaptureMo
         rhs[i][c] = std::conj(a[c][i]) / noise_variance[static_cast<std::size_t>(c)];
     }
     const Matrix3 x = solve3(normal, rhs);
-    for (int i = 0; i < 3; ++i)
+    for (int i = 0; i < latents; ++i)
       for (int c = 0; c < 3; ++c)
-        filter[j][static_cast<std::size_t>(i * 3 + c)] =
-            std::complex<float>(x[i][c] / static_cast<double>(n));
+        transfer[static_cast<std::size_t>(i)][static_cast<std::size_t>(c)][j] = x[i][c];
+  }
+  if (!mix.empty()) {
+    std::vector<std::vector<Complex>> mixed(3, std::vector<Complex>(bins));
+    for (std::size_t i = 0; i < transfer.size(); ++i)
+      for (std::size_t c = 0; c < 3; ++c)
+        for (std::size_t j = 0; j < bins; ++j) mixed[c][j] += mix[i] * transfer[i][c][j];
+    transfer = {std::move(mixed)};
   }
 
-  if (!mix.empty()) {
-    for (auto& f : filter) {
-      std::array<std::complex<float>, 9> mixed{};
-      for (int i = 0; i < latents; ++i)
-        for (int c = 0; c < 3; ++c)
-          mixed[static_cast<std::size_t>(c)] +=
-              static_cast<float>(mix[static_cast<std::size_t>(i)]) *
-              f[static_cast<std::size_t>(i * 3 + c)];
-      f = mixed;
-    }
+  std::vector<Plane> out;
+  for (const auto& output : transfer) {
+    JointWiener filter(output, n, width, options.plan_effort);
+    if (options.skip_flat_rows)  // noise without shot noise, as deblur() gives it
+      filter.skip_flat_rows(std::vector<double>(3, channel_noise_variance(model, 0)));
+    Plane latent = filter.deconvolve(rows, options.threads, &frame.row_levels());
+    // The offset, by linearity: the filter of y_c - o_c is the filter of y_c less
+    // sum_c T_c(0) o_c (a constant row has only a DC bin).
+    double shift = 0;
+    for (std::size_t c = 0; c < 3; ++c) shift += output[c][0].real() * offset_electrons[c];
+    if (shift != 0)
+      for (float& p : latent.pixels) p -= static_cast<float>(shift);
+    undo_psf_lead(latent, pixel_model_lead(model.pixel_model));
+    out.push_back(std::move(latent));
   }
-  const int outputs = mix.empty() ? latents : 1;
-  const std::vector<float> blend = periodic_blend(width, n);
-  std::vector<Plane> out(static_cast<std::size_t>(outputs), Plane(width, height));
-  RowPool pool(std::max(1, std::min(threads, height)));
-  pool.run(height, [&](int first, int last, int) {
-    std::vector<AlignedFloats> padded, spectra;
-    for (int c = 0; c < 3; ++c) {
-      padded.emplace_back(static_cast<std::size_t>(n));
-      spectra.emplace_back(2 * bins);
-    }
-    AlignedFloats latent_spectrum(2 * bins), latent_row(static_cast<std::size_t>(n));
-    for (int y = first; y < last; ++y) {
-      for (int c = 0; c < 3; ++c) {
-        const auto cu = static_cast<std::size_t>(c);
-        const auto source = rows[cu].row(y);
-        const auto offset = static_cast<float>(offset_electrons[cu]);
-        for (int x = 0; x < width; ++x)
-          padded[cu][static_cast<std::size_t>(x)] = source[static_cast<std::size_t>(x)] - offset;
-        extend_row_periodically(padded[cu].span(), width, blend);
-        fft.forward(padded[cu].data(), spectra[cu].complex());
-      }
-      for (int i = 0; i < outputs; ++i) {
-        std::complex<float>* spectrum = latent_spectrum.complex();
-        for (std::size_t j = 0; j < bins; ++j) {
-          std::complex<float> sum = 0;
-          for (int c = 0; c < 3; ++c)
-            sum += filter[j][static_cast<std::size_t>(i * 3 + c)] *
-                   spectra[static_cast<std::size_t>(c)].complex()[j];
-          spectrum[j] = sum;
-        }
-        fft.inverse(spectrum, latent_row.data());
-        std::copy(latent_row.data(), latent_row.data() + width,
-                  out[static_cast<std::size_t>(i)].row(y).begin());
-      }
-    }
-  });
-  for (auto& latent : out) undo_psf_lead(latent, pixel_model_lead(model.pixel_model));
   return out;
 }
 
@@ -273,8 +250,7 @@ BandBasis print_plane(const std::vector<Plane>& bands, double blur_px) {
 
 Result<PerChannelResult, std::string> deblur_per_channel(const MotionFrame& frame,
                                                          const CaptureModel& model, double lambda,
-                                                         int threads, ColourPrior prior,
-                                                         PerChannelOutput output) {
+                                                         const PerChannelOptions& options) {
   using Out = Result<PerChannelResult, std::string>;
   if (auto problem = capture_model_problem(model); !problem.empty()) return Out::failure(problem);
   if (model.channels != 3 || model.leds != 3)
@@ -294,23 +270,23 @@ Result<PerChannelResult, std::string> deblur_per_channel(const MotionFrame& fram
     result.noise_variance.push_back(channel_noise_variance(model, noise_level_mean(r)));
   BandBasis basis;
   basis.basis = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
-  if (prior == ColourPrior::kPrintPlane)
-    basis = print_plane(solve_latents(rows, model, result.noise_variance, basis, lambda, threads),
+  if (options.prior == ColourPrior::kPrintPlane)
+    basis = print_plane(solve_latents(frame, model, result.noise_variance, basis, lambda, options),
                         model.blur_px);
-  if (output == PerChannelOutput::kGreyOnly) {
+  if (options.output == PerChannelOutput::kGreyOnly) {
     // grey = mean_k r_k = mean_k offset_k + sum_i (mean_k basis[i][k]) a_i.
     std::vector<double> mix;
     for (const auto& b : basis.basis) mix.push_back((b[0] + b[1] + b[2]) / 3);
     result.grey = std::move(
-        solve_latents(rows, model, result.noise_variance, basis, lambda, threads, mix).front());
+        solve_latents(frame, model, result.noise_variance, basis, lambda, options, mix).front());
     const auto offset =
         static_cast<float>((basis.offset[0] + basis.offset[1] + basis.offset[2]) / 3);
     for (float& p : result.grey.pixels) p += offset;
     return Out::success(std::move(result));
   }
   std::vector<Plane> bands =
-      solve_latents(rows, model, result.noise_variance, basis, lambda, threads);
-  if (prior == ColourPrior::kPrintPlane) bands = to_bands(bands, basis);
+      solve_latents(frame, model, result.noise_variance, basis, lambda, options);
+  if (options.prior == ColourPrior::kPrintPlane) bands = to_bands(bands, basis);
   result.grey = Plane(rows[0].width, rows[0].height);
   for (const auto& band : bands)
     for (std::size_t i = 0; i < band.pixels.size(); ++i)

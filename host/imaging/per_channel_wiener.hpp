@@ -22,6 +22,7 @@
 #include "flutterscan/common/result.hpp"
 #include "imaging/capture_model.hpp"
 #include "imaging/motion_frame.hpp"
+#include "imaging/row_fft.hpp"
 
 namespace flutterscan::imaging {
 
@@ -45,12 +46,20 @@ struct PerChannelResult {
   std::vector<double> noise_variance;  ///< per channel, e-^2, at the frame's mean signal
 };
 
+struct PerChannelOptions {
+  int threads = 2;
+  ColourPrior prior = ColourPrior::kThreeBands;
+  PerChannelOutput output = PerChannelOutput::kBands;
+  PlanEffort plan_effort = PlanEffort::kEstimate;  ///< FFTW planning (row_fft.hpp)
+  /// Rows that carry only noise filled, not transformed (DeblurOptions::skip_flat_rows).
+  bool skip_flat_rows = false;
+};
+
 /// \brief Deblurs `frame` (electrons, 3 channels, black level removed, linear)
 /// into one latent per LED band, in the motion frame. Needs 3 channels and 3 LEDs; `lambda` weights
 /// the gradient prior of every band (1 / kLabelGradientVariance in deblur()).
-Result<PerChannelResult, std::string> deblur_per_channel(
-    const MotionFrame& frame, const CaptureModel& model, double lambda, int threads = 2,
-    ColourPrior prior = ColourPrior::kThreeBands,
-    PerChannelOutput output = PerChannelOutput::kBands);
+Result<PerChannelResult, std::string> deblur_per_channel(const MotionFrame& frame,
+                                                         const CaptureModel& model, double lambda,
+                                                         const PerChannelOptions& options = {});
 
 }  // namespace flutterscan::imaging

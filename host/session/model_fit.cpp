@@ -141,8 +141,10 @@ Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
   if (model.speed_ratio != 1) out.log["model"]["speed_ratio"] = rounded(model.speed_ratio, 3);
   if (choice.latent == imaging::LatentModel::kPerChannel && frame.channel_count() == 3) {
     auto result = imaging::deblur_per_channel(frame, model, 1.0 / options.gradient_variance,
-                                              options.threads, imaging::ColourPrior::kThreeBands,
-                                              imaging::PerChannelOutput::kGreyOnly);
+                                              {.threads = options.threads,
+                                               .output = imaging::PerChannelOutput::kGreyOnly,
+                                               .plan_effort = options.plan_effort,
+                                               .skip_flat_rows = options.skip_flat_rows});
     if (!result.ok()) return Out::failure(result.error());
     out.latent = std::move(result.value().grey);
     out.per_channel = true;
