@@ -94,8 +94,7 @@ struct BandBasis {
 /// channels; returns them as planes (motion frame). With `mix` (K weights), one
 /// plane instead: sum_i mix[i] a_i, filtered as one (the sum is linear in each
 /// bin). Each output is a filter of joint Wiener's shape (a transfer function
-/// per channel, summed), so it runs on JointWiener's rows in pairs and, with
-/// options.skip_flat_rows, its flat rows.
+/// per channel, summed), so it runs on JointWiener's rows in pairs.
 std::vector<Plane> solve_latents(const MotionFrame& frame, const CaptureModel& model,
                                  std::span<const double> noise_variance, const BandBasis& bands,
                                  double lambda, const PerChannelOptions& options,
@@ -176,9 +175,7 @@ std::vector<Plane> solve_latents(const MotionFrame& frame, const CaptureModel& m
   std::vector<Plane> out;
   for (const auto& output : transfer) {
     JointWiener filter(output, n, width, options.plan_effort);
-    if (options.skip_flat_rows)  // noise without shot noise, as deblur() gives it
-      filter.skip_flat_rows(std::vector<double>(3, channel_noise_variance(model, 0)));
-    Plane latent = filter.deconvolve(rows, options.threads, &frame.row_levels());
+    Plane latent = filter.deconvolve(rows, options.threads);
     // The offset, by linearity: the filter of y_c - o_c is the filter of y_c less
     // sum_c T_c(0) o_c (a constant row has only a DC bin).
     double shift = 0;

@@ -51,8 +51,6 @@ struct PerChannelOptions {
   ColourPrior prior = ColourPrior::kThreeBands;
   PerChannelOutput output = PerChannelOutput::kBands;
   PlanEffort plan_effort = PlanEffort::kEstimate;  ///< FFTW planning (row_fft.hpp)
-  /// Rows that carry only noise filled, not transformed (DeblurOptions::skip_flat_rows).
-  bool skip_flat_rows = false;
 };
 
 /// \brief Deblurs `frame` (electrons, 3 channels, black level removed, linear)

@@ -143,8 +143,7 @@ Result<FittedFrame, std::string> deblur_fitting_model(double saturated_share,
     auto result = imaging::deblur_per_channel(frame, model, 1.0 / options.gradient_variance,
                                               {.threads = options.threads,
                                                .output = imaging::PerChannelOutput::kGreyOnly,
-                                               .plan_effort = options.plan_effort,
-                                               .skip_flat_rows = options.skip_flat_rows});
+                                               .plan_effort = options.plan_effort});
     if (!result.ok()) return Out::failure(result.error());
     out.latent = std::move(result.value().grey);
     out.per_channel = true;

@@ -124,55 +124,6 @@ TEST(PerChannelModel, TheGreyAloneIsTheBandsMean) {
   }
 }
 
-TEST(PerChannelModel, FlatRowsAreFilledAndTheLabelRowsUnchanged) {
-  const CaptureModel m = camera("found-mse", 3000);
-  const auto label = render_colour_scene(label_spec(), kRedInk);
-  ASSERT_TRUE(label.ok()) << label.error();
-  // The label on a plain belt: 80 rows of belt above and below it.
-  constexpr int kBelt = 80;
-  constexpr float kBeltReflectance = 0.4f;
-  std::vector<Plane> bands;
-  for (const Plane& band : label.value()) {
-    Plane tall(band.width, band.height + 2 * kBelt, kBeltReflectance);
-    for (int y = 0; y < band.height; ++y)
-      std::copy(band.row(y).begin(), band.row(y).end(), tall.row(y + kBelt).begin());
-    bands.push_back(std::move(tall));
-  }
-  const auto expected = expected_colour_electrons(bands, m);
-  ASSERT_TRUE(expected.ok()) << expected.error();
-  const auto frame = motion_frame(record_frame(expected.value(), m, 7), m);
-  const double lambda = 1.0 / imaging::kLabelGradientVariance;
-  const auto every_row = imaging::deblur_per_channel(
-      frame, m, lambda, {.output = imaging::PerChannelOutput::kGreyOnly});
-  const auto skipping = imaging::deblur_per_channel(
-      frame, m, lambda, {.output = imaging::PerChannelOutput::kGreyOnly, .skip_flat_rows = true});
-  ASSERT_TRUE(every_row.ok() && skipping.ok());
-  const Plane& all = every_row.value().grey;
-  const Plane& skipped = skipping.value().grey;
-  EXPECT_NEAR(kBeltReflectance, skipped.at(all.width / 2, kBelt / 2), 0.05);
-  EXPECT_TRUE(decodes(skipped));
-  int belt_rows_filled = 0;
-  for (int y = 0; y < all.height; ++y) {
-    const auto a = all.row(y), s = skipped.row(y);
-    const bool filled = std::all_of(s.begin(), s.end(), [&](float v) { return v == s[0]; });
-    double mean = 0, worst = 0;
-    for (std::size_t x = 0; x < a.size(); ++x) {
-      mean += a[x] / static_cast<double>(a.size());
-      worst = std::max(worst, static_cast<double>(std::abs(a[x] - s[x])));
-    }
-    if (filled) {
-      // A flat row's fill is its level as the row transformed gives it.
-      EXPECT_NEAR(s[0], mean, 0.02) << "row " << y;
-      if (y < kBelt || y >= all.height - kBelt) ++belt_rows_filled;
-    } else {
-      // A row transformed is the same filter, whatever row it was paired with.
-      EXPECT_LT(worst, 1e-3) << "row " << y;
-    }
-  }
-  // Nearly every belt row is noise alone (kFlatRowSigmas lets about one in a hundred through).
-  EXPECT_GT(belt_rows_filled, 2 * kBelt * 9 / 10);
-}
-
 TEST(PerChannelModel, AGreyObjectComesOutAsTheGreyModelDoes) {
   const CaptureModel m = camera("raskar-white", 3000);
   const auto scene = render_scene(label_spec()).value();
