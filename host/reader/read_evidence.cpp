@@ -43,7 +43,9 @@ bool zbar_reads(std::span<const std::uint8_t> lum, int width, int height,
                      [&](const ZbarSymbol& s) { return same_value(s.text, s.format, code); });
 }
 
-/// A window cut down to a symbol's surroundings: its own copies of the rows.
+/// A window cut down to a symbol's surroundings: its own copies of the rows,
+/// which `window`'s spans view (moving the struct moves the vectors' buffers
+/// with them, so the spans stay valid; a copy would not).
 struct Surroundings {
   std::vector<std::uint8_t> lum, zbar_lum;
   LumWindow window;
