@@ -90,16 +90,15 @@ struct BandBasis {
   std::array<double, 3> offset{};
 };
 
-/// Solves for the K latents of `basis` per frequency from the frame's three
-/// channels; returns them as planes (motion frame). With `mix` (K weights), one
+/// Solves for the K latents of `basis` per frequency from the three channels
+/// (motion-frame rows); returns them as planes (motion frame). With `mix` (K weights), one
 /// plane instead: sum_i mix[i] a_i, filtered as one (the sum is linear in each
 /// bin). Each output is a filter of joint Wiener's shape (a transfer function
 /// per channel, summed), so it runs on JointWiener's rows in pairs.
-std::vector<Plane> solve_latents(const MotionFrame& frame, const CaptureModel& model,
+std::vector<Plane> solve_latents(const std::vector<Plane>& rows, const CaptureModel& model,
                                  std::span<const double> noise_variance, const BandBasis& bands,
                                  double lambda, const PerChannelOptions& options,
                                  std::span<const double> mix = {}) {
-  const std::vector<Plane>& rows = frame.image().channels;
   const int width = rows[0].width;
   const int latents = static_cast<int>(bands.basis.size());
   const auto segments = slot_segments(model);
@@ -268,21 +267,21 @@ Result<PerChannelResult, std::string> deblur_per_channel(const MotionFrame& fram
   BandBasis basis;
   basis.basis = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
   if (options.prior == ColourPrior::kPrintPlane)
-    basis = print_plane(solve_latents(frame, model, result.noise_variance, basis, lambda, options),
+    basis = print_plane(solve_latents(rows, model, result.noise_variance, basis, lambda, options),
                         model.blur_px);
   if (options.output == PerChannelOutput::kGreyOnly) {
     // grey = mean_k r_k = mean_k offset_k + sum_i (mean_k basis[i][k]) a_i.
     std::vector<double> mix;
     for (const auto& b : basis.basis) mix.push_back((b[0] + b[1] + b[2]) / 3);
     result.grey = std::move(
-        solve_latents(frame, model, result.noise_variance, basis, lambda, options, mix).front());
+        solve_latents(rows, model, result.noise_variance, basis, lambda, options, mix).front());
     const auto offset =
         static_cast<float>((basis.offset[0] + basis.offset[1] + basis.offset[2]) / 3);
     for (float& p : result.grey.pixels) p += offset;
     return Out::success(std::move(result));
   }
   std::vector<Plane> bands =
-      solve_latents(frame, model, result.noise_variance, basis, lambda, options);
+      solve_latents(rows, model, result.noise_variance, basis, lambda, options);
   if (options.prior == ColourPrior::kPrintPlane) bands = to_bands(bands, basis);
   result.grey = Plane(rows[0].width, rows[0].height);
   for (const auto& band : bands)

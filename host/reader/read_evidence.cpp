@@ -43,6 +43,18 @@ bool zbar_reads(std::span<const std::uint8_t> lum, int width, int height,
                      [&](const ZbarSymbol& s) { return same_value(s.text, s.format, code); });
 }
 
+/// Columns [x0, x1) of rows [y0, y1) of `lum` (packed rows of `width`), packed.
+std::vector<std::uint8_t> cropped(std::span<const std::uint8_t> lum, int width, int x0, int y0,
+                                  int x1, int y1) {
+  std::vector<std::uint8_t> out;
+  out.reserve(static_cast<std::size_t>(x1 - x0) * static_cast<std::size_t>(y1 - y0));
+  for (int y = y0; y < y1; ++y) {
+    const auto row = lum.begin() + static_cast<std::ptrdiff_t>(y) * width;
+    out.insert(out.end(), row + x0, row + x1);
+  }
+  return out;
+}
+
 /// A window cut down to a symbol's surroundings: its own copies of the rows,
 /// which `window`'s spans view (moving the struct moves the vectors' buffers
 /// with them, so the spans stay valid; a copy would not).
@@ -79,16 +91,9 @@ Surroundings surroundings(const DecodedCode& code, const LumWindow& window, bool
             y0 = clip(top - margin_y - window.y0, window.height),
             y1 = clip(bottom + margin_y - window.y0, window.height);
   Surroundings out;
-  const auto copy = [&](std::span<const std::uint8_t> from, std::vector<std::uint8_t>& to) {
-    if (from.empty()) return;
-    to.reserve(static_cast<std::size_t>(x1 - x0) * static_cast<std::size_t>(y1 - y0));
-    for (int y = y0; y < y1; ++y) {
-      const auto row = from.begin() + static_cast<std::ptrdiff_t>(y) * window.width;
-      to.insert(to.end(), row + x0, row + x1);
-    }
-  };
-  copy(window.lum, out.lum);
-  copy(window.zbar_lum, out.zbar_lum);
+  out.lum = cropped(window.lum, window.width, x0, y0, x1, y1);
+  if (!window.zbar_lum.empty())
+    out.zbar_lum = cropped(window.zbar_lum, window.width, x0, y0, x1, y1);
   out.window = {out.lum, x1 - x0, y1 - y0, window.x0 + x0, window.y0 + y0, out.zbar_lum};
   return out;
 }
@@ -129,19 +134,10 @@ std::string corroboration(const DecodedCode& code, const LumWindow& whole,
   if (!no_check(code.format) && independent_apart > 0 && end_a > 0 && begin_b < across) {
     bool both = true;
     for (const auto& [from, to] : {std::pair{0, end_a}, std::pair{begin_b, across}}) {
-      // The half as packed rows (a half of columns is copied out).
-      std::vector<std::uint8_t> half;
       const int w = along_x ? window.width : to - from, h = along_x ? to - from : window.height;
-      if (along_x) {
-        const auto first = window.lum.begin() + static_cast<std::ptrdiff_t>(from) * window.width;
-        half.assign(first, first + static_cast<std::ptrdiff_t>(h) * window.width);
-      } else {
-        half.reserve(static_cast<std::size_t>(w) * h);
-        for (int y = 0; y < h; ++y) {
-          const auto row = window.lum.begin() + static_cast<std::ptrdiff_t>(y) * window.width;
-          half.insert(half.end(), row + from, row + to);
-        }
-      }
+      const std::vector<std::uint8_t> half =
+          along_x ? cropped(window.lum, window.width, 0, from, window.width, to)
+                  : cropped(window.lum, window.width, from, 0, to, window.height);
       const bool reads =
           zxing ? zxing_reads(ZXing::ImageView(half.data(), w, h, ZXing::ImageFormat::Lum), hints,
                               code)
