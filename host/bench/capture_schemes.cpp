@@ -1,6 +1,7 @@
 #include "bench/capture_schemes.hpp"
 
 #include "codes/library.hpp"
+#include "codes/scheme_choice.hpp"
 
 namespace flutterscan::bench {
 namespace {
@@ -12,9 +13,8 @@ LedCode library_code(const char* name) {
 }
 
 CaptureScheme snapshot(int slots) {
-  std::string digits(kSlots, '0');
-  for (int t = 0; t < slots; ++t) digits[static_cast<std::size_t>(t)] = '7';
-  return {"snapshot-" + std::to_string(slots), LedCode::parse(digits, 3).value(), false};
+  const std::string name = "snapshot-" + std::to_string(slots);
+  return {name, *codes::snapshot_code(name), false};
 }
 
 }  // namespace

@@ -2,10 +2,15 @@
 // `envelope`): for each symbol and light level, the highest belt speed at which
 // every one of a few hundred labels reads, for the product's coded one-of-3
 // light and for a white strobe under the same light budget, each beside the
-// formula that predicts it (bench/envelope_formula.hpp).
+// formula that predicts it (bench/envelope_formula.hpp) and what the session's
+// per-frame path cost a frame at that speed. Every label goes through the
+// session's per-frame path (bench/line_labels.hpp) with the line's method
+// (cascade: what a line runs; tv: tv on every frame, the ceiling) at a frame
+// rate and worker count.
 //
 //   envelope_bench [--out DIR] [--light 60,200,600] [--labels 300] [--step-labels 20]
 //                  [--mm-per-px 0.1] [--slot-us 100] [--read-noise 4] [--cap 3]
+//                  [--method cascade] [--fps 30] [--workers 2]
 //                  [--symbols 0,1,...] [--threads 2]
 //
 // Writes DIR/envelope.csv (every point), DIR/envelope-code128.png and
@@ -26,6 +31,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench/cpu_model.hpp"
 #include "bench/envelope_formula.hpp"
 #include "bench/envelope_setup.hpp"
 #include "bench/line_labels.hpp"
@@ -50,7 +56,16 @@ struct Point {
   double formula = 0;  // m/s
   double seconds = 0;
   std::vector<std::pair<int, double>> strobe_tries;  // k, unverified speed
+  std::vector<double> frame_ms;                      // each label's at the reported speed
 };
+
+/// The `q` quantile of `values` (nearest rank), 0 when there are none.
+double quantile(std::vector<double> values, double q) {
+  if (values.empty()) return 0;
+  std::sort(values.begin(), values.end());
+  const auto rank = static_cast<std::size_t>(std::ceil(q * static_cast<double>(values.size())));
+  return values[std::clamp<std::size_t>(rank, 1, values.size()) - 1];
+}
 
 /// The formula: the lower of the noise limit (joint Wiener's margin) and the
 /// decoder's resolution limit for the lit stretch of `scheme`.
@@ -75,6 +90,7 @@ int main(int argc, char** argv) {
   double slot_us = line.slot_ms * 1000;
   bench::SpeedSearchOptions search;
   bench::LineMotion motion;
+  bench::LineProcessing processing;
   int threads = 2;
   double max_blur_px = 1200;
   CLI::App app{"Highest belt speed at which >= 99% of labels read, coded light and strobe"};
@@ -114,6 +130,15 @@ int main(int argc, char** argv) {
   app.add_option("--encoder-error", motion.encoder_error, "encoder blur drawn from 1 +- this")
       ->check(CLI::Range(0.0, 0.09))
       ->capture_default_str();
+  app.add_option("--method", processing.method,
+                 std::string("the session's processing.method: ") + session::kProcessingMethods)
+      ->capture_default_str();
+  app.add_option("--fps", processing.fps, "the line's frame rate (0: offline, every window)")
+      ->check(CLI::Range(0.0, 1000.0))
+      ->capture_default_str();
+  app.add_option("--workers", processing.workers, "the session's processing.workers")
+      ->check(CLI::Range(1, 64))
+      ->capture_default_str();
   app.add_option("--symbols", symbol_pick, "indices into the symbol list (default all)")
       ->delimiter(',');
   app.add_option("--max-blur", max_blur_px, "speeds stop where the exposure's blur reaches this")
@@ -128,6 +153,14 @@ int main(int argc, char** argv) {
     return app.exit(error) == 0 ? 0 : 2;
   }
   line.slot_ms = slot_us / 1000;
+  {
+    session::ProcessingConfig check;
+    if (!session::set_processing_method(processing.method, check)) {
+      std::fprintf(stderr, "envelope_bench: --method %s: not one of %s\n",
+                   processing.method.c_str(), session::kProcessingMethods);
+      return 2;
+    }
+  }
   // Keep freed frames in the process, as the session does (session.cpp): every
   // label allocates and frees its frame's planes, and memory handed back to the
   // kernel returns as page faults.
@@ -166,7 +199,7 @@ int main(int argc, char** argv) {
   std::vector<Point> points;
   for (std::size_t s = 0; s < symbol_pick.size(); ++s)
     for (double e : light)
-      for (bool coded : {true, false}) points.push_back({s, e, coded, "", {}, 0, 0, {}});
+      for (bool coded : {true, false}) points.push_back({s, e, coded, "", {}, 0, 0, {}, {}});
 
   std::atomic<std::size_t> next{0};
   std::mutex print_mutex;
@@ -177,13 +210,17 @@ int main(int argc, char** argv) {
       const auto& symbol = all_symbols[symbol_pick[p.symbol]];
       const double module = bench::module_px(symbol.mil, line);
       const bench::LabelLine& labels = lines[p.symbol];
-      // Each search draws fresh label numbers: `offset` keeps them apart.
+      // Each search draws fresh label numbers: `offset` keeps them apart. The
+      // final search keeps each label's frame time with its speed.
+      std::vector<std::pair<double, double>> costs;  // speed, frame ms
       const auto search_scheme = [&](const CaptureScheme& scheme, std::uint64_t offset,
-                                     bench::SpeedSearchOptions options) {
+                                     bench::SpeedSearchOptions options, bool keep_costs) {
         return bench::highest_reading_speed(
             [&](double v, std::uint64_t label) {
-              return labels.reads(bench::line_capture(scheme, line, p.light, v), motion,
-                                  offset + label);
+              const auto r = labels.read(bench::line_path(scheme, line, p.light, processing),
+                                         bench::exposure_blur_px(v, line), motion, offset + label);
+              if (keep_costs) costs.emplace_back(v, r.frame_ms);
+              return r.read;
             },
             options);
       };
@@ -195,7 +232,7 @@ int main(int argc, char** argv) {
         p.scheme = scheme.name;
         p.formula = formula_for(scheme, line, p.light, symbol.kind, module, max_speed);
         options.start = p.formula > 0 ? p.formula : 0.5;
-        p.measured = search_scheme(scheme, 0, options);
+        p.measured = search_scheme(scheme, 0, options, true);
       } else {
         // The strobe's length is the line's choice: each length searched
         // without verification, the fastest then searched again and verified.
@@ -209,7 +246,7 @@ int main(int argc, char** argv) {
           auto quick = options;
           quick.final_labels = 0;
           quick.start = f > 0 ? f : 0.5;
-          const auto r = search_scheme(scheme, offset, quick);
+          const auto r = search_scheme(scheme, offset, quick, false);
           offset += 1000000;
           p.strobe_tries.emplace_back(k, r.speed);
           if (r.speed > best) {
@@ -220,13 +257,18 @@ int main(int argc, char** argv) {
         const auto scheme = bench::strobe_scheme(best_k);
         p.scheme = scheme.name;
         options.start = best > 0 ? best : 0.5;
-        p.measured = search_scheme(scheme, offset, options);
+        p.measured = search_scheme(scheme, offset, options, true);
       }
+      for (const auto& [v, ms] : costs)
+        if (v == p.measured.speed) p.frame_ms.push_back(ms);
       p.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
       const std::lock_guard lock(print_mutex);
-      std::fprintf(stderr, "  %-20s %5g e-/ms %-9s %6.3f m/s (formula %6.3f), %d labels, %.0f s\n",
+      std::fprintf(stderr,
+                   "  %-20s %5g e-/ms %-9s %6.3f m/s (formula %6.3f), frame %.1f ms (p99 %.1f), "
+                   "%d labels, %.0f s\n",
                    symbol.name.c_str(), p.light, p.scheme.c_str(), p.measured.speed, p.formula,
-                   p.measured.labels_tried, p.seconds);
+                   quantile(p.frame_ms, 0.5), quantile(p.frame_ms, 0.99), p.measured.labels_tried,
+                   p.seconds);
     }
   };
   {
@@ -246,20 +288,23 @@ int main(int argc, char** argv) {
   std::fprintf(csv,
                "symbol,mil,module_px,electrons_per_ms,exposure_electrons,scheme,speed_m_s,"
                "verified,labels_read,labels_tried,back_offs,at_max,formula_m_s,measured_over_"
-               "formula,exposure_blur_px,lit_motion_modules,seconds\n");
+               "formula,exposure_blur_px,lit_motion_modules,frame_ms_median,frame_ms_p99,"
+               "seconds\n");
   for (const Point& p : points) {
     const auto& s = all_symbols[symbol_pick[p.symbol]];
     const double module = bench::module_px(s.mil, line);
     const auto scheme =
         p.coded ? bench::coded_scheme() : bench::strobe_scheme(std::stoi(p.scheme.substr(7)));
     const double blur = bench::exposure_blur_px(p.measured.speed, line);
-    std::fprintf(csv, "%s,%g,%.3f,%g,%.1f,%s,%.4f,%d,%d,%d,%d,%d,%.4f,%.3f,%.2f,%.3f,%.1f\n",
+    std::fprintf(csv,
+                 "%s,%g,%.3f,%g,%.1f,%s,%.4f,%d,%d,%d,%d,%d,%.4f,%.3f,%.2f,%.3f,%.2f,%.2f,%.1f\n",
                  s.name.c_str(), s.mil, module, p.light, bench::exposure_electrons(p.light, line),
                  p.scheme.c_str(), p.measured.speed, p.measured.verified ? 1 : 0,
                  p.measured.final_labels, p.measured.labels_tried, p.measured.back_offs,
                  p.measured.at_max ? 1 : 0, p.formula,
                  p.formula > 0 ? p.measured.speed / p.formula : 0.0, blur,
-                 blur * bench::lit_run_slots(scheme) / line.slots / module, p.seconds);
+                 blur * bench::lit_run_slots(scheme) / line.slots / module,
+                 quantile(p.frame_ms, 0.5), quantile(p.frame_ms, 0.99), p.seconds);
   }
   std::fclose(csv);
 
@@ -267,23 +312,26 @@ int main(int argc, char** argv) {
   std::printf(
       "Optics: %.3f mm per pixel on the belt; slot %g us, %d slots (exposure %.2f ms); "
       "cap c = %g; read noise %g e-; jitter %g rms per slot, speed change +-%g%%, "
-      "encoder error +-%g%%; %d labels verified per speed\n\n",
+      "encoder error +-%g%%; %d labels verified per speed\n"
+      "Per frame: the session's path, method %s, %g fps on %d workers; %d points at once on %s\n\n",
       line.mm_per_px, slot_us, line.slots, line.slots * line.slot_ms, line.cap, line.read_noise,
       motion.jitter_rms, 100 * motion.speed_change, 100 * motion.encoder_error,
-      search.final_labels);
+      search.final_labels, processing.method.c_str(), processing.fps, processing.workers, threads,
+      bench::cpu_model().c_str());
   std::printf(
       "| symbol | module (px) | light (e-/ms) | E (e-) | scheme | measured (m/s) | "
-      "formula (m/s) | measured / formula | labels read |\n");
-  std::printf("|---|---|---|---|---|---|---|---|---|\n");
+      "formula (m/s) | measured / formula | labels read | frame ms (median, p99) |\n");
+  std::printf("|---|---|---|---|---|---|---|---|---|---|\n");
   for (const Point& p : points) {
     const auto& s = all_symbols[symbol_pick[p.symbol]];
-    std::printf("| %s | %.2f | %g | %.0f | %s | %.2f%s | %.2f | %.2f | %d / %d%s |\n",
+    std::printf("| %s | %.2f | %g | %.0f | %s | %.2f%s | %.2f | %.2f | %d / %d%s | %.1f, %.1f |\n",
                 s.name.c_str(), bench::module_px(s.mil, line), p.light,
                 bench::exposure_electrons(p.light, line), p.scheme.c_str(), p.measured.speed,
                 p.measured.at_max ? "+" : "", p.formula,
                 p.formula > 0 ? p.measured.speed / p.formula : 0.0, p.measured.final_labels,
                 p.measured.verified ? p.measured.final_labels : search.final_labels,
-                p.measured.verified ? "" : " (not verified)");
+                p.measured.verified ? "" : " (not verified)", quantile(p.frame_ms, 0.5),
+                quantile(p.frame_ms, 0.99));
   }
   std::printf(
       "\n| symbol | light (e-/ms) | coded / strobe, measured | formula | strobe tries "
@@ -334,11 +382,12 @@ int main(int argc, char** argv) {
                   (c128 ? "Code 128" : "Data Matrix");
     chart.x_label = "module (mil)";
     chart.y_label = "belt speed (m/s)";
-    char note[200];
+    char note[256];
     std::snprintf(note, sizeof note,
-                  "%.2f mm/px, slot %g us x %d, cap %g, read noise %g e-; solid: coded one-of-3 "
-                  "(joint Wiener), dashed: best white strobe",
-                  line.mm_per_px, slot_us, line.slots, line.cap, line.read_noise);
+                  "%.2f mm/px, slot %g us x %d, cap %g, read noise %g e-, the session's %s at %g "
+                  "fps; solid: coded one-of-3, dashed: best white strobe",
+                  line.mm_per_px, slot_us, line.slots, line.cap, line.read_noise,
+                  processing.method.c_str(), processing.fps);
     chart.notes.push_back(note);
     std::snprintf(note, sizeof note,
                   "every point: %d of %d labels read (a point no verification passed is left out)",

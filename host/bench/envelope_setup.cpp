@@ -1,8 +1,12 @@
 #include "bench/envelope_setup.hpp"
 
 #include <algorithm>
+#include <cmath>
+#include <stdexcept>
 
+#include "bench/real_print_session.hpp"
 #include "codes/library.hpp"
+#include "codes/scheme_choice.hpp"
 
 namespace flutterscan::bench {
 
@@ -39,15 +43,39 @@ CaptureScheme coded_scheme() {
 }
 
 CaptureScheme strobe_scheme(int slots) {
-  std::string digits(52, '0');
-  for (int t = 0; t < std::min(slots, 52); ++t) digits[static_cast<std::size_t>(t)] = '7';
-  return {"strobe-" + std::to_string(slots), LedCode::parse(digits, 3).value(), false};
+  return {"strobe-" + std::to_string(slots),
+          *codes::snapshot_code("snapshot-" + std::to_string(slots)), false};
 }
 
 imaging::CaptureModel line_capture(const CaptureScheme& scheme, const LineSetup& line,
                                    double electrons_per_ms, double speed_m_s) {
   return bench_camera(scheme, exposure_electrons(electrons_per_ms, line), line.cap, line.read_noise,
                       exposure_blur_px(speed_m_s, line));
+}
+
+LinePath line_path(const CaptureScheme& scheme, const LineSetup& line, double electrons_per_ms,
+                   const LineProcessing& processing) {
+  LinePath path{line_config(exposure_electrons(electrons_per_ms, line),
+                            reader::ReaderOptions{}.area, {}, -1),
+                processing.fps};
+  session::SessionConfig& c = path.config;
+  if (scheme.one_of_three) {
+    std::string digits(static_cast<std::size_t>(scheme.code.length()), '0');
+    scheme.code.format(digits);
+    c.controller.code = digits;
+  } else {
+    c.controller.code = "snapshot-" + std::to_string(lit_run_slots(scheme));
+    if (codes::snapshot_code(c.controller.code) != scheme.code)
+      throw std::invalid_argument(scheme.name + " is neither one-of-3 nor a white strobe");
+  }
+  c.controller.slot_time_us = static_cast<std::uint32_t>(std::lround(line.slot_ms * 1000));
+  c.optics.cap = line.cap;
+  c.optics.read_noise_e = line.read_noise;
+  c.processing.workers = processing.workers;
+  if (!session::set_processing_method(processing.method, c.processing))
+    throw std::invalid_argument("processing method '" + processing.method + "' is none of " +
+                                session::kProcessingMethods);
+  return path;
 }
 
 int lit_run_slots(const CaptureScheme& scheme) {

@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "bench/capture_schemes.hpp"
+#include "bench/line_labels.hpp"
 #include "imaging/capture_model.hpp"
 #include "sim/scene.hpp"
 
@@ -22,6 +23,13 @@ struct LineSetup {
   int slots = 52;          ///< slots per exposure: the exposure is slots x slot_ms
   double cap = 3;          ///< LED overdrive cap c
   double read_noise = 4;   ///< camera read noise, e- rms (the bench camera otherwise)
+};
+
+/// \brief How the line's session processes its frames.
+struct LineProcessing {
+  std::string method = "cascade";  ///< processing.method (session::kProcessingMethods)
+  double fps = 30;                 ///< the camera's frame rate (0: unknown, as offline)
+  int workers = 2;                 ///< processing.workers
 };
 
 /// \brief A symbol of the datasheet: a symbology at one X dimension (mil).
@@ -61,6 +69,14 @@ CaptureScheme strobe_scheme(int slots);
 /// read noise, cap and exposure, motion along +x, constant speed.
 imaging::CaptureModel line_capture(const CaptureScheme& scheme, const LineSetup& line,
                                    double electrons_per_ms, double speed_m_s);
+
+/// \brief The session a line lit by `scheme` runs on `line` at `electrons_per_ms`:
+/// the session's default config with the scheme's code, the line's slot time,
+/// light (E), cap and read noise, processed as `processing` says. Throws if the
+/// method is none of session::kProcessingMethods, or the scheme is neither
+/// one-of-3 nor a white strobe (controller.code snapshot-K).
+LinePath line_path(const CaptureScheme& scheme, const LineSetup& line, double electrons_per_ms,
+                   const LineProcessing& processing);
 
 /// \brief The stretch of the exposure, in slots, within which the light cannot
 /// tell positions apart: one slot for a code that changes LEDs every slot (every

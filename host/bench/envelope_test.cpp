@@ -1,10 +1,13 @@
-// The datasheet's search and formula (docs/datasheet.md): the bisection finds a
-// known threshold and backs off where labels fail now and then; the formula
-// meets its physical limits.
+// The datasheet's search, formula and line (docs/datasheet.md): the bisection
+// finds a known threshold and backs off where labels fail now and then; the
+// formula meets its physical limits; the line's session records and reads as
+// the formula's camera says.
 
 #include <gtest/gtest.h>
 
 #include <cmath>
+
+#include "bench/real_print_session.hpp"
 
 #include "bench/envelope_formula.hpp"
 #include "bench/envelope_setup.hpp"
@@ -125,6 +128,57 @@ TEST(LineMotion, SlotsAddUpToTheBlurAndMoveForward) {
   for (std::size_t t = 1; t < b.size(); ++t) EXPECT_GE(b[t], b[t - 1]);
   // Faster at the end than at the start (on average over the first and last ten slots).
   EXPECT_GT(b[52] - b[42], b[10] - b[0]);
+}
+
+TEST(LinePath, TheSessionsCameraIsTheFormulasForCodedLightAndTheStrobe) {
+  const LineSetup line;
+  for (const auto& scheme : {coded_scheme(), strobe_scheme(2)}) {
+    const auto path = line_path(scheme, line, 200, LineProcessing{});
+    EXPECT_EQ(path.fps, 30);
+    EXPECT_EQ(path.config.processing.workers, 2);
+    const auto session = SessionLine(path.config, 400, 32, 52).model();
+    const auto formula = line_capture(scheme, line, 200, 1.0);  // 1 m/s: 52 px
+    EXPECT_TRUE(session.code == formula.code) << scheme.name;
+    EXPECT_NEAR(session.blur_px, formula.blur_px, 1e-9);
+    ASSERT_EQ(session.led_electrons.size(), 3U);
+    for (std::size_t i = 0; i < 3; ++i)
+      EXPECT_NEAR(session.led_electrons[i], formula.led_electrons[i], 1e-9) << scheme.name;
+    EXPECT_EQ(session.crosstalk, formula.crosstalk);
+    EXPECT_EQ(session.read_noise, formula.read_noise);
+    EXPECT_EQ(session.full_well, formula.full_well);
+    EXPECT_EQ(session.gain, formula.gain);
+    EXPECT_EQ(session.black_level, formula.black_level);
+    EXPECT_EQ(session.bit_depth, formula.bit_depth);
+  }
+  EXPECT_THROW(line_path(coded_scheme(), line, 200, {"sharpest", 30, 2}), std::invalid_argument);
+}
+
+TEST(LabelLine, ALabelReadsThroughTheSessionWhereItsBlurCanBeUndoneAndNotWhereItCannot) {
+  // 13-mil Code 128 (3.3 px modules) in bright light: at 0.5 m/s (26 px of
+  // blur, a module per 7 slots) coded light and a one-slot strobe read it; at
+  // 8 m/s a 4-slot strobe moves 32 px in its pulse, 10 modules, and nothing
+  // undoes that.
+  const LineSetup line;
+  const auto labels = LabelLine::make(sim::SceneKind::kCode128, module_px(13, line), 2, 5);
+  ASSERT_EQ(labels.error(), "");
+  const LineMotion motion;
+  int coded = 0, strobe = 0;
+  for (std::uint64_t label = 0; label < 3; ++label) {
+    const auto c = labels.read(line_path(coded_scheme(), line, 600, {"cascade", 0, 2}),
+                               exposure_blur_px(0.5, line), motion, label);
+    coded += c.read;
+    EXPECT_GT(c.frame_ms, 0);
+    strobe += labels
+                  .read(line_path(strobe_scheme(1), line, 600, {"cascade", 0, 2}),
+                        exposure_blur_px(0.5, line), motion, label)
+                  .read;
+  }
+  EXPECT_EQ(coded, 3);
+  EXPECT_EQ(strobe, 3);
+  EXPECT_FALSE(labels
+                   .read(line_path(strobe_scheme(4), line, 600, {"cascade", 0, 2}),
+                         exposure_blur_px(8, line), motion, 0)
+                   .read);
 }
 
 }  // namespace

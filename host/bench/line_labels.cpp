@@ -4,15 +4,9 @@
 #include <cmath>
 #include <random>
 
-#include "imaging/deblur.hpp"
+#include "bench/real_print_session.hpp"
 #include "imaging/exposure_timeline.hpp"
-#include "imaging/frame_conversion.hpp"
-#include "imaging/motion_frame.hpp"
 #include "imaging/motion_psf.hpp"
-#include "imaging/motion_refinement.hpp"
-#include "reader/barcode_reader.hpp"
-#include "reader/code_reading.hpp"
-#include "reader/reader_options.hpp"
 #include "sim/forward_model.hpp"
 #include "sim/pixel_integration.hpp"
 #include "sim/timeline_forward.hpp"
@@ -102,9 +96,9 @@ int LabelLine::frame_width(double blur_px) const {
   return label + static_cast<int>(std::ceil(blur_px)) + kMarginPx + 1;
 }
 
-bool LabelLine::reads(const imaging::CaptureModel& nominal, const LineMotion& motion,
-                      std::uint64_t label) const {
-  if (labels_.empty()) return false;
+LabelRead LabelLine::read(const LinePath& path, double blur_px, const LineMotion& motion,
+                          std::uint64_t label) const {
+  if (labels_.empty()) return {};
   std::mt19937_64 rng(seed_ * 0x9E3779B97F4A7C15ULL + label * 0xBF58476D1CE4E5B9ULL + 1);
   const Label& shown = labels_[label % labels_.size()];
   std::uniform_int_distribution<int> phase_pick(0, kFine - 1);
@@ -115,16 +109,19 @@ bool LabelLine::reads(const imaging::CaptureModel& nominal, const LineMotion& mo
   const std::uint64_t jitter_seed = rng();
   const std::uint64_t noise_seed = rng();
 
-  // The truth: the belt's motion slot by slot.
-  imaging::CaptureModel truth = nominal;
-  truth.direction = imaging::Direction::kPlusX;
+  const bool linear = kind_ == sim::SceneKind::kCode128;
+  const int width = frame_width(blur_px);
+  const int height = linear ? kLinearStripRows : shown.fine.height / kFine;
+  // The truth: the line's camera (the session's own model of it) and the belt's
+  // motion slot by slot.
+  imaging::CaptureModel truth = SessionLine(path.config, width, height, blur_px).model();
+  truth.blur_px = blur_px;
   const auto boundaries = line_slot_boundaries(truth.code.length(), truth.blur_px, speed_ratio,
                                                motion.jitter_rms, jitter_seed);
   const auto segments = imaging::segments_from_boundaries(truth.code, boundaries);
 
   // The scene on the fine grid, belt downstream for the blur to run onto.
   const int right = kFine * (static_cast<int>(std::ceil(truth.blur_px)) + kMarginPx) + kFine;
-  const bool linear = kind_ == sim::SceneKind::kCode128;
   imaging::Image expected;
   if (linear) {
     const int middle = (shown.fine.height / kFine / 2) * kFine;
@@ -137,31 +134,20 @@ bool LabelLine::reads(const imaging::CaptureModel& nominal, const LineMotion& mo
       expected.channels.push_back(std::move(rows));
     }
   } else {
-    const int height = shown.fine.height / kFine * kFine;
-    const auto scene = padded(shown.fine, phase, right - phase, 0, height);
+    const auto scene = padded(shown.fine, phase, right - phase, 0, height * kFine);
     expected = sim::expected_electrons_timeline(scene, truth, segments, kFine);
   }
-  const auto electrons =
-      imaging::dn_to_electrons(sim::record_frame(expected, truth, noise_seed), truth);
+  const auto dn = sim::record_frame(expected, truth, noise_seed);
 
-  // What the session knows: the encoder's blur at constant speed, refined on the frame.
-  imaging::CaptureModel assumed = nominal;
-  assumed.direction = imaging::Direction::kPlusX;
-  assumed.blur_px = truth.blur_px * encoder;
-  assumed.speed_ratio = 1;
-  auto frame = imaging::MotionFrame::make(electrons, assumed.direction);
-  if (!frame.ok()) return false;
-  assumed = imaging::motion_refined(frame.value(), assumed, motion.refine_tolerance);
-  imaging::DeblurOptions options;
-  options.method = imaging::Method::kJointWiener;
-  options.threads = 1;
-  const auto result = imaging::deblur(frame.value(), assumed, options);
-  if (!result.ok()) return false;
-  const auto texts =
-      reader::code_texts(reader::read_codes(result.value().latent, {}, assumed.direction,
-                                            reader::whole_frame_options())
-                             .readout);
-  return std::find(texts.begin(), texts.end(), shown.content) != texts.end();
+  // What the session knows: the encoder's blur at constant speed.
+  SessionLine session(path.config, width, height, blur_px * encoder);
+  if (path.fps > 0) session.at_frame_rate(path.fps, path.config.processing.workers);
+  const SessionRead seen = session.read(dn);
+  LabelRead out;
+  for (const auto& code : seen.readout.codes) out.read |= code.text == shown.content;
+  if (const auto times = seen.log.find("times_ms"); times != seen.log.end())
+    for (const auto& [stage, ms] : times->items()) out.frame_ms += ms.get<double>();
+  return out;
 }
 
 }  // namespace flutterscan::bench

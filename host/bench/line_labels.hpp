@@ -3,18 +3,18 @@
 // path (docs/datasheet.md, "The line measured"): a label of one symbol at one module
 // size, on the belt, under continuous motion with belt jitter, a speed change
 // within the exposure and an encoder that tells the blur a little wrong;
-// recorded with EMVA 1288 noise; the encoder's blur refined on the frame as the
-// session refines it (within 10%, used unless flagged); deblurred by joint Wiener
-// (the session's default method); read by the product's reader on the whole
-// frame. Each label number draws its own content, sub-pixel position, motion
-// and noise.
+// recorded with EMVA 1288 noise by the camera the line's session config
+// describes; read by session::process_frame with that config (model choice,
+// guards, the encoder's blur refined on the frame, the deblur, the decode and
+// the cascade's second pass within the budget the line's frame rate gives).
+// Each label number draws its own content, sub-pixel position, motion and noise.
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
-#include "imaging/capture_model.hpp"
 #include "imaging/image.hpp"
+#include "session/session_config.hpp"
 #include "sim/scene.hpp"
 
 namespace flutterscan::bench {
@@ -24,7 +24,21 @@ struct LineMotion {
   double jitter_rms = 0.05;        ///< belt speed jitter per slot, fraction of the mean speed
   double speed_change = 0.05;      ///< end / start speed drawn from 1 +- this (uniform)
   double encoder_error = 0.02;     ///< the encoder's blur drawn from the true one x (1 +- this)
-  double refine_tolerance = 0.10;  ///< the session's processing.blur_tolerance
+};
+
+/// \brief The session a line runs: its config (code, slot time, light, camera,
+/// processing) and the frame rate its camera runs at (0: unknown, as offline:
+/// every window the cascade wants).
+struct LinePath {
+  session::SessionConfig config;
+  double fps = 0;
+};
+
+/// \brief One label's frame: whether its content was among the codes read, and
+/// what the session's stages took on it (convert, deblur, decode, second pass), ms.
+struct LabelRead {
+  bool read = false;
+  double frame_ms = 0;
 };
 
 /// \brief The camera rows of a 1-D label's frame: a strip across the bars (every
@@ -40,10 +54,10 @@ class LabelLine {
   /// Fails (message) when a label cannot be rendered.
   static LabelLine make(sim::SceneKind kind, double module_px, int contents, std::uint64_t seed);
 
-  /// \brief Whether label number `label` reads when it passes under `nominal`
-  /// (its code, light, camera and blur at the belt's speed; motion along +x).
-  bool reads(const imaging::CaptureModel& nominal, const LineMotion& motion,
-             std::uint64_t label) const;
+  /// \brief Label number `label` passing under `path`'s line at a belt motion of
+  /// `blur_px` per exposure along +x.
+  LabelRead read(const LinePath& path, double blur_px, const LineMotion& motion,
+                 std::uint64_t label) const;
 
   /// \brief The frame width (px) a label needs at a blur of `blur_px`.
   int frame_width(double blur_px) const;

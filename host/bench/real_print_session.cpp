@@ -27,22 +27,32 @@ capture::FrameFormat format(int width, int height, int bit_depth) {
 
 }  // namespace
 
+session::SessionConfig line_config(double electrons, reader::DecodeArea area,
+                                   const session::SecondPassTries& tries, double second_pass_ms,
+                                   double decode_ms) {
+  session::SessionConfig config;
+  config.processing.decode_ms = decode_ms;
+  config.optics.electrons = electrons;
+  config.processing.decode_area = area;
+  config.optics.electrons_given = true;
+  config.processing.threads_per_worker = 1;
+  config.processing.second_pass_ms = second_pass_ms;
+  config.processing.second_pass_tries = tries;
+  return config;
+}
+
 SessionLine::SessionLine(int width, int height, double blur_px, double electrons,
                          reader::DecodeArea area)
-    : SessionLine(width, height, blur_px, electrons, area, session::SecondPassTries{},
-                  session::kMaxSecondPassMs) {}
+    : SessionLine(line_config(electrons, area), width, height, blur_px) {}
 
 SessionLine::SessionLine(int width, int height, double blur_px, double electrons,
                          reader::DecodeArea area, const session::SecondPassTries& tries,
                          double second_pass_ms, double decode_ms)
-    : width_(width), height_(height) {
-  config_.processing.decode_ms = decode_ms;
-  config_.optics.electrons = electrons;
-  config_.processing.decode_area = area;
-  config_.optics.electrons_given = true;
-  config_.processing.threads_per_worker = 1;
-  config_.processing.second_pass_ms = second_pass_ms;
-  config_.processing.second_pass_tries = tries;
+    : SessionLine(line_config(electrons, area, tries, second_pass_ms, decode_ms), width, height,
+                  blur_px) {}
+
+SessionLine::SessionLine(session::SessionConfig config, int width, int height, double blur_px)
+    : config_(std::move(config)), width_(width), height_(height) {
   if (auto problem = session::check_config(config_); !problem.empty())
     throw std::runtime_error("session config: " + problem);
   encoder_counts_ = static_cast<int>(std::lround(blur_px / config_.optics.px_per_count));

@@ -38,8 +38,25 @@ inline double line_credit_ms(double fps, int workers) {
   return 1000.0 / fps * workers * session::SecondPassBudget::kShare;
 }
 
+/// \brief The session's default config for a line at light level `electrons`
+/// (optics.electrons, given), one row thread per worker, codes looked for in
+/// `area`, the second pass's `tries` with a credit of `second_pass_ms` per
+/// frame (session::kMaxSecondPassMs: offline, every window) and the first
+/// pass's decode time `decode_ms` (processing.decode_ms; "auto", -1: every
+/// window while the frame rate is unknown). Not checked: SessionLine checks it.
+session::SessionConfig line_config(double electrons,
+                                   reader::DecodeArea area = reader::ReaderOptions{}.area,
+                                   const session::SecondPassTries& tries = {},
+                                   double second_pass_ms = session::kMaxSecondPassMs,
+                                   double decode_ms = -1);
+
 class SessionLine {
  public:
+  /// \brief Frames of `width` x `height` (RGB, the config's bit depth) moving
+  /// `blur_px` along +x per exposure, read as a session with `config` reads them
+  /// (its code, light, camera and processing). Throws if the config does not
+  /// check.
+  SessionLine(session::SessionConfig config, int width, int height, double blur_px);
   /// \brief Frames of `width` x `height` (RGB, 12 bits) moving `blur_px` along +x
   /// per exposure at light level `electrons`, codes looked for in `area` (the
   /// session's default: the label paper). Throws if the config does not check.

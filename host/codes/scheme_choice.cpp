@@ -1,6 +1,7 @@
 #include "codes/scheme_choice.hpp"
 
 #include <array>
+#include <charconv>
 #include <cmath>
 #include <limits>
 
@@ -109,16 +110,25 @@ std::size_t nearest(const std::array<double, 6>& grid, double value) {
 }
 
 LedCode scheme_code(const std::string& name) {
-  if (name.rfind("snapshot-", 0) == 0) {
-    const int slots = std::stoi(name.substr(9));
-    std::string digits(52, '0');
-    for (int t = 0; t < slots; ++t) digits[static_cast<std::size_t>(t)] = '7';
-    return LedCode::parse(digits, 3).value();
-  }
+  if (auto snapshot = snapshot_code(name)) return *snapshot;
   return to_code(*find_library_code(name));
 }
 
 }  // namespace
+
+std::optional<LedCode> snapshot_code(std::string_view name) {
+  constexpr std::string_view kPrefix = "snapshot-";
+  if (!name.starts_with(kPrefix)) return std::nullopt;
+  const auto number = name.substr(kPrefix.size());
+  int slots = 0;
+  const auto [end, error] = std::from_chars(number.data(), number.data() + number.size(), slots);
+  if (error != std::errc{} || end != number.data() + number.size() || slots < 1 ||
+      slots > kSnapshotSlots)
+    return std::nullopt;
+  std::string digits(kSnapshotSlots, '0');
+  digits.replace(0, static_cast<std::size_t>(slots), static_cast<std::size_t>(slots), '7');
+  return LedCode::parse(digits, 3).value();
+}
 
 SchemeChoice choose_scheme(double electrons, double read_noise, double cap) {
   const std::size_t light = nearest(kLight, std::max(electrons, 1e-9));

@@ -11,7 +11,9 @@
 // A query falls in the nearest cell on log scales of light and read noise;
 // caps below 5.5 use the c = 3 map, above it the c = 8 map.
 
+#include <optional>
 #include <string>
+#include <string_view>
 
 #include "flutterscan/common/led_code.hpp"
 
@@ -23,6 +25,14 @@ struct SchemeChoice {
   double margin_db = 0;  ///< best coded minus best snapshot in that cell (> 0: coded wins)
   double cell_electrons = 0, cell_read_noise = 0, cell_cap = 0;  ///< the map cell used
 };
+
+/// \brief Slots of a snapshot's exposure: a code's length.
+inline constexpr int kSnapshotSlots = 52;
+
+/// \brief The code of the white strobe `name` = "snapshot-K" (K = 1..52): all
+/// three LEDs lit for the first K of 52 slots, each at its budget's cap (the
+/// regime map's snapshot-K); nothing for any other name.
+std::optional<LedCode> snapshot_code(std::string_view name);
 
 /// \brief The scheme that won the regime map's cell nearest to (electrons per
 /// channel under rect-white, read noise e-, overdrive cap). Light and read

@@ -544,12 +544,14 @@ std::string check_config(SessionConfig& c) {
     c.controller.parsed_code = c.controller.scheme->code;
   } else if (auto entry = codes::find_library_code(c.controller.code)) {
     c.controller.parsed_code = codes::to_code(*entry);
+  } else if (auto snapshot = codes::snapshot_code(c.controller.code)) {
+    c.controller.parsed_code = *snapshot;
   } else {
     auto parsed = LedCode::parse(c.controller.code, 3, CodeRule::kOneOfN);
     if (!parsed.ok())
       return problem("controller.code", "'" + c.controller.code +
-                                            "' is neither a library code nor a one-of-3 digit "
-                                            "string (slot " +
+                                            "' is neither a library code, a white strobe "
+                                            "snapshot-1..52 nor a one-of-3 digit string (slot " +
                                             std::to_string(parsed.error().slot) + ")");
     c.controller.parsed_code = parsed.value();
   }

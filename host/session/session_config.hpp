@@ -29,7 +29,8 @@ struct CameraConfig {
 
 struct ControllerConfig {
   std::string spec = "sim";  ///< "sim", "auto" or a serial number
-  /// Digits, a library name (docs/codes.md), or "auto": the scheme the regime
+  /// Digits, a library name (docs/codes.md), a white strobe "snapshot-K" (all
+  /// LEDs for the first K slots, codes::snapshot_code), or "auto": the scheme the regime
   /// map says wins at the light level the session measures before it starts
   /// (session/light_probe.hpp), optics.read_noise_e and optics.cap.
   std::string code = "seed-maxmin-1";

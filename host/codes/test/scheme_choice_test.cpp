@@ -32,5 +32,16 @@ TEST(SchemeChoice, AShortStrobeForQuietSensorsAndHighOverdrive) {
   EXPECT_EQ(choose_scheme(1000, 30, 8).cell_cap, 8);
 }
 
+TEST(SnapshotCode, AllThreeLedsForTheFirstKSlotsAndNothingElseByThatName) {
+  const auto four = snapshot_code("snapshot-4");
+  ASSERT_TRUE(four.has_value());
+  ASSERT_EQ(four->length(), 52);
+  for (int t = 0; t < 52; ++t) EXPECT_EQ(four->mask(t), t < 4 ? 7 : 0) << t;
+  EXPECT_TRUE(snapshot_code("snapshot-52").has_value());
+  for (const char* bad : {"snapshot-0", "snapshot-53", "snapshot-", "snapshot-4x", "snapshot--1",
+                          "strobe-4", "seed-maxmin-1"})
+    EXPECT_FALSE(snapshot_code(bad).has_value()) << bad;
+}
+
 }  // namespace
 }  // namespace flutterscan::codes

@@ -328,6 +328,13 @@ TEST(SessionConfigFile, ReadsTheAnnotatedExampleAndNamesBadKeys) {
   SessionConfig bad;
   bad.controller.code = "1234";
   EXPECT_NE(check_config(bad).find("controller.code"), std::string::npos);
+  SessionConfig strobe;  // a white strobe by the regime map's name
+  strobe.controller.code = "snapshot-2";
+  EXPECT_EQ(check_config(strobe), "");
+  EXPECT_EQ(strobe.controller.parsed_code.mask(1), 7);
+  EXPECT_EQ(strobe.controller.parsed_code.mask(2), 0);
+  strobe.controller.code = "snapshot-60";
+  EXPECT_NE(check_config(strobe).find("snapshot-1..52"), std::string::npos);
   // A crosstalk entry is 0 or measurable: 1e-300 would underflow in the deconvolutions.
   SessionConfig faint;
   ASSERT_EQ(faint.optics.crosstalk.size(), 9u);
