@@ -44,20 +44,28 @@ using namespace flutterscan;
 using bench::CaptureScheme;
 
 constexpr int kContentsPerSymbol = 16;  // distinct label contents per symbol, drawn in turn
-const int kStrobeSlots[] = {1, 2, 4, 8};
-
 struct Point {
   std::size_t symbol = 0;
   double light = 0;  // e-/ms
   bool coded = true;
   // results
-  std::string scheme;  // "coded" or "strobe-k"
+  CaptureScheme scheme;   // coded light, or the strobe chosen
+  bench::LineSetup line;  // its line (a strobe's own slot time)
   bench::SpeedSearchResult measured;
   double formula = 0;  // m/s
   double seconds = 0;
-  std::vector<std::pair<int, double>> strobe_tries;  // k, unverified speed
-  std::vector<double> frame_ms;                      // each label's at the reported speed
+  std::vector<std::pair<double, double>> strobe_tries;  // pulse us, unverified speed
+  std::vector<double> frame_ms;                         // each label's at the reported speed
 };
+
+/// What a point's scheme is called in the tables: "coded" or "strobe N us".
+std::string scheme_label(const Point& p) {
+  if (p.coded) return p.scheme.name;
+  char text[32];
+  std::snprintf(text, sizeof text, "strobe %g us",
+                p.line.slot_ms * 1000 * bench::lit_run_slots(p.scheme));
+  return text;
+}
 
 /// The `q` quantile of `values` (nearest rank), 0 when there are none.
 double quantile(std::vector<double> values, double q) {
@@ -194,12 +202,15 @@ int main(int argc, char** argv) {
       return 1;
     }
   }
-  const double max_speed = max_blur_px * line.mm_per_px / (line.slots * line.slot_ms);
+  // Speeds stop where the exposure's blur reaches max_blur_px.
+  const auto max_speed = [&](const bench::LineSetup& on) {
+    return max_blur_px * on.mm_per_px / (on.slots * on.slot_ms);
+  };
 
   std::vector<Point> points;
   for (std::size_t s = 0; s < symbol_pick.size(); ++s)
     for (double e : light)
-      for (bool coded : {true, false}) points.push_back({s, e, coded, "", {}, 0, 0, {}, {}});
+      for (bool coded : {true, false}) points.push_back({s, e, coded, {}, line, {}, 0, 0, {}, {}});
 
   std::atomic<std::size_t> next{0};
   std::mutex print_mutex;
@@ -213,51 +224,51 @@ int main(int argc, char** argv) {
       // Each search draws fresh label numbers: `offset` keeps them apart. The
       // final search keeps each label's frame time with its speed.
       std::vector<std::pair<double, double>> costs;  // speed, frame ms
-      const auto search_scheme = [&](const CaptureScheme& scheme, std::uint64_t offset,
-                                     bench::SpeedSearchOptions options, bool keep_costs) {
+      const auto search_scheme = [&](const CaptureScheme& scheme, const bench::LineSetup& on,
+                                     std::uint64_t offset, bench::SpeedSearchOptions options,
+                                     bool keep_costs) {
+        options.max_speed = max_speed(on);
+        options.min_speed = 0.01;
+        const auto path = bench::line_path(scheme, on, p.light, processing);
         return bench::highest_reading_speed(
             [&](double v, std::uint64_t label) {
-              const auto r = labels.read(bench::line_path(scheme, line, p.light, processing),
-                                         bench::exposure_blur_px(v, line), motion, offset + label);
+              const auto r =
+                  labels.read(path, bench::exposure_blur_px(v, on), motion, offset + label);
               if (keep_costs) costs.emplace_back(v, r.frame_ms);
               return r.read;
             },
             options);
       };
       bench::SpeedSearchOptions options = search;
-      options.max_speed = max_speed;
-      options.min_speed = 0.01;
       if (p.coded) {
-        const auto scheme = bench::coded_scheme();
-        p.scheme = scheme.name;
-        p.formula = formula_for(scheme, line, p.light, symbol.kind, module, max_speed);
+        p.scheme = bench::coded_scheme();
+        p.formula = formula_for(p.scheme, line, p.light, symbol.kind, module, max_speed(line));
         options.start = p.formula > 0 ? p.formula : 0.5;
-        p.measured = search_scheme(scheme, 0, options, true);
+        p.measured = search_scheme(p.scheme, line, 0, options, true);
       } else {
-        // The strobe's length is the line's choice: each length searched
-        // without verification, the fastest then searched again and verified.
+        // The strobe's pulse is the line's choice: each pulse searched without
+        // verification, the fastest then searched again and verified.
         double best = -1;
-        int best_k = 1;
         std::uint64_t offset = 0;
-        for (int k : kStrobeSlots) {
-          const auto scheme = bench::strobe_scheme(k);
-          const double f = formula_for(scheme, line, p.light, symbol.kind, module, max_speed);
+        for (double pulse : bench::kStrobePulsesUs) {
+          const auto strobe = bench::strobe_of_pulse(line, pulse);
+          const double f = formula_for(strobe.scheme, strobe.line, p.light, symbol.kind, module,
+                                       max_speed(strobe.line));
           p.formula = std::max(p.formula, f);
           auto quick = options;
           quick.final_labels = 0;
           quick.start = f > 0 ? f : 0.5;
-          const auto r = search_scheme(scheme, offset, quick, false);
+          const auto r = search_scheme(strobe.scheme, strobe.line, offset, quick, false);
           offset += 1000000;
-          p.strobe_tries.emplace_back(k, r.speed);
+          p.strobe_tries.emplace_back(pulse, r.speed);
           if (r.speed > best) {
             best = r.speed;
-            best_k = k;
+            p.scheme = strobe.scheme;
+            p.line = strobe.line;
           }
         }
-        const auto scheme = bench::strobe_scheme(best_k);
-        p.scheme = scheme.name;
         options.start = best > 0 ? best : 0.5;
-        p.measured = search_scheme(scheme, offset, options, true);
+        p.measured = search_scheme(p.scheme, p.line, offset, options, true);
       }
       for (const auto& [v, ms] : costs)
         if (v == p.measured.speed) p.frame_ms.push_back(ms);
@@ -266,9 +277,9 @@ int main(int argc, char** argv) {
       std::fprintf(stderr,
                    "  %-20s %5g e-/ms %-9s %6.3f m/s (formula %6.3f), frame %.1f ms (p99 %.1f), "
                    "%d labels, %.0f s\n",
-                   symbol.name.c_str(), p.light, p.scheme.c_str(), p.measured.speed, p.formula,
-                   quantile(p.frame_ms, 0.5), quantile(p.frame_ms, 0.99), p.measured.labels_tried,
-                   p.seconds);
+                   symbol.name.c_str(), p.light, scheme_label(p).c_str(), p.measured.speed,
+                   p.formula, quantile(p.frame_ms, 0.5), quantile(p.frame_ms, 0.99),
+                   p.measured.labels_tried, p.seconds);
     }
   };
   {
@@ -293,18 +304,15 @@ int main(int argc, char** argv) {
   for (const Point& p : points) {
     const auto& s = all_symbols[symbol_pick[p.symbol]];
     const double module = bench::module_px(s.mil, line);
-    const auto scheme =
-        p.coded ? bench::coded_scheme() : bench::strobe_scheme(std::stoi(p.scheme.substr(7)));
-    const double blur = bench::exposure_blur_px(p.measured.speed, line);
-    std::fprintf(csv,
-                 "%s,%g,%.3f,%g,%.1f,%s,%.4f,%d,%d,%d,%d,%d,%.4f,%.3f,%.2f,%.3f,%.2f,%.2f,%.1f\n",
-                 s.name.c_str(), s.mil, module, p.light, bench::exposure_electrons(p.light, line),
-                 p.scheme.c_str(), p.measured.speed, p.measured.verified ? 1 : 0,
-                 p.measured.final_labels, p.measured.labels_tried, p.measured.back_offs,
-                 p.measured.at_max ? 1 : 0, p.formula,
-                 p.formula > 0 ? p.measured.speed / p.formula : 0.0, blur,
-                 blur * bench::lit_run_slots(scheme) / line.slots / module,
-                 quantile(p.frame_ms, 0.5), quantile(p.frame_ms, 0.99), p.seconds);
+    const double blur = bench::exposure_blur_px(p.measured.speed, p.line);
+    std::fprintf(
+        csv, "%s,%g,%.3f,%g,%.1f,%s,%.4f,%d,%d,%d,%d,%d,%.4f,%.3f,%.2f,%.3f,%.2f,%.2f,%.1f\n",
+        s.name.c_str(), s.mil, module, p.light, bench::exposure_electrons(p.light, p.line),
+        scheme_label(p).c_str(), p.measured.speed, p.measured.verified ? 1 : 0,
+        p.measured.final_labels, p.measured.labels_tried, p.measured.back_offs,
+        p.measured.at_max ? 1 : 0, p.formula, p.formula > 0 ? p.measured.speed / p.formula : 0.0,
+        blur, blur * bench::lit_run_slots(p.scheme) / p.line.slots / module,
+        quantile(p.frame_ms, 0.5), quantile(p.frame_ms, 0.99), p.seconds);
   }
   std::fclose(csv);
 
@@ -315,8 +323,8 @@ int main(int argc, char** argv) {
       "encoder error +-%g%%; %d labels verified per speed\n"
       "Per frame: the session's path, method %s, %g fps on %d workers; %d points at once on %s\n\n",
       line.mm_per_px, slot_us, line.slots, line.slots * line.slot_ms, line.cap, line.read_noise,
-      motion.jitter_rms, 100 * motion.speed_change, 100 * motion.encoder_error,
-      search.final_labels, processing.method.c_str(), processing.fps, processing.workers, threads,
+      motion.jitter_rms, 100 * motion.speed_change, 100 * motion.encoder_error, search.final_labels,
+      processing.method.c_str(), processing.fps, processing.workers, threads,
       bench::cpu_model().c_str());
   std::printf(
       "| symbol | module (px) | light (e-/ms) | E (e-) | scheme | measured (m/s) | "
@@ -326,8 +334,8 @@ int main(int argc, char** argv) {
     const auto& s = all_symbols[symbol_pick[p.symbol]];
     std::printf("| %s | %.2f | %g | %.0f | %s | %.2f%s | %.2f | %.2f | %d / %d%s | %.1f, %.1f |\n",
                 s.name.c_str(), bench::module_px(s.mil, line), p.light,
-                bench::exposure_electrons(p.light, line), p.scheme.c_str(), p.measured.speed,
-                p.measured.at_max ? "+" : "", p.formula,
+                bench::exposure_electrons(p.light, p.line), scheme_label(p).c_str(),
+                p.measured.speed, p.measured.at_max ? "+" : "", p.formula,
                 p.formula > 0 ? p.measured.speed / p.formula : 0.0, p.measured.final_labels,
                 p.measured.verified ? p.measured.final_labels : search.final_labels,
                 p.measured.verified ? "" : " (not verified)", quantile(p.frame_ms, 0.5),
@@ -335,20 +343,31 @@ int main(int argc, char** argv) {
   }
   std::printf(
       "\n| symbol | light (e-/ms) | coded / strobe, measured | formula | strobe tries "
-      "(k: m/s, unverified) |\n|---|---|---|---|---|\n");
+      "(pulse us: m/s, unverified) |\n|---|---|---|---|---|\n");
+  std::vector<double> coded_over_strobe;
   for (std::size_t i = 0; i + 1 < points.size(); i += 2) {
     const Point& c = points[i];
     const Point& s = points[i + 1];
     std::string tries;
-    for (const auto& [k, v] : s.strobe_tries) {
+    for (const auto& [pulse, v] : s.strobe_tries) {
       char buf[48];
-      std::snprintf(buf, sizeof buf, "%s%d: %.2f", tries.empty() ? "" : ", ", k, v);
+      std::snprintf(buf, sizeof buf, "%s%g: %.2f", tries.empty() ? "" : ", ", pulse, v);
       tries += buf;
     }
+    // A cell with no verified speed counts as 0 m/s.
+    const double coded = c.measured.verified ? c.measured.speed : 0;
+    const double strobe = s.measured.verified ? s.measured.speed : 0;
+    const double ratio = strobe > 0 ? coded / strobe : (coded > 0 ? 1e9 : 0);
+    coded_over_strobe.push_back(ratio);
     std::printf("| %s | %g | %.2f | %.2f | %s |\n", all_symbols[symbol_pick[c.symbol]].name.c_str(),
-                c.light, s.measured.speed > 0 ? c.measured.speed / s.measured.speed : 0.0,
-                s.formula > 0 ? c.formula / s.formula : 0.0, tries.c_str());
+                c.light, ratio, s.formula > 0 ? c.formula / s.formula : 0.0, tries.c_str());
   }
+  if (!coded_over_strobe.empty())
+    std::printf(
+        "\ncoded / strobe: median %.2f (the lower middle of %zu cells); coded faster in %td\n",
+        quantile(coded_over_strobe, 0.5), coded_over_strobe.size(),
+        std::count_if(coded_over_strobe.begin(), coded_over_strobe.end(),
+                      [](double r) { return r > 1; }));
   // How far the formula is off: the median of measured / formula per scheme, and
   // how many points lie within 15% of the formula, as it stands and times that median.
   for (int coded = 1; coded >= 0; --coded) {

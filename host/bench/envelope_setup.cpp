@@ -47,6 +47,18 @@ CaptureScheme strobe_scheme(int slots) {
           *codes::snapshot_code("snapshot-" + std::to_string(slots)), false};
 }
 
+StrobeLine strobe_of_pulse(const LineSetup& line, double pulse_us) {
+  StrobeLine out{line, {}};
+  const double slot_us = line.slot_ms * 1000;
+  int slots = 1;
+  if (pulse_us <= slot_us)
+    out.line.slot_ms = pulse_us / 1000;
+  else
+    slots = std::clamp(static_cast<int>(std::lround(pulse_us / slot_us)), 1, line.slots);
+  out.scheme = strobe_scheme(slots);
+  return out;
+}
+
 imaging::CaptureModel line_capture(const CaptureScheme& scheme, const LineSetup& line,
                                    double electrons_per_ms, double speed_m_s) {
   return bench_camera(scheme, exposure_electrons(electrons_per_ms, line), line.cap, line.read_noise,
@@ -55,9 +67,9 @@ imaging::CaptureModel line_capture(const CaptureScheme& scheme, const LineSetup&
 
 LinePath line_path(const CaptureScheme& scheme, const LineSetup& line, double electrons_per_ms,
                    const LineProcessing& processing) {
-  LinePath path{line_config(exposure_electrons(electrons_per_ms, line),
-                            reader::ReaderOptions{}.area, {}, -1),
-                processing.fps};
+  LinePath path{
+      line_config(exposure_electrons(electrons_per_ms, line), reader::ReaderOptions{}.area, {}, -1),
+      processing.fps};
   session::SessionConfig& c = path.config;
   if (scheme.one_of_three) {
     std::string digits(static_cast<std::size_t>(scheme.code.length()), '0');

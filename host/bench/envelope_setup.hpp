@@ -64,6 +64,23 @@ CaptureScheme coded_scheme();
 /// map's snapshot-k.
 CaptureScheme strobe_scheme(int slots);
 
+/// \brief The white strobe pulses the datasheet searches, us: the line picks its pulse.
+inline constexpr double kStrobePulsesUs[] = {25, 50, 100, 200, 400, 800};
+
+/// \brief A strobe of one pulse on a line: the line with the slot time that
+/// gives the pulse, and the scheme.
+struct StrobeLine {
+  LineSetup line;
+  CaptureScheme scheme;
+};
+
+/// \brief The white strobe of `pulse_us` on `line`: one slot of that length where
+/// the pulse is no longer than the line's slot, else the line's slot time and
+/// the pulse rounded to whole slots. Its light depends on the pulse alone (c
+/// times the continuous rating for the pulse: docs/conventions.md's budget), not
+/// on how it is cut into slots.
+StrobeLine strobe_of_pulse(const LineSetup& line, double pulse_us);
+
 /// \brief The capture model of `scheme` on `line` at `speed_m_s` and
 /// `electrons_per_ms`: the bench camera (capture_schemes.hpp) with the line's
 /// read noise, cap and exposure, motion along +x, constant speed.

@@ -153,6 +153,31 @@ TEST(LinePath, TheSessionsCameraIsTheFormulasForCodedLightAndTheStrobe) {
   EXPECT_THROW(line_path(coded_scheme(), line, 200, {"sharpest", 30, 2}), std::invalid_argument);
 }
 
+TEST(LinePath, AStrobesLightFollowsItsPulseHoweverItIsCutIntoSlots) {
+  const LineSetup line;  // 100 us slots
+  const auto short_pulse = strobe_of_pulse(line, 25);
+  EXPECT_NEAR(short_pulse.line.slot_ms, 0.025, 1e-12);
+  EXPECT_EQ(lit_run_slots(short_pulse.scheme), 1);
+  const auto long_pulse = strobe_of_pulse(line, 400);
+  EXPECT_NEAR(long_pulse.line.slot_ms, 0.1, 1e-12);
+  EXPECT_EQ(lit_run_slots(long_pulse.scheme), 4);
+  const auto light = [&](double pulse_us) {
+    const auto strobe = strobe_of_pulse(line, pulse_us);
+    // electrons a lit slot gives, times the lit slots
+    return line_capture(strobe.scheme, strobe.line, 200, 1.0).led_electrons[0] *
+           lit_run_slots(strobe.scheme);
+  };
+  EXPECT_NEAR(light(25) / light(100), 0.25, 1e-9);
+  EXPECT_NEAR(light(400) / light(100), 4, 1e-9);
+  // And the session runs each as the same white strobe.
+  for (double pulse : kStrobePulsesUs) {
+    const auto strobe = strobe_of_pulse(line, pulse);
+    const auto path = line_path(strobe.scheme, strobe.line, 200, LineProcessing{});
+    EXPECT_EQ(path.config.controller.slot_time_us, std::lround(strobe.line.slot_ms * 1000));
+    EXPECT_TRUE(SessionLine(path.config, 400, 32, 20).model().code == strobe.scheme.code) << pulse;
+  }
+}
+
 TEST(LabelLine, ALabelReadsThroughTheSessionWhereItsBlurCanBeUndoneAndNotWhereItCannot) {
   // 13-mil Code 128 (3.3 px modules) in bright light: at 0.5 m/s (26 px of
   // blur, a module per 7 slots) coded light and a one-slot strobe read it; at

@@ -21,9 +21,9 @@ namespace flutterscan::bench {
 
 /// \brief What the line does to the motion, per label.
 struct LineMotion {
-  double jitter_rms = 0.05;        ///< belt speed jitter per slot, fraction of the mean speed
-  double speed_change = 0.05;      ///< end / start speed drawn from 1 +- this (uniform)
-  double encoder_error = 0.02;     ///< the encoder's blur drawn from the true one x (1 +- this)
+  double jitter_rms = 0.05;     ///< belt speed jitter per slot, fraction of the mean speed
+  double speed_change = 0.05;   ///< end / start speed drawn from 1 +- this (uniform)
+  double encoder_error = 0.02;  ///< the encoder's blur drawn from the true one x (1 +- this)
 };
 
 /// \brief The session a line runs: its config (code, slot time, light, camera,
