@@ -9,7 +9,8 @@
 // rate and worker count.
 //
 //   envelope_bench [--out DIR] [--light 60,200,600] [--labels 300] [--step-labels 20]
-//                  [--mm-per-px 0.1] [--slot-us 100] [--read-noise 4] [--cap 3]
+//                  [--mm-per-px 0.1] [--coded-slots 25,50,100,200,400]
+//                  [--strobe-pulses 25,50,100,200,400,800] [--read-noise 4] [--cap 3]
 //                  [--method cascade] [--fps 30] [--workers 2]
 //                  [--symbols 0,1,...] [--threads 2]
 //
@@ -44,27 +45,42 @@ using namespace flutterscan;
 using bench::CaptureScheme;
 
 constexpr int kContentsPerSymbol = 16;  // distinct label contents per symbol, drawn in turn
+
 struct Point {
   std::size_t symbol = 0;
   double light = 0;  // e-/ms
   bool coded = true;
   // results
-  CaptureScheme scheme;   // coded light, or the strobe chosen
-  bench::LineSetup line;  // its line (a strobe's own slot time)
+  bench::Lighting lit;  // the slot (coded) or pulse (strobe) chosen, on its line
   bench::SpeedSearchResult measured;
   double formula = 0;  // m/s
   double seconds = 0;
-  std::vector<std::pair<double, double>> strobe_tries;  // pulse us, unverified speed
-  std::vector<double> frame_ms;                         // each label's at the reported speed
+  std::vector<std::pair<double, double>> tries;  // slot or pulse us, unverified speed
+  std::vector<double> frame_ms;                  // each label's at the reported speed
 };
 
-/// What a point's scheme is called in the tables: "coded" or "strobe N us".
+/// Slot (coded light) or pulse (strobe) of `lit`, us.
+double lit_us(const bench::Lighting& lit) {
+  return lit.line.slot_ms * 1000 * bench::lit_run_slots(lit.scheme);
+}
+
+/// What a point's lighting is called in the tables: "coded 100 us" (its slot) or
+/// "strobe 25 us" (its pulse).
 std::string scheme_label(const Point& p) {
-  if (p.coded) return p.scheme.name;
-  char text[32];
-  std::snprintf(text, sizeof text, "strobe %g us",
-                p.line.slot_ms * 1000 * bench::lit_run_slots(p.scheme));
+  char text[40];
+  std::snprintf(text, sizeof text, "%s %g us", p.coded ? "coded" : "strobe", lit_us(p.lit));
   return text;
+}
+
+/// `values` as "25,50,100".
+std::string listed(const std::vector<double>& values) {
+  std::string out;
+  for (double v : values) {
+    char text[24];
+    std::snprintf(text, sizeof text, "%s%g", out.empty() ? "" : ",", v);
+    out += text;
+  }
+  return out;
 }
 
 /// The `q` quantile of `values` (nearest rank), 0 when there are none.
@@ -95,7 +111,9 @@ int main(int argc, char** argv) {
   std::vector<double> light = {60, 200, 600};
   std::vector<std::size_t> symbol_pick;
   bench::LineSetup line;
-  double slot_us = line.slot_ms * 1000;
+  std::vector<double> coded_slots(std::begin(bench::kCodedSlotsUs), std::end(bench::kCodedSlotsUs));
+  std::vector<double> strobe_pulses(std::begin(bench::kStrobePulsesUs),
+                                    std::end(bench::kStrobePulsesUs));
   bench::SpeedSearchOptions search;
   bench::LineMotion motion;
   bench::LineProcessing processing;
@@ -120,8 +138,15 @@ int main(int argc, char** argv) {
   app.add_option("--mm-per-px", line.mm_per_px, "one camera pixel on the belt, mm")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
-  app.add_option("--slot-us", slot_us, "controller slot time, us (52 slots per exposure)")
-      ->check(CLI::PositiveNumber)
+  app.add_option("--coded-slots", coded_slots,
+                 "coded light's slot times searched, us (52 slots per exposure)")
+      ->delimiter(',')
+      ->check(CLI::Range(1.0, 10000.0))
+      ->capture_default_str();
+  app.add_option("--strobe-pulses", strobe_pulses,
+                 "strobe pulses searched, us (longer than 100 us: whole 100-us slots)")
+      ->delimiter(',')
+      ->check(CLI::Range(1.0, 5200.0))
       ->capture_default_str();
   app.add_option("--read-noise", line.read_noise, "camera read noise, e- rms")
       ->check(CLI::NonNegativeNumber)
@@ -160,7 +185,6 @@ int main(int argc, char** argv) {
   } catch (const CLI::ParseError& error) {
     return app.exit(error) == 0 ? 0 : 2;
   }
-  line.slot_ms = slot_us / 1000;
   {
     session::ProcessingConfig check;
     if (!session::set_processing_method(processing.method, check)) {
@@ -210,7 +234,8 @@ int main(int argc, char** argv) {
   std::vector<Point> points;
   for (std::size_t s = 0; s < symbol_pick.size(); ++s)
     for (double e : light)
-      for (bool coded : {true, false}) points.push_back({s, e, coded, {}, line, {}, 0, 0, {}, {}});
+      for (bool coded : {true, false})
+        points.push_back({s, e, coded, {line, {}}, {}, 0, 0, {}, {}});
 
   std::atomic<std::size_t> next{0};
   std::mutex print_mutex;
@@ -239,37 +264,30 @@ int main(int argc, char** argv) {
             },
             options);
       };
+      // The slot (coded) or pulse (strobe) is the line's choice: each searched
+      // without verification, the fastest then searched again and verified.
       bench::SpeedSearchOptions options = search;
-      if (p.coded) {
-        p.scheme = bench::coded_scheme();
-        p.formula = formula_for(p.scheme, line, p.light, symbol.kind, module, max_speed(line));
-        options.start = p.formula > 0 ? p.formula : 0.5;
-        p.measured = search_scheme(p.scheme, line, 0, options, true);
-      } else {
-        // The strobe's pulse is the line's choice: each pulse searched without
-        // verification, the fastest then searched again and verified.
-        double best = -1;
-        std::uint64_t offset = 0;
-        for (double pulse : bench::kStrobePulsesUs) {
-          const auto strobe = bench::strobe_of_pulse(line, pulse);
-          const double f = formula_for(strobe.scheme, strobe.line, p.light, symbol.kind, module,
-                                       max_speed(strobe.line));
-          p.formula = std::max(p.formula, f);
-          auto quick = options;
-          quick.final_labels = 0;
-          quick.start = f > 0 ? f : 0.5;
-          const auto r = search_scheme(strobe.scheme, strobe.line, offset, quick, false);
-          offset += 1000000;
-          p.strobe_tries.emplace_back(pulse, r.speed);
-          if (r.speed > best) {
-            best = r.speed;
-            p.scheme = strobe.scheme;
-            p.line = strobe.line;
-          }
+      double best = -1;
+      std::uint64_t offset = 0;
+      for (double us : p.coded ? coded_slots : strobe_pulses) {
+        const auto lit =
+            p.coded ? bench::coded_of_slot(line, us) : bench::strobe_of_pulse(line, us);
+        const double f =
+            formula_for(lit.scheme, lit.line, p.light, symbol.kind, module, max_speed(lit.line));
+        p.formula = std::max(p.formula, f);
+        auto quick = options;
+        quick.final_labels = 0;
+        quick.start = f > 0 ? f : 0.5;
+        const auto r = search_scheme(lit.scheme, lit.line, offset, quick, false);
+        offset += 1000000;
+        p.tries.emplace_back(us, r.speed);
+        if (r.speed > best) {
+          best = r.speed;
+          p.lit = lit;
         }
-        options.start = best > 0 ? best : 0.5;
-        p.measured = search_scheme(p.scheme, p.line, offset, options, true);
       }
+      options.start = best > 0 ? best : 0.5;
+      p.measured = search_scheme(p.lit.scheme, p.lit.line, offset, options, true);
       for (const auto& [v, ms] : costs)
         if (v == p.measured.speed) p.frame_ms.push_back(ms);
       p.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -304,28 +322,28 @@ int main(int argc, char** argv) {
   for (const Point& p : points) {
     const auto& s = all_symbols[symbol_pick[p.symbol]];
     const double module = bench::module_px(s.mil, line);
-    const double blur = bench::exposure_blur_px(p.measured.speed, p.line);
+    const double blur = bench::exposure_blur_px(p.measured.speed, p.lit.line);
     std::fprintf(
         csv, "%s,%g,%.3f,%g,%.1f,%s,%.4f,%d,%d,%d,%d,%d,%.4f,%.3f,%.2f,%.3f,%.2f,%.2f,%.1f\n",
-        s.name.c_str(), s.mil, module, p.light, bench::exposure_electrons(p.light, p.line),
+        s.name.c_str(), s.mil, module, p.light, bench::exposure_electrons(p.light, p.lit.line),
         scheme_label(p).c_str(), p.measured.speed, p.measured.verified ? 1 : 0,
         p.measured.final_labels, p.measured.labels_tried, p.measured.back_offs,
         p.measured.at_max ? 1 : 0, p.formula, p.formula > 0 ? p.measured.speed / p.formula : 0.0,
-        blur, blur * bench::lit_run_slots(p.scheme) / p.line.slots / module,
+        blur, blur * bench::lit_run_slots(p.lit.scheme) / p.lit.line.slots / module,
         quantile(p.frame_ms, 0.5), quantile(p.frame_ms, 0.99), p.seconds);
   }
   std::fclose(csv);
 
   // Markdown: the table, then coded over strobe.
   std::printf(
-      "Optics: %.3f mm per pixel on the belt; slot %g us, %d slots (exposure %.2f ms); "
-      "cap c = %g; read noise %g e-; jitter %g rms per slot, speed change +-%g%%, "
-      "encoder error +-%g%%; %d labels verified per speed\n"
+      "Optics: %.3f mm per pixel on the belt; %d slots per exposure; coded slots searched %s us, "
+      "strobe pulses %s us; cap c = %g; read noise %g e-; jitter %g rms per slot, speed change "
+      "+-%g%%, encoder error +-%g%%; %d labels verified per speed\n"
       "Per frame: the session's path, method %s, %g fps on %d workers; %d points at once on %s\n\n",
-      line.mm_per_px, slot_us, line.slots, line.slots * line.slot_ms, line.cap, line.read_noise,
-      motion.jitter_rms, 100 * motion.speed_change, 100 * motion.encoder_error, search.final_labels,
-      processing.method.c_str(), processing.fps, processing.workers, threads,
-      bench::cpu_model().c_str());
+      line.mm_per_px, line.slots, listed(coded_slots).c_str(), listed(strobe_pulses).c_str(),
+      line.cap, line.read_noise, motion.jitter_rms, 100 * motion.speed_change,
+      100 * motion.encoder_error, search.final_labels, processing.method.c_str(), processing.fps,
+      processing.workers, threads, bench::cpu_model().c_str());
   std::printf(
       "| symbol | module (px) | light (e-/ms) | E (e-) | scheme | measured (m/s) | "
       "formula (m/s) | measured / formula | labels read | frame ms (median, p99) |\n");
@@ -334,7 +352,7 @@ int main(int argc, char** argv) {
     const auto& s = all_symbols[symbol_pick[p.symbol]];
     std::printf("| %s | %.2f | %g | %.0f | %s | %.2f%s | %.2f | %.2f | %d / %d%s | %.1f, %.1f |\n",
                 s.name.c_str(), bench::module_px(s.mil, line), p.light,
-                bench::exposure_electrons(p.light, p.line), scheme_label(p).c_str(),
+                bench::exposure_electrons(p.light, p.lit.line), scheme_label(p).c_str(),
                 p.measured.speed, p.measured.at_max ? "+" : "", p.formula,
                 p.formula > 0 ? p.measured.speed / p.formula : 0.0, p.measured.final_labels,
                 p.measured.verified ? p.measured.final_labels : search.final_labels,
@@ -342,25 +360,29 @@ int main(int argc, char** argv) {
                 quantile(p.frame_ms, 0.99));
   }
   std::printf(
-      "\n| symbol | light (e-/ms) | coded / strobe, measured | formula | strobe tries "
-      "(pulse us: m/s, unverified) |\n|---|---|---|---|---|\n");
+      "\n| symbol | light (e-/ms) | coded / strobe, measured | formula | coded tries (slot us: "
+      "m/s, unverified) | strobe tries (pulse us: m/s, unverified) |\n|---|---|---|---|---|---|\n");
   std::vector<double> coded_over_strobe;
   for (std::size_t i = 0; i + 1 < points.size(); i += 2) {
     const Point& c = points[i];
     const Point& s = points[i + 1];
-    std::string tries;
-    for (const auto& [pulse, v] : s.strobe_tries) {
-      char buf[48];
-      std::snprintf(buf, sizeof buf, "%s%g: %.2f", tries.empty() ? "" : ", ", pulse, v);
-      tries += buf;
-    }
+    const auto tries = [](const Point& p) {
+      std::string text;
+      for (const auto& [us, v] : p.tries) {
+        char buf[48];
+        std::snprintf(buf, sizeof buf, "%s%g: %.2f", text.empty() ? "" : ", ", us, v);
+        text += buf;
+      }
+      return text;
+    };
     // A cell with no verified speed counts as 0 m/s.
     const double coded = c.measured.verified ? c.measured.speed : 0;
     const double strobe = s.measured.verified ? s.measured.speed : 0;
     const double ratio = strobe > 0 ? coded / strobe : (coded > 0 ? 1e9 : 0);
     coded_over_strobe.push_back(ratio);
-    std::printf("| %s | %g | %.2f | %.2f | %s |\n", all_symbols[symbol_pick[c.symbol]].name.c_str(),
-                c.light, ratio, s.formula > 0 ? c.formula / s.formula : 0.0, tries.c_str());
+    std::printf("| %s | %g | %.2f | %.2f | %s | %s |\n",
+                all_symbols[symbol_pick[c.symbol]].name.c_str(), c.light, ratio,
+                s.formula > 0 ? c.formula / s.formula : 0.0, tries(c).c_str(), tries(s).c_str());
   }
   if (!coded_over_strobe.empty())
     std::printf(
@@ -403,10 +425,10 @@ int main(int argc, char** argv) {
     chart.y_label = "belt speed (m/s)";
     char note[256];
     std::snprintf(note, sizeof note,
-                  "%.2f mm/px, slot %g us x %d, cap %g, read noise %g e-, the session's %s at %g "
-                  "fps; solid: coded one-of-3, dashed: best white strobe",
-                  line.mm_per_px, slot_us, line.slots, line.cap, line.read_noise,
-                  processing.method.c_str(), processing.fps);
+                  "%.2f mm/px, cap %g, read noise %g e-, the session's %s at %g fps; solid: coded "
+                  "one-of-3 (52 slots, best slot), dashed: white strobe (best pulse)",
+                  line.mm_per_px, line.cap, line.read_noise, processing.method.c_str(),
+                  processing.fps);
     chart.notes.push_back(note);
     std::snprintf(note, sizeof note,
                   "every point: %d of %d labels read (a point no verification passed is left out)",

@@ -47,8 +47,14 @@ CaptureScheme strobe_scheme(int slots) {
           *codes::snapshot_code("snapshot-" + std::to_string(slots)), false};
 }
 
-StrobeLine strobe_of_pulse(const LineSetup& line, double pulse_us) {
-  StrobeLine out{line, {}};
+Lighting coded_of_slot(const LineSetup& line, double slot_us) {
+  Lighting out{line, coded_scheme()};
+  out.line.slot_ms = slot_us / 1000;
+  return out;
+}
+
+Lighting strobe_of_pulse(const LineSetup& line, double pulse_us) {
+  Lighting out{line, {}};
   const double slot_us = line.slot_ms * 1000;
   int slots = 1;
   if (pulse_us <= slot_us)

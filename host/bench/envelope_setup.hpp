@@ -64,22 +64,28 @@ CaptureScheme coded_scheme();
 /// map's snapshot-k.
 CaptureScheme strobe_scheme(int slots);
 
+/// \brief The coded light's slot times the datasheet searches, us: the line picks
+/// its slot (52 of them make an exposure of 1.3 to 20.8 ms, within a 30 fps frame).
+inline constexpr double kCodedSlotsUs[] = {25, 50, 100, 200, 400};
+
 /// \brief The white strobe pulses the datasheet searches, us: the line picks its pulse.
 inline constexpr double kStrobePulsesUs[] = {25, 50, 100, 200, 400, 800};
 
-/// \brief A strobe of one pulse on a line: the line with the slot time that
-/// gives the pulse, and the scheme.
-struct StrobeLine {
+/// \brief How a line is lit: the line with its slot time, and the scheme.
+struct Lighting {
   LineSetup line;
   CaptureScheme scheme;
 };
+
+/// \brief The product's coded light (coded_scheme()) with slots of `slot_us` on `line`.
+Lighting coded_of_slot(const LineSetup& line, double slot_us);
 
 /// \brief The white strobe of `pulse_us` on `line`: one slot of that length where
 /// the pulse is no longer than the line's slot, else the line's slot time and
 /// the pulse rounded to whole slots. Its light depends on the pulse alone (c
 /// times the continuous rating for the pulse: docs/conventions.md's budget), not
 /// on how it is cut into slots.
-StrobeLine strobe_of_pulse(const LineSetup& line, double pulse_us);
+Lighting strobe_of_pulse(const LineSetup& line, double pulse_us);
 
 /// \brief The capture model of `scheme` on `line` at `speed_m_s` and
 /// `electrons_per_ms`: the bench camera (capture_schemes.hpp) with the line's

@@ -169,6 +169,9 @@ TEST(LinePath, AStrobesLightFollowsItsPulseHoweverItIsCutIntoSlots) {
   };
   EXPECT_NEAR(light(25) / light(100), 0.25, 1e-9);
   EXPECT_NEAR(light(400) / light(100), 4, 1e-9);
+  const auto coded = coded_of_slot(line, 50);
+  EXPECT_NEAR(coded.line.slot_ms, 0.05, 1e-12);
+  EXPECT_TRUE(coded.scheme.code == coded_scheme().code);
   // And the session runs each as the same white strobe.
   for (double pulse : kStrobePulsesUs) {
     const auto strobe = strobe_of_pulse(line, pulse);
