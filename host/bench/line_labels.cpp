@@ -109,9 +109,8 @@ LabelRead LabelLine::read(const LinePath& path, double blur_px, const LineMotion
   const std::uint64_t jitter_seed = rng();
   const std::uint64_t noise_seed = rng();
 
-  const bool linear = kind_ == sim::SceneKind::kCode128;
   const int width = frame_width(blur_px);
-  const int height = linear ? kLinearStripRows : shown.fine.height / kFine;
+  const int height = shown.fine.height / kFine;
   // The truth: the line's camera (the session's own model of it) and the belt's
   // motion slot by slot.
   imaging::CaptureModel truth = SessionLine(path.config, width, height, blur_px).model();
@@ -120,22 +119,35 @@ LabelRead LabelLine::read(const LinePath& path, double blur_px, const LineMotion
                                                motion.jitter_rms, jitter_seed);
   const auto segments = imaging::segments_from_boundaries(truth.code, boundaries);
 
-  // The scene on the fine grid, belt downstream for the blur to run onto.
+  // The whole label on the belt, belt downstream for the blur to run onto. The
+  // motion is along the rows, so each camera row is the blur of its own fine
+  // rows alone: a row like one already exposed (a linear label's rows of bars,
+  // of paper, of belt) is copied, not exposed again.
   const int right = kFine * (static_cast<int>(std::ceil(truth.blur_px)) + kMarginPx) + kFine;
   imaging::Image expected;
-  if (linear) {
-    const int middle = (shown.fine.height / kFine / 2) * kFine;
-    const auto strip = padded(shown.fine, phase, right - phase, middle, kFine);
-    const auto row = sim::expected_electrons_timeline(strip, truth, segments, kFine);
-    for (const auto& channel : row.channels) {
-      imaging::Plane rows(channel.width, kLinearStripRows);
-      for (int y = 0; y < kLinearStripRows; ++y)
-        std::copy(channel.row(0).begin(), channel.row(0).end(), rows.row(y).begin());
-      expected.channels.push_back(std::move(rows));
+  std::vector<std::pair<int, imaging::Image>> exposed;  // first camera row, its exposure
+  for (int y = 0; y < height; ++y) {
+    const auto same_fine_rows = [&](int other) {
+      for (int f = 0; f < kFine; ++f) {
+        const auto a = shown.fine.row(y * kFine + f);
+        const auto b = shown.fine.row(other * kFine + f);
+        if (!std::equal(a.begin(), a.end(), b.begin())) return false;
+      }
+      return true;
+    };
+    auto match = std::find_if(exposed.begin(), exposed.end(),
+                              [&](const auto& e) { return same_fine_rows(e.first); });
+    if (match == exposed.end()) {
+      const auto rows = padded(shown.fine, phase, right - phase, y * kFine, kFine);
+      exposed.emplace_back(y, sim::expected_electrons_timeline(rows, truth, segments, kFine));
+      match = std::prev(exposed.end());
     }
-  } else {
-    const auto scene = padded(shown.fine, phase, right - phase, 0, height * kFine);
-    expected = sim::expected_electrons_timeline(scene, truth, segments, kFine);
+    if (expected.channels.empty())
+      expected.channels.assign(match->second.channels.size(), imaging::Plane(width, height));
+    for (std::size_t c = 0; c < expected.channels.size(); ++c) {
+      const auto from = match->second.channels[c].row(0);
+      std::copy(from.begin(), from.end(), expected.channels[c].row(y).begin());
+    }
   }
   const auto dn = sim::record_frame(expected, truth, noise_seed);
 

@@ -41,11 +41,6 @@ struct LabelRead {
   double frame_ms = 0;
 };
 
-/// \brief The camera rows of a 1-D label's frame: a strip across the bars (every
-/// row of the bars is the same scene, so the strip is rendered once per frame
-/// and its rows differ by their noise).
-inline constexpr int kLinearStripRows = 32;
-
 /// \brief Labels of one symbol at one module size.
 class LabelLine {
  public:
