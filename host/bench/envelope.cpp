@@ -426,7 +426,7 @@ int main(int argc, char** argv) {
     char note[256];
     std::snprintf(note, sizeof note,
                   "%.2f mm/px, cap %g, read noise %g e-, the session's %s at %g fps; solid: coded "
-                  "one-of-3 (52 slots, best slot), dashed: white strobe (best pulse)",
+                  "(best slot), dashed: strobe (best pulse)",
                   line.mm_per_px, line.cap, line.read_noise, processing.method.c_str(),
                   processing.fps);
     chart.notes.push_back(note);
