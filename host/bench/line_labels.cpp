@@ -16,7 +16,7 @@ namespace {
 
 constexpr int kFine = sim::kSimSupersample;
 constexpr double kBelt = 0.35;  // sim::SceneSpec's belt
-constexpr int kMarginPx = 8;    // belt kept downstream of the blur
+constexpr int kMarginPx = 8;    // belt beyond the blur, each side
 
 std::string random_content(sim::SceneKind kind, std::mt19937_64& rng) {
   static constexpr char kChars[] = "ABCDEFGHJKLMNPQRSTUVWXYZ0123456789";
@@ -93,7 +93,7 @@ LabelLine LabelLine::make(sim::SceneKind kind, double module_px, int contents, s
 
 int LabelLine::frame_width(double blur_px) const {
   const int label = labels_.empty() ? 0 : labels_.front().fine.width / kFine;
-  return label + static_cast<int>(std::ceil(blur_px)) + kMarginPx + 1;
+  return label + 2 * (static_cast<int>(std::ceil(blur_px)) + kMarginPx) + 1;
 }
 
 LabelRead LabelLine::read(const LinePath& path, double blur_px, const LineMotion& motion,
@@ -119,11 +119,16 @@ LabelRead LabelLine::read(const LinePath& path, double blur_px, const LineMotion
                                                motion.jitter_rms, jitter_seed);
   const auto segments = imaging::segments_from_boundaries(truth.code, boundaries);
 
-  // The whole label on the belt, belt downstream for the blur to run onto. The
-  // motion is along the rows, so each camera row is the blur of its own fine
-  // rows alone: a row like one already exposed (a linear label's rows of bars,
-  // of paper, of belt) is copied, not exposed again.
-  const int right = kFine * (static_cast<int>(std::ceil(truth.blur_px)) + kMarginPx) + kFine;
+  // The whole label on the belt, wholly in view: a blur's travel and a margin of
+  // belt upstream (within a blur of the upstream edge the latent also holds
+  // what was outside the frame, and the session leaves a label there to the
+  // frame in which it has come further into view) and downstream for the blur
+  // to run onto. The motion is along the rows, so each camera row is the blur
+  // of its own fine rows alone: a row like one already exposed (a linear
+  // label's rows of bars, of paper, of belt) is copied, not exposed again.
+  const int around = kFine * (static_cast<int>(std::ceil(truth.blur_px)) + kMarginPx);
+  const int left = around + phase;
+  const int right = around + kFine - phase;
   imaging::Image expected;
   std::vector<std::pair<int, imaging::Image>> exposed;  // first camera row, its exposure
   for (int y = 0; y < height; ++y) {
@@ -138,7 +143,7 @@ LabelRead LabelLine::read(const LinePath& path, double blur_px, const LineMotion
     auto match = std::find_if(exposed.begin(), exposed.end(),
                               [&](const auto& e) { return same_fine_rows(e.first); });
     if (match == exposed.end()) {
-      const auto rows = padded(shown.fine, phase, right - phase, y * kFine, kFine);
+      const auto rows = padded(shown.fine, left, right, y * kFine, kFine);
       exposed.emplace_back(y, sim::expected_electrons_timeline(rows, truth, segments, kFine));
       match = std::prev(exposed.end());
     }
