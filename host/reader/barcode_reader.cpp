@@ -240,6 +240,47 @@ bool cut_along_reading(const ZXing::Result& result, int width, int height) {
                  : cut_along_reading(low->y, high->y, height);
 }
 
+/// The symbols ZXing reads with `hints` in `lum` (`width` x `height`, 8 bits):
+/// the linear ones, where `row_step` > 1, on every row_step-th row, and with
+/// tryRotate every row_step-th column (a view of the columns as rows: no copy),
+/// each placed in `lum`'s pixels.
+ZXing::Results read_view(const std::vector<std::uint8_t>& lum, int width, int height,
+                         const ZXing::DecodeHints& hints, int row_step) {
+  const ZXing::ImageView view(lum.data(), width, height, ZXing::ImageFormat::Lum);
+  const ZXing::BarcodeFormats linear = linear_formats(hints.formats());
+  if (row_step <= 1 || linear.empty()) return ZXing::ReadBarcodes(view, hints);
+  ZXing::DecodeHints matrix_hints = hints;
+  matrix_hints.setFormats(hints.formats() &
+                          ZXing::BarcodeFormats(ZXing::BarcodeFormat::MatrixCodes));
+  ZXing::Results out;
+  if (!matrix_hints.formats().empty()) out = ZXing::ReadBarcodes(view, matrix_hints);
+  // Not downscaled: ZXing's smaller copies average rows row_step apart, across a leaning code's bars.
+  ZXing::DecodeHints linear_hints = hints;
+  linear_hints.setFormats(linear).setTryRotate(false).setTryDownscale(false);
+  const int rows = (height - 1) / row_step + 1, columns = (width - 1) / row_step + 1;
+  for (ZXing::Result& r : ZXing::ReadBarcodes(
+           ZXing::ImageView(lum.data(), width, rows, ZXing::ImageFormat::Lum, width * row_step, 1),
+           linear_hints)) {
+    ZXing::Position p = r.position();
+    for (ZXing::PointI& corner : p) corner.y *= row_step;
+    r.setPosition(p);
+    out.push_back(std::move(r));
+  }
+  if (!hints.tryRotate()) return out;
+  // The columns' view is the window mirrored about its diagonal: (u, v) is pixel (v * row_step, u).
+  for (ZXing::Result& r : ZXing::ReadBarcodes(ZXing::ImageView(lum.data(), height, columns,
+                                                               ZXing::ImageFormat::Lum, row_step,
+                                                               width),
+                                              linear_hints)) {
+    const ZXing::Position& q = r.position();
+    ZXing::Position p;
+    for (int i = 0; i < 4; ++i) p[i] = {q[i].y * row_step, q[i].x};
+    r.setPosition(p);
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
 /// Whether `code` (read in `window`) is backed: a strong check, or for a
 /// weak-check symbology a second reading (corroboration()); `code.evidence`
 /// says which. A value nothing backs joins `unconfirmed` (once).
@@ -384,10 +425,9 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
           to_paper ? linear_hints : (smooth ? matrix_hints : hints);
       const auto view_started = std::chrono::steady_clock::now();
       to_luminance(latent, x0, y0, x1, y1, luminance, lum);
-      const ZXing::ImageView view(lum.data(), x1 - x0, y1 - y0, ZXing::ImageFormat::Lum);
       ZXing::Results results;
-      out.decoder_fault =
-          run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, view_hints); });
+      out.decoder_fault = run_catching_assertions(
+          [&] { results = read_view(lum, x1 - x0, y1 - y0, view_hints, w.linear_row_step); });
       if (v == 0) {
         out.first_view_ms += std::chrono::duration<double, std::milli>(
                                  std::chrono::steady_clock::now() - view_started)
@@ -400,8 +440,8 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
         // window once more, stopping at its first symbol, reads one of them.
         ZXing::DecodeHints first_symbol = view_hints;
         first_symbol.setMaxNumberOfSymbols(1);
-        out.decoder_fault =
-            run_catching_assertions([&] { results = ZXing::ReadBarcodes(view, first_symbol); });
+        out.decoder_fault = run_catching_assertions(
+            [&] { results = read_view(lum, x1 - x0, y1 - y0, first_symbol, w.linear_row_step); });
       }
       if (!out.decoder_fault.empty()) {
         out.codes.clear();

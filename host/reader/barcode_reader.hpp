@@ -173,6 +173,10 @@ struct DecodeWindow {
   /// its own (joint Wiener), 2h + 1 on sums of 2h + 1 rows; 0 where a prior
   /// ties every row together (tv's), and only a second decoder backs a value.
   int independent_apart = 1;
+  /// ZXing looks for linear codes on every `linear_row_step`-th row of the
+  /// window (and, with try_rotate, column: turned codes) and for matrix codes
+  /// on every pixel; 1: its thorough scan, every row or every other.
+  int linear_row_step = 1;
 };
 
 /// \brief Every barcode of the named symbologies (check_symbologies() passed)
@@ -246,6 +250,9 @@ struct LabelRegion {
   /// Rows of the paper across the motion; both 0: not measured (every row).
   int across_begin = 0;
   int across_end = 0;
+  /// A tile of a larger region, cut to what the decode's budget reads
+  /// (region_tiles.hpp): read with kTileRowStep.
+  bool tile = false;
 
   /// \brief Whether the rows were measured (if not, the region spans every row).
   bool rows_measured() const { return across_end > across_begin; }

@@ -1,5 +1,7 @@
 #include "reader/code_reading.hpp"
 
+#include "reader/region_tiles.hpp"
+
 #include <vector>
 
 namespace flutterscan::reader {
@@ -17,6 +19,7 @@ CodeReading read_codes(const imaging::Plane& latent, std::span<const LabelRegion
   for (std::size_t i = 0; i < windows.size(); ++i) {
     if (paper[i].cut) windows[i].views = options.cut_window_views;
     windows[i].second_decoder = options.second_decoder;
+    if (paper[i].tile) windows[i].linear_row_step = kTileRowStep;
   }
   out.windows = windows.size();
   if (!windows.empty())

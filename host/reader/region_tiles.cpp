@@ -32,6 +32,7 @@ double view_cost_ms_per_mpx(const std::string& symbologies, bool try_rotate) {
   DecodeWindow window{0, 0, kSide, kSide};
   window.views = 1;
   window.second_decoder = false;
+  window.linear_row_step = kTileRowStep;
   const BarcodeReadout readout = read_barcodes(print, symbologies, try_rotate, {&window, 1});
   return readout.first_view_ms / (static_cast<double>(readout.first_view_px) / 1e6);
 }
@@ -59,6 +60,7 @@ std::vector<RegionTile> cut_to_tiles(std::span<const LabelRegion> regions, int l
         tile.across_begin = across;
         tile.across_end = std::min(bottom, across + side);
         tile.cut = r.cut && (tile.begin == r.begin || tile.end == r.end);
+        tile.tile = true;
         out.push_back({tile, i});
       }
   }

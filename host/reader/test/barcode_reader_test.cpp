@@ -138,6 +138,59 @@ TEST(BarcodeReader, ACodeTurnedBy90DegreesIsReadOnlyWithTryRotate) {
   EXPECT_TRUE(read_barcodes(turned, "Code128", false).codes.empty());
 }
 
+/// Code 128 `text` (`length` x `height` px with its quiet zones, dark on 0.9)
+/// laid into `into` at (x, y), its bars across the rows, or (`turned`) along them.
+void lay_code128(imaging::Plane& into, const std::wstring& text, int length, int height, int x,
+                 int y, bool turned) {
+  const ZXing::BitMatrix bars =
+      ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code128).setMargin(10).encode(text, length,
+                                                                                     height);
+  for (int b = 0; b < bars.height(); ++b)
+    for (int a = 0; a < bars.width(); ++a)
+      (turned ? into.at(x + b, y + a) : into.at(x + a, y + b)) = bars.get(a, b) ? 0.05f : 0.9f;
+}
+
+TEST(BarcodeReader, ATilesLinearCodesAreFoundOnEveryEighthRowOrColumnInTheirPlace) {
+  imaging::Plane print(640, 640, 0.5f);
+  lay_code128(print, L"FS-UPRIGHT-1", 300, 70, 40, 407, false);
+  lay_code128(print, L"FS-TURNED-2", 300, 70, 500, 123, true);
+  lay_code128(print, L"FS-SHORT-3", 300, 12, 40, 603, false);  // 12 rows: two scans at most
+  DecodeWindow thorough{0, 0, 640, 640};
+  thorough.views = 1;
+  thorough.second_decoder = false;
+  DecodeWindow every_eighth = thorough;
+  every_eighth.linear_row_step = 8;
+  const BarcodeReadout all = read_barcodes(print, "Code128", true, {&thorough, 1});
+  const BarcodeReadout stepped = read_barcodes(print, "Code128", true, {&every_eighth, 1});
+  ASSERT_EQ(all.codes.size(), 3u);
+  ASSERT_EQ(stepped.codes.size(), 2u);
+  for (const DecodedCode& code : stepped.codes) {
+    const auto same = std::find_if(all.codes.begin(), all.codes.end(),
+                                   [&](const DecodedCode& c) { return c.text == code.text; });
+    ASSERT_NE(same, all.codes.end()) << code.text;
+    EXPECT_NE(code.text, "FS-SHORT-3");
+    // Where it lies and which way it reads: as the thorough scan says, within
+    // the rows (or columns) between two scanned ones.
+    EXPECT_NEAR(code.centre_x, same->centre_x, 8) << code.text;
+    EXPECT_NEAR(code.centre_y, same->centre_y, 8) << code.text;
+    EXPECT_NEAR(code.orientation_deg, same->orientation_deg, 1) << code.text;
+    for (std::size_t c = 0; c < 4; ++c) {  // ZXing's corner order: its top edge first
+      EXPECT_NEAR(code.quality.corners[c].x, same->quality.corners[c].x, 8) << code.text << c;
+      EXPECT_NEAR(code.quality.corners[c].y, same->quality.corners[c].y, 8) << code.text << c;
+    }
+  }
+  // A matrix code in the same window is looked for on every pixel.
+  const ZXing::BitMatrix qr =
+      ZXing::MultiFormatWriter(ZXing::BarcodeFormat::QRCode).setMargin(4).encode(L"FS-QR", 0, 0);
+  imaging::Plane matrix(640, 640, 0.9f);
+  for (int y = 0; y < qr.height() * 4; ++y)
+    for (int x = 0; x < qr.width() * 4; ++x)
+      if (qr.get(x / 4, y / 4)) matrix.at(300 + x, 301 + y) = 0.05f;
+  const BarcodeReadout square = read_barcodes(matrix, "QRCode,Code128", true, {&every_eighth, 1});
+  ASSERT_EQ(square.codes.size(), 1u);
+  EXPECT_EQ(square.codes[0].text, "FS-QR");
+}
+
 /// A belt (0.35) `height` rows tall with white labels 160 rows tall from row
 /// `top`, each carrying a Code 128 code, starting at `starts` (the last one may
 /// run past the right edge).

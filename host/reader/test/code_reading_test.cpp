@@ -65,6 +65,30 @@ TEST(CodeReading, AWindowCutByTheFramesEdgeIsReadInTheViewsTheOptionsGiveIt) {
             read);
 }
 
+// A tile of a region cut to the budget looks for linear codes on every
+// kTileRowStep-th row: a code 12 rows tall, read in its region, is not in a tile.
+TEST(CodeReading, ATilesWindowLooksForLinearCodesOnEveryEighthRow) {
+  imaging::Plane belt(900, 200, 0.35f);
+  const ZXing::BitMatrix bars =
+      ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code128).setMargin(10).encode(L"FS-LOW", 300,
+                                                                                    12);
+  for (int y = 0; y < 60; ++y)
+    for (int x = 0; x < 320; ++x) {
+      const int bx = x - 10, by = y - 24;
+      const bool bar =
+          bx >= 0 && by >= 0 && bx < bars.width() && by < bars.height() && bars.get(bx, by);
+      belt.at(300 + x, 70 + y) = bar ? 0.02f : 0.9f;
+    }
+  LabelRegion region{280, 640, false, 60, 140};
+  ReaderOptions options;
+  options.second_decoder = false;  // ZXing's scan alone
+  EXPECT_EQ(code_texts(read_codes(belt, {&region, 1}, imaging::Direction::kPlusX, options).readout),
+            std::vector<std::string>{"FS-LOW"});
+  region.tile = true;
+  EXPECT_TRUE(
+      read_codes(belt, {&region, 1}, imaging::Direction::kPlusX, options).readout.codes.empty());
+}
+
 TEST(CodeReading, OnlyTheWholeFrameReadsACodeWithoutPaper) {
   const imaging::Plane belt = belt_with_code(300, false);
   const auto paper = find_paper_runs(belt);

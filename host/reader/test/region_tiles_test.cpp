@@ -31,6 +31,7 @@ TEST(RegionTiles, AFrameOfPrintIsCutIntoTilesThatHoldEveryCodeUpToHalfATile) {
     EXPECT_LE(t.tile.across_end, 1080);
     // Cut where the frame's edge cuts the region: the tiles at its first or last column.
     EXPECT_EQ(t.tile.cut, t.tile.begin == 0 || t.tile.end == 1920);
+    EXPECT_TRUE(t.tile.tile);  // read with kTileRowStep
   }
   // A code of half a tile each way, anywhere in the region, lies whole in a tile.
   const int half = side / 2;
@@ -50,6 +51,7 @@ TEST(RegionTiles, RegionsWithinTheBudgetAndEveryRegionWithoutOnePassWhole) {
   EXPECT_EQ(within[0].region, 0u);
   EXPECT_EQ(within[0].tile.begin, 100);
   EXPECT_EQ(within[0].tile.across_end, 500);
+  EXPECT_FALSE(within[0].tile.tile);
   for (std::size_t i = 1; i < within.size(); ++i) EXPECT_EQ(within[i].region, 1u);
   const std::vector<RegionTile> unbounded = cut_to_tiles(regions, 1080, 0);
   ASSERT_EQ(unbounded.size(), 2u);
