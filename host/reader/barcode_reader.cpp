@@ -254,24 +254,24 @@ ZXing::Results read_view(const std::vector<std::uint8_t>& lum, int width, int he
                           ZXing::BarcodeFormats(ZXing::BarcodeFormat::MatrixCodes));
   ZXing::Results out;
   if (!matrix_hints.formats().empty()) out = ZXing::ReadBarcodes(view, matrix_hints);
-  // Not downscaled: ZXing's smaller copies average rows row_step apart, across a leaning code's bars.
+  // Not downscaled: ZXing's smaller copies would average rows row_step apart,
+  // across a leaning code's bars.
   ZXing::DecodeHints linear_hints = hints;
   linear_hints.setFormats(linear).setTryRotate(false).setTryDownscale(false);
   const int rows = (height - 1) / row_step + 1, columns = (width - 1) / row_step + 1;
-  for (ZXing::Result& r : ZXing::ReadBarcodes(
-           ZXing::ImageView(lum.data(), width, rows, ZXing::ImageFormat::Lum, width * row_step, 1),
-           linear_hints)) {
+  const ZXing::ImageView every_nth_row(lum.data(), width, rows, ZXing::ImageFormat::Lum,
+                                       width * row_step, 1);
+  for (ZXing::Result& r : ZXing::ReadBarcodes(every_nth_row, linear_hints)) {
     ZXing::Position p = r.position();
     for (ZXing::PointI& corner : p) corner.y *= row_step;
     r.setPosition(p);
     out.push_back(std::move(r));
   }
   if (!hints.tryRotate()) return out;
-  // The columns' view is the window mirrored about its diagonal: (u, v) is pixel (v * row_step, u).
-  for (ZXing::Result& r : ZXing::ReadBarcodes(ZXing::ImageView(lum.data(), height, columns,
-                                                               ZXing::ImageFormat::Lum, row_step,
-                                                               width),
-                                              linear_hints)) {
+  // The window mirrored about its diagonal: (u, v) is pixel (v * row_step, u).
+  const ZXing::ImageView every_nth_column(lum.data(), height, columns, ZXing::ImageFormat::Lum,
+                                          row_step, width);
+  for (ZXing::Result& r : ZXing::ReadBarcodes(every_nth_column, linear_hints)) {
     const ZXing::Position& q = r.position();
     ZXing::Position p;
     for (int i = 0; i < 4; ++i) p[i] = {q[i].y * row_step, q[i].x};
@@ -428,7 +428,7 @@ BarcodeReadout read_barcodes(const imaging::Plane& latent, const std::string& sy
       ZXing::Results results;
       out.decoder_fault = run_catching_assertions(
           [&] { results = read_view(lum, x1 - x0, y1 - y0, view_hints, w.linear_row_step); });
-      if (v == 0) {
+      if (v == 0 && w.linear_row_step <= 1) {
         out.first_view_ms += std::chrono::duration<double, std::milli>(
                                  std::chrono::steady_clock::now() - view_started)
                                  .count();

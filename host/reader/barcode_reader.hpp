@@ -118,8 +118,9 @@ struct BarcodeReadout {
   /// nothing read (windows_cut).
   std::vector<std::size_t> windows_left;
   std::vector<std::size_t> windows_cut;
-  /// The windows' first views (the linear one, ZXing): their time and their
-  /// pixels, what one view of a window costs a pixel on this machine.
+  /// The first views (the linear one, ZXing) of the windows ZXing scans
+  /// thoroughly (linear_row_step 1): their time and their pixels, what one view
+  /// of a window costs a pixel on this machine (a tile's costs less).
   double first_view_ms = 0;
   long long first_view_px = 0;
   /// Values of weak-check symbologies a decoder read that no second reading

@@ -32,7 +32,6 @@ double view_cost_ms_per_mpx(const std::string& symbologies, bool try_rotate) {
   DecodeWindow window{0, 0, kSide, kSide};
   window.views = 1;
   window.second_decoder = false;
-  window.linear_row_step = kTileRowStep;
   const BarcodeReadout readout = read_barcodes(print, symbologies, try_rotate, {&window, 1});
   return readout.first_view_ms / (static_cast<double>(readout.first_view_px) / 1e6);
 }

@@ -39,9 +39,9 @@ inline constexpr int kTileRowStep = 8;
 
 /// \brief What one view of a window full of print costs a megapixel, ms, on
 /// this machine with `symbologies` and `try_rotate`: ZXing's first view of a
-/// 640 x 640 tile of random 4 px cells (print with edges everywhere, which no
-/// symbology reads), timed once. What a session starts from, before its frames
-/// say.
+/// 640 x 640 window of random 4 px cells (print with edges everywhere, which no
+/// symbology reads), timed once: ZXing's thorough scan (a tile's view costs less). What a session
+/// starts from, before its frames say.
 double view_cost_ms_per_mpx(const std::string& symbologies, bool try_rotate);
 
 /// \brief `regions` (motion frame, `lines` across) with each larger than

@@ -142,9 +142,9 @@ TEST(BarcodeReader, ACodeTurnedBy90DegreesIsReadOnlyWithTryRotate) {
 /// laid into `into` at (x, y), its bars across the rows, or (`turned`) along them.
 void lay_code128(imaging::Plane& into, const std::wstring& text, int length, int height, int x,
                  int y, bool turned) {
-  const ZXing::BitMatrix bars =
-      ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code128).setMargin(10).encode(text, length,
-                                                                                     height);
+  const ZXing::BitMatrix bars = ZXing::MultiFormatWriter(ZXing::BarcodeFormat::Code128)
+                                    .setMargin(10)
+                                    .encode(text, length, height);
   for (int b = 0; b < bars.height(); ++b)
     for (int a = 0; a < bars.width(); ++a)
       (turned ? into.at(x + b, y + a) : into.at(x + a, y + b)) = bars.get(a, b) ? 0.05f : 0.9f;
@@ -154,7 +154,7 @@ TEST(BarcodeReader, ATilesLinearCodesAreFoundOnEveryEighthRowOrColumnInTheirPlac
   imaging::Plane print(640, 640, 0.5f);
   lay_code128(print, L"FS-UPRIGHT-1", 300, 70, 40, 407, false);
   lay_code128(print, L"FS-TURNED-2", 300, 70, 500, 123, true);
-  lay_code128(print, L"FS-SHORT-3", 300, 12, 40, 603, false);  // 12 rows: two scans at most
+  lay_code128(print, L"FS-SHORT-3", 300, 6, 40, 603, false);  // one row looked at, not two
   DecodeWindow thorough{0, 0, 640, 640};
   thorough.views = 1;
   thorough.second_decoder = false;
@@ -164,6 +164,9 @@ TEST(BarcodeReader, ATilesLinearCodesAreFoundOnEveryEighthRowOrColumnInTheirPlac
   const BarcodeReadout stepped = read_barcodes(print, "Code128", true, {&every_eighth, 1});
   ASSERT_EQ(all.codes.size(), 3u);
   ASSERT_EQ(stepped.codes.size(), 2u);
+  // What a thorough view costs a pixel is followed on thorough views only.
+  EXPECT_EQ(all.first_view_px, 640 * 640);
+  EXPECT_EQ(stepped.first_view_px, 0);
   for (const DecodedCode& code : stepped.codes) {
     const auto same = std::find_if(all.codes.begin(), all.codes.end(),
                                    [&](const DecodedCode& c) { return c.text == code.text; });
